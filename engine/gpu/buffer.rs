@@ -1,0 +1,197 @@
+//! Typed storage buffers sized by the caller, with upload and readback. Memory the host can see
+//! coherently (every type on lavapipe, resizable BAR on GPUs) is written and read in place;
+//! otherwise the copy goes through a staging buffer.
+
+use super::context::GpuContext;
+use super::error::{GpuError, GpuResult, VkContext};
+use super::recorder::Recorder;
+use ash::vk;
+use bytemuck::Pod;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::marker::PhantomData;
+use std::sync::Arc;
+
+/// A buffer of `len` elements of `T` in device memory, usable as a storage buffer and as the
+/// source or destination of copies.
+pub struct GpuBuffer<T: Pod> {
+    ctx: Arc<GpuContext>,
+    raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    len: usize,
+    name: String,
+    _element: PhantomData<T>,
+}
+
+/// A range of a buffer bound to one storage-buffer slot of a dispatch.
+#[derive(Clone, Copy, Debug)]
+pub struct BufferBinding {
+    pub(crate) buffer: vk::Buffer,
+    pub(crate) offset: u64,
+    pub(crate) range: u64,
+}
+
+impl<T: Pod> GpuBuffer<T> {
+    /// A device buffer of `len` elements (contents undefined). Refuses sizes over the device's
+    /// `maxStorageBufferRange` or `maxMemoryAllocationSize` with an error naming the buffer.
+    pub fn new(ctx: &Arc<GpuContext>, name: &str, len: usize) -> GpuResult<Self> {
+        Self::with_location(ctx, name, len, MemoryLocation::GpuOnly)
+    }
+
+    /// A device buffer holding a copy of `data`.
+    pub fn from_slice(ctx: &Arc<GpuContext>, name: &str, data: &[T]) -> GpuResult<Self> {
+        let buffer = Self::new(ctx, name, data.len())?;
+        buffer.write(data)?;
+        Ok(buffer)
+    }
+
+    fn with_location(ctx: &Arc<GpuContext>, name: &str, len: usize, location: MemoryLocation) -> GpuResult<Self> {
+        let bytes = checked_bytes::<T>(ctx, name, len)?;
+        let device = ctx.device();
+        // Vulkan forbids empty buffers; an empty one still gets a few bytes so it can be bound.
+        let info = vk::BufferCreateInfo::default()
+            .size(bytes.max(16))
+            .usage(vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let raw = unsafe { device.create_buffer(&info, None) }.during("vkCreateBuffer")?;
+        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        let allocated = ctx.allocator().as_mut().expect("allocator lives as long as the context").allocate(
+            &AllocationCreateDesc { name, requirements, location, linear: true, allocation_scheme: AllocationScheme::GpuAllocatorManaged },
+        );
+        let allocation = match allocated {
+            Ok(allocation) => allocation,
+            Err(e) => {
+                unsafe { device.destroy_buffer(raw, None) };
+                return Err(GpuError::OutOfMemory { name: name.into(), bytes, reason: e.to_string() });
+            }
+        };
+        let bound = unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+        let buffer = Self { ctx: ctx.clone(), raw, allocation: Some(allocation), len, name: name.into(), _element: PhantomData };
+        bound.during("vkBindBufferMemory")?;
+        Ok(buffer)
+    }
+
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    #[inline]
+    pub fn size_bytes(&self) -> u64 {
+        (self.len * size_of::<T>()) as u64
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The context the buffer lives in.
+    pub fn context(&self) -> &Arc<GpuContext> {
+        &self.ctx
+    }
+
+    /// The whole buffer as a dispatch binding.
+    #[inline]
+    pub fn binding(&self) -> BufferBinding {
+        BufferBinding { buffer: self.raw, offset: 0, range: vk::WHOLE_SIZE }
+    }
+
+    #[inline]
+    pub(crate) fn raw(&self) -> vk::Buffer {
+        self.raw
+    }
+
+    /// Writes `data` to the start of the buffer. No GPU work may be using the buffer (every
+    /// [`Recorder::submit_and_wait`] returns only when its work is done, so this holds).
+    pub fn write(&self, data: &[T]) -> GpuResult<()> {
+        self.check_len("write", data.len())?;
+        if data.is_empty() {
+            return Ok(());
+        }
+        if let Some(mapped) = self.coherent_mapping() {
+            let bytes: &[u8] = bytemuck::cast_slice(data);
+            unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), mapped, bytes.len()) };
+            return Ok(());
+        }
+        let staging = Self::with_location(&self.ctx, "staging upload", data.len(), MemoryLocation::CpuToGpu)?;
+        staging.write(data)?;
+        let mut recorder = Recorder::new(&self.ctx)?;
+        recorder.copy_buffer(&staging, self, data.len());
+        recorder.submit_and_wait()?;
+        Ok(())
+    }
+
+    /// Reads the whole buffer.
+    pub fn read(&self) -> GpuResult<Vec<T>> {
+        self.read_prefix(self.len)
+    }
+
+    /// Reads the first `len` elements.
+    pub fn read_prefix(&self, len: usize) -> GpuResult<Vec<T>> {
+        self.check_len("read", len)?;
+        let mut out = vec![T::zeroed(); len];
+        if len == 0 {
+            return Ok(out);
+        }
+        if let Some(mapped) = self.coherent_mapping() {
+            let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
+            unsafe { std::ptr::copy_nonoverlapping(mapped, bytes.as_mut_ptr(), bytes.len()) };
+            return Ok(out);
+        }
+        let staging = Self::with_location(&self.ctx, "staging readback", len, MemoryLocation::GpuToCpu)?;
+        let mut recorder = Recorder::new(&self.ctx)?;
+        recorder.copy_buffer(self, &staging, len);
+        recorder.submit_and_wait()?;
+        staging.read_prefix(len)
+    }
+
+    fn check_len(&self, what: &'static str, len: usize) -> GpuResult<()> {
+        if len > self.len {
+            return Err(GpuError::LengthMismatch { what, name: self.name.clone(), len, capacity: self.len });
+        }
+        Ok(())
+    }
+
+    /// The host pointer, if this memory is mapped and coherent (no flush or invalidate needed).
+    fn coherent_mapping(&self) -> Option<*mut u8> {
+        let allocation = self.allocation.as_ref()?;
+        let coherent = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+        if !allocation.memory_properties().contains(coherent) {
+            return None;
+        }
+        allocation.mapped_ptr().map(|p| p.as_ptr() as *mut u8)
+    }
+}
+
+impl<T: Pod> Drop for GpuBuffer<T> {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device().destroy_buffer(self.raw, None) };
+        if let Some(allocation) = self.allocation.take() {
+            if let Some(allocator) = self.ctx.allocator().as_mut() {
+                // Freeing only fails for an allocation of another allocator: a bug, not input.
+                allocator.free(allocation).expect("allocation belongs to this context");
+            }
+        }
+    }
+}
+
+/// Bytes for `len` elements of `T`, or the error naming the limit it breaks.
+fn checked_bytes<T>(ctx: &GpuContext, name: &str, len: usize) -> GpuResult<u64> {
+    let limits = ctx.limits();
+    let too_large = |bytes, limit, limit_name| GpuError::BufferTooLarge { name: name.into(), bytes, limit, limit_name };
+    let bytes = (len as u64)
+        .checked_mul(size_of::<T>() as u64)
+        .ok_or_else(|| too_large(u64::MAX, limits.max_storage_buffer_range, "maxStorageBufferRange"))?;
+    if bytes > limits.max_storage_buffer_range {
+        return Err(too_large(bytes, limits.max_storage_buffer_range, "maxStorageBufferRange"));
+    }
+    if bytes > limits.max_memory_allocation_size {
+        return Err(too_large(bytes, limits.max_memory_allocation_size, "maxMemoryAllocationSize"));
+    }
+    Ok(bytes)
+}

@@ -1,0 +1,334 @@
+//! The Vulkan context: instance, chosen physical device, logical device with one compute queue,
+//! memory allocator, pipeline cache and (optionally) the validation messenger. Shared as
+//! `Arc<GpuContext>`; buffers and pipelines hold a clone, so it outlives them.
+
+use super::error::{GpuError, GpuResult, VkContext};
+use super::features::{DeviceCapabilities, REQUIRED_EXTENSIONS};
+use super::select::{choose_device, DeviceInfo, DEVICE_ENV};
+use super::validation::{self, ValidationLog, VALIDATION_ENV, VALIDATION_LAYER};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::sync::{Arc, Mutex, MutexGuard};
+
+/// How to create a context. `None` fields fall back to the environment
+/// (`TAGSPLAT_DEVICE`, `TAGSPLAT_VALIDATION=1`) and then to the defaults (policy, off).
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    pub device: Option<String>,
+    pub validation: Option<bool>,
+}
+
+/// Device limits and properties the engine sizes its work by.
+#[derive(Clone, Debug)]
+pub struct DeviceLimits {
+    pub max_storage_buffer_range: u64,
+    pub max_memory_allocation_size: u64,
+    pub max_workgroup_count: [u32; 3],
+    pub max_workgroup_invocations: u32,
+    pub max_shared_memory_bytes: u32,
+    pub max_push_constants_bytes: u32,
+    pub subgroup_size: u32,
+    /// Nanoseconds per timestamp tick; `None` when the compute queue cannot write timestamps.
+    pub timestamp_period_ns: Option<f64>,
+    pub timestamp_valid_bits: u32,
+    /// Sum of the device-local heaps.
+    pub device_local_bytes: u64,
+}
+
+pub struct GpuContext {
+    _entry: ash::Entry,
+    instance: ash::Instance,
+    messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    /// Shared so the messenger's pointer stays valid until the instance is gone, and so a
+    /// caller can read messages sent while the context is destroyed.
+    validation_log: Arc<ValidationLog>,
+    device: ash::Device,
+    push_descriptor: ash::khr::push_descriptor::Device,
+    queue: Mutex<vk::Queue>,
+    queue_family: u32,
+    allocator: Mutex<Option<Allocator>>,
+    pipeline_cache: vk::PipelineCache,
+    info: DeviceInfo,
+    limits: DeviceLimits,
+    validation_enabled: bool,
+}
+
+impl GpuContext {
+    /// Creates a context on the device chosen by `options` (see [`choose_device`]).
+    pub fn new(options: &ContextOptions) -> GpuResult<Arc<Self>> {
+        let validation = options.validation.unwrap_or_else(|| std::env::var(VALIDATION_ENV).is_ok_and(|v| v == "1"));
+        let wanted = options.device.clone().or_else(|| std::env::var(DEVICE_ENV).ok());
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loading(e.to_string()))?;
+        let validation_log = Arc::<ValidationLog>::default();
+        let instance = create_instance(&entry, validation, &validation_log)?;
+        // From here on, a failure must destroy the instance: build the rest in a closure.
+        let messenger = if validation { Some(create_messenger(&entry, &instance, &validation_log)) } else { None };
+        let rest = (|| {
+            let devices = unsafe { enumerate(&instance)? };
+            let chosen = choose_device(&devices, wanted.as_deref())?;
+            let physical_device = unsafe { instance.enumerate_physical_devices() }.during("vkEnumeratePhysicalDevices")?[chosen];
+            Ok((devices[chosen].clone(), physical_device))
+        })();
+        let (info, physical_device) = match rest {
+            Ok(v) => v,
+            Err(e) => {
+                unsafe { destroy_instance(&instance, messenger) };
+                return Err(e);
+            }
+        };
+        let built = unsafe { create_device(&instance, physical_device) };
+        let (device, queue_family) = match built {
+            Ok(v) => v,
+            Err(e) => {
+                unsafe { destroy_instance(&instance, messenger) };
+                return Err(e);
+            }
+        };
+        let limits = unsafe { read_limits(&instance, physical_device, queue_family, &info.capabilities) };
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        });
+        let pipeline_cache = unsafe { device.create_pipeline_cache(&vk::PipelineCacheCreateInfo::default(), None) };
+        let (allocator, pipeline_cache) = match (allocator, pipeline_cache) {
+            (Ok(a), Ok(c)) => (a, c),
+            (allocator, cache) => {
+                let error = match (allocator.err(), cache.err()) {
+                    (Some(e), _) => GpuError::OutOfMemory { name: "allocator".into(), bytes: 0, reason: e.to_string() },
+                    (None, Some(r)) => GpuError::Vulkan { call: "vkCreatePipelineCache", result: r },
+                    (None, None) => unreachable!(),
+                };
+                unsafe {
+                    device.destroy_device(None);
+                    destroy_instance(&instance, messenger);
+                }
+                return Err(error);
+            }
+        };
+        Ok(Arc::new(Self {
+            _entry: entry,
+            instance,
+            messenger,
+            validation_log,
+            device,
+            push_descriptor,
+            queue: Mutex::new(queue),
+            queue_family,
+            allocator: Mutex::new(Some(allocator)),
+            pipeline_cache,
+            info,
+            limits,
+            validation_enabled: validation,
+        }))
+    }
+
+    /// Every Vulkan device on this machine, with its capabilities (no context needed).
+    pub fn list_devices() -> GpuResult<Vec<DeviceInfo>> {
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loading(e.to_string()))?;
+        let instance = create_instance(&entry, false, &ValidationLog::default())?;
+        let devices = unsafe { enumerate(&instance) };
+        unsafe { instance.destroy_instance(None) };
+        devices
+    }
+
+    pub fn info(&self) -> &DeviceInfo {
+        &self.info
+    }
+
+    pub fn limits(&self) -> &DeviceLimits {
+        &self.limits
+    }
+
+    /// Whether the validation layer is on; [`Self::validation`] then counts its messages.
+    pub fn validation_enabled(&self) -> bool {
+        self.validation_enabled
+    }
+
+    pub fn validation(&self) -> &Arc<ValidationLog> {
+        &self.validation_log
+    }
+
+    pub fn device(&self) -> &ash::Device {
+        &self.device
+    }
+
+    pub(crate) fn push_descriptor(&self) -> &ash::khr::push_descriptor::Device {
+        &self.push_descriptor
+    }
+
+    pub(crate) fn queue(&self) -> MutexGuard<'_, vk::Queue> {
+        self.queue.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    pub(crate) fn queue_family(&self) -> u32 {
+        self.queue_family
+    }
+
+    pub(crate) fn allocator(&self) -> MutexGuard<'_, Option<Allocator>> {
+        self.allocator.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    pub(crate) fn pipeline_cache(&self) -> vk::PipelineCache {
+        self.pipeline_cache
+    }
+}
+
+impl Drop for GpuContext {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_pipeline_cache(self.pipeline_cache, None);
+            // The allocator frees its memory blocks, so it must go before the device.
+            self.allocator().take();
+            self.device.destroy_device(None);
+            destroy_instance(&self.instance, self.messenger.take());
+        }
+    }
+}
+
+fn create_instance(entry: &ash::Entry, validation: bool, log: &ValidationLog) -> GpuResult<ash::Instance> {
+    let app = vk::ApplicationInfo::default()
+        .application_name(c"tagsplat")
+        .engine_name(c"tagsplat")
+        .api_version(vk::API_VERSION_1_2);
+    let mut layers = Vec::new();
+    let mut extensions = Vec::new();
+    let sync_validation = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&sync_validation);
+    let mut messenger_info = messenger_create_info(log);
+    let mut create_info = vk::InstanceCreateInfo::default().application_info(&app);
+    if validation {
+        let available = unsafe { entry.enumerate_instance_layer_properties() }.during("vkEnumerateInstanceLayerProperties")?;
+        if !available.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)) {
+            return Err(GpuError::NoValidationLayer);
+        }
+        layers.push(VALIDATION_LAYER.as_ptr());
+        extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        extensions.push(ash::ext::validation_features::NAME.as_ptr());
+        // Chained here too, so messages from instance creation itself are counted.
+        create_info = create_info.push_next(&mut features).push_next(&mut messenger_info);
+    }
+    let create_info = create_info.enabled_layer_names(&layers).enabled_extension_names(&extensions);
+    unsafe { entry.create_instance(&create_info, None) }.map_err(|result| match result {
+        vk::Result::ERROR_INCOMPATIBLE_DRIVER => GpuError::NoDevice,
+        result => GpuError::Vulkan { call: "vkCreateInstance", result },
+    })
+}
+
+fn messenger_create_info(log: &ValidationLog) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+    vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(validation::SEVERITIES)
+        .message_type(validation::TYPES)
+        .pfn_user_callback(Some(validation::on_message))
+        .user_data(log as *const ValidationLog as *mut _)
+}
+
+fn create_messenger(
+    entry: &ash::Entry,
+    instance: &ash::Instance,
+    log: &ValidationLog,
+) -> (ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT) {
+    let loader = ash::ext::debug_utils::Instance::new(entry, instance);
+    // A messenger that fails to appear only loses messages; the layer still prints them.
+    let messenger = unsafe { loader.create_debug_utils_messenger(&messenger_create_info(log), None) }
+        .unwrap_or(vk::DebugUtilsMessengerEXT::null());
+    (loader, messenger)
+}
+
+unsafe fn destroy_instance(
+    instance: &ash::Instance,
+    messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+) {
+    if let Some((loader, messenger)) = messenger {
+        loader.destroy_debug_utils_messenger(messenger, None);
+    }
+    instance.destroy_instance(None);
+}
+
+unsafe fn enumerate(instance: &ash::Instance) -> GpuResult<Vec<DeviceInfo>> {
+    let physical_devices = instance.enumerate_physical_devices().during("vkEnumeratePhysicalDevices")?;
+    Ok(physical_devices
+        .into_iter()
+        .enumerate()
+        .map(|(index, pd)| {
+            let properties = instance.get_physical_device_properties(pd);
+            DeviceInfo {
+                index,
+                name: properties.device_name_as_c_str().unwrap_or(c"?").to_string_lossy().into_owned(),
+                kind: properties.device_type,
+                capabilities: DeviceCapabilities::query(instance, pd),
+            }
+        })
+        .collect())
+}
+
+/// The compute queue family: one that also writes timestamps if any does.
+unsafe fn compute_queue_family(instance: &ash::Instance, physical_device: vk::PhysicalDevice) -> u32 {
+    let families = instance.get_physical_device_queue_family_properties(physical_device);
+    let compute = |f: &vk::QueueFamilyProperties| f.queue_flags.contains(vk::QueueFlags::COMPUTE);
+    let position = families
+        .iter()
+        .position(|f| compute(f) && f.timestamp_valid_bits > 0)
+        .or_else(|| families.iter().position(compute));
+    // `missing_features` already refused devices without a compute queue.
+    position.unwrap_or(0) as u32
+}
+
+unsafe fn create_device(
+    instance: &ash::Instance,
+    physical_device: vk::PhysicalDevice,
+) -> GpuResult<(ash::Device, u32)> {
+    let queue_family = compute_queue_family(instance, physical_device);
+    let priorities = [1.0];
+    let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+    let extensions: Vec<*const i8> = REQUIRED_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+    let core = vk::PhysicalDeviceFeatures::default().shader_int64(true);
+    let mut vk12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
+    let mut atomic_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
+        .shader_buffer_float32_atomics(true)
+        .shader_buffer_float32_atomic_add(true);
+    let mut features = vk::PhysicalDeviceFeatures2::default().features(core).push_next(&mut vk12).push_next(&mut atomic_float);
+    let create_info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queues)
+        .enabled_extension_names(&extensions)
+        .push_next(&mut features);
+    let device = instance.create_device(physical_device, &create_info, None).during("vkCreateDevice")?;
+    Ok((device, queue_family))
+}
+
+unsafe fn read_limits(
+    instance: &ash::Instance,
+    physical_device: vk::PhysicalDevice,
+    queue_family: u32,
+    capabilities: &DeviceCapabilities,
+) -> DeviceLimits {
+    let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
+    let mut properties2 = vk::PhysicalDeviceProperties2::default().push_next(&mut maintenance3);
+    instance.get_physical_device_properties2(physical_device, &mut properties2);
+    let limits = properties2.properties.limits;
+    let family = instance.get_physical_device_queue_family_properties(physical_device)[queue_family as usize];
+    let memory = instance.get_physical_device_memory_properties(physical_device);
+    let device_local_bytes = memory.memory_heaps_as_slice()
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .sum();
+    DeviceLimits {
+        max_storage_buffer_range: limits.max_storage_buffer_range as u64,
+        max_memory_allocation_size: maintenance3.max_memory_allocation_size,
+        max_workgroup_count: limits.max_compute_work_group_count,
+        max_workgroup_invocations: limits.max_compute_work_group_invocations,
+        max_shared_memory_bytes: limits.max_compute_shared_memory_size,
+        max_push_constants_bytes: limits.max_push_constants_size,
+        subgroup_size: capabilities.subgroup_size,
+        timestamp_period_ns: (family.timestamp_valid_bits > 0).then_some(limits.timestamp_period as f64),
+        timestamp_valid_bits: family.timestamp_valid_bits,
+        device_local_bytes,
+    }
+}

@@ -1,0 +1,22 @@
+//! The GPU core: one Vulkan context, typed buffers, compute pipelines, command recording with
+//! barriers, timestamps, device choice and feature checks, and validation as a test oracle.
+
+mod buffer;
+mod context;
+mod error;
+mod features;
+mod pipeline;
+mod recorder;
+mod select;
+mod timing;
+mod validation;
+
+pub use buffer::{BufferBinding, GpuBuffer};
+pub use context::{ContextOptions, DeviceLimits, GpuContext};
+pub use error::{GpuError, GpuResult};
+pub use features::DeviceCapabilities;
+pub use pipeline::{ComputePipeline, PipelineDesc};
+pub use recorder::Recorder;
+pub use select::{choose_device, DeviceInfo, DEVICE_ENV};
+pub use timing::{PassTime, PassTimes};
+pub use validation::{ValidationLog, VALIDATION_ENV};

@@ -1,0 +1,98 @@
+//! Compute pipelines from embedded SPIR-V. Every pipeline binds `bindings` storage buffers
+//! (set 0, bindings 0..n, pushed per dispatch with VK_KHR_push_descriptor, so there are no
+//! descriptor pools to size) and one push-constant block. Specialization constant `i` takes
+//! `specialization[i]`; by convention constant 0 is the workgroup size.
+
+use super::context::GpuContext;
+use super::error::{GpuError, GpuResult, VkContext};
+use ash::vk;
+use std::sync::Arc;
+
+/// What a compute pipeline is made of.
+pub struct PipelineDesc<'a> {
+    pub name: &'static str,
+    pub spirv: &'a [u8],
+    pub bindings: u32,
+    pub push_constant_bytes: u32,
+    pub specialization: &'a [u32],
+}
+
+pub struct ComputePipeline {
+    ctx: Arc<GpuContext>,
+    pub(crate) pipeline: vk::Pipeline,
+    pub(crate) layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+    pub(crate) name: &'static str,
+    pub(crate) bindings: u32,
+    pub(crate) push_constant_bytes: u32,
+}
+
+impl ComputePipeline {
+    pub fn new(ctx: &Arc<GpuContext>, desc: &PipelineDesc) -> GpuResult<Self> {
+        let device = ctx.device();
+        let code = ash::util::read_spv(&mut std::io::Cursor::new(desc.spirv))
+            .map_err(|_| GpuError::Vulkan { call: "read_spv (corrupt embedded SPIR-V)", result: vk::Result::ERROR_INVALID_SHADER_NV })?;
+        let bindings: Vec<_> = (0..desc.bindings)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        let set_layout_info = vk::DescriptorSetLayoutCreateInfo::default()
+            .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+            .bindings(&bindings);
+        // Build bottom-up; `Self`'s Drop destroys whatever was made if a later step fails.
+        let mut pipeline = Self {
+            ctx: ctx.clone(),
+            pipeline: vk::Pipeline::null(),
+            layout: vk::PipelineLayout::null(),
+            set_layout: vk::DescriptorSetLayout::null(),
+            name: desc.name,
+            bindings: desc.bindings,
+            push_constant_bytes: desc.push_constant_bytes,
+        };
+        pipeline.set_layout = unsafe { device.create_descriptor_set_layout(&set_layout_info, None) }.during("vkCreateDescriptorSetLayout")?;
+        let push_ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .size(desc.push_constant_bytes)];
+        let set_layouts = [pipeline.set_layout];
+        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if desc.push_constant_bytes > 0 {
+            layout_info = layout_info.push_constant_ranges(&push_ranges);
+        }
+        pipeline.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.during("vkCreatePipelineLayout")?;
+
+        let module = unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None) }
+            .during("vkCreateShaderModule")?;
+        let entries: Vec<_> = (0..desc.specialization.len() as u32)
+            .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: 4 * i, size: 4 })
+            .collect();
+        let specialization = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::cast_slice(desc.specialization));
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(c"main")
+            .specialization_info(&specialization);
+        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(pipeline.layout);
+        let created = unsafe { device.create_compute_pipelines(ctx.pipeline_cache(), &[info], None) };
+        unsafe { device.destroy_shader_module(module, None) };
+        pipeline.pipeline = created.map_err(|(_, result)| result).during(desc.name)?[0];
+        Ok(pipeline)
+    }
+}
+
+impl Drop for ComputePipeline {
+    fn drop(&mut self) {
+        let device = self.ctx.device();
+        unsafe {
+            device.destroy_pipeline(self.pipeline, None);
+            device.destroy_pipeline_layout(self.layout, None);
+            device.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}

@@ -1,0 +1,225 @@
+//! Command recording: dispatches, copies and fills into one command buffer, a barrier between
+//! every two commands, timestamps around named passes, then one submit that waits on a fence.
+//!
+//! Barriers: every command may read what the one before it wrote, so the recorder puts a full
+//! compute/transfer memory barrier between consecutive commands. Kernels in this engine are
+//! chained (project → bin → sort → rasterize), so almost every pair depends anyway, and this
+//! keeps synchronization validation clean by construction.
+
+use super::buffer::{BufferBinding, GpuBuffer};
+use super::context::GpuContext;
+use super::error::{GpuError, GpuResult, VkContext};
+use super::pipeline::ComputePipeline;
+use super::timing::{PassTimes, Timestamps};
+use ash::vk;
+use bytemuck::Pod;
+use std::sync::Arc;
+
+pub struct Recorder {
+    ctx: Arc<GpuContext>,
+    pool: vk::CommandPool,
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+    timestamps: Timestamps,
+    /// Whether a command was recorded since the last barrier.
+    pending_writes: bool,
+    /// Submitted and not yet waited for: Drop must wait before freeing.
+    in_flight: bool,
+}
+
+const STAGES: vk::PipelineStageFlags = vk::PipelineStageFlags::from_raw(
+    vk::PipelineStageFlags::COMPUTE_SHADER.as_raw() | vk::PipelineStageFlags::TRANSFER.as_raw(),
+);
+
+impl Recorder {
+    pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
+        let device = ctx.device();
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(ctx.queue_family())
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+        let mut recorder = Self {
+            ctx: ctx.clone(),
+            pool: unsafe { device.create_command_pool(&pool_info, None) }.during("vkCreateCommandPool")?,
+            cmd: vk::CommandBuffer::null(),
+            fence: vk::Fence::null(),
+            timestamps: Timestamps::new(ctx),
+            pending_writes: false,
+            in_flight: false,
+        };
+        let alloc_info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(recorder.pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        recorder.cmd = unsafe { device.allocate_command_buffers(&alloc_info) }.during("vkAllocateCommandBuffers")?[0];
+        recorder.fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.during("vkCreateFence")?;
+        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        unsafe { device.begin_command_buffer(recorder.cmd, &begin) }.during("vkBeginCommandBuffer")?;
+        Ok(recorder)
+    }
+
+    /// Records `pipeline` over `groups` workgroups with `buffers` at bindings 0.. and `push` as
+    /// push constants.
+    pub fn dispatch<P: Pod>(&mut self, pipeline: &ComputePipeline, buffers: &[BufferBinding], push: &P, groups: [u32; 3]) {
+        assert_eq!(buffers.len() as u32, pipeline.bindings, "{}: wrong number of buffers", pipeline.name);
+        assert_eq!(size_of::<P>() as u32, pipeline.push_constant_bytes, "{}: wrong push-constant size", pipeline.name);
+        if groups.contains(&0) {
+            return;
+        }
+        self.barrier_if_needed();
+        let device = self.ctx.device();
+        let infos: Vec<_> = buffers
+            .iter()
+            .map(|b| vk::DescriptorBufferInfo { buffer: b.buffer, offset: b.offset, range: b.range })
+            .collect();
+        let writes: Vec<_> = infos
+            .iter()
+            .enumerate()
+            .map(|(i, info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_binding(i as u32)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(std::slice::from_ref(info))
+            })
+            .collect();
+        unsafe {
+            device.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.pipeline);
+            if !writes.is_empty() {
+                self.ctx.push_descriptor().cmd_push_descriptor_set(
+                    self.cmd,
+                    vk::PipelineBindPoint::COMPUTE,
+                    pipeline.layout,
+                    0,
+                    &writes,
+                );
+            }
+            if size_of::<P>() > 0 {
+                device.cmd_push_constants(self.cmd, pipeline.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(push));
+            }
+            device.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]);
+        }
+        self.pending_writes = true;
+    }
+
+    /// Like [`Self::dispatch`] for a 1-D grid of `groups` workgroups, folded into x and y when
+    /// it exceeds `maxComputeWorkGroupCount[0]`. Shaders recover the flat index with
+    /// `flat_workgroup_id()` (shaders/common/grid.glsl) and skip ids past their work.
+    pub fn dispatch_1d<P: Pod>(&mut self, pipeline: &ComputePipeline, buffers: &[BufferBinding], push: &P, groups: u64) -> GpuResult<()> {
+        let grid = grid_for(groups, self.ctx.limits().max_workgroup_count).ok_or_else(|| GpuError::LimitExceeded {
+            what: format!("{}: workgroups", pipeline.name),
+            count: groups,
+            limit: self.ctx.limits().max_workgroup_count[0] as u64 * self.ctx.limits().max_workgroup_count[1] as u64,
+            limit_name: "maxComputeWorkGroupCount[0] * [1]",
+        })?;
+        self.dispatch(pipeline, buffers, push, grid);
+        Ok(())
+    }
+
+    /// Copies the first `len` elements of `src` to `dst`.
+    pub fn copy_buffer<T: Pod>(&mut self, src: &GpuBuffer<T>, dst: &GpuBuffer<T>, len: usize) {
+        assert!(len <= src.len() && len <= dst.len(), "copy of {len} elements out of bounds");
+        if len == 0 {
+            return;
+        }
+        self.barrier_if_needed();
+        let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: (len * size_of::<T>()) as u64 };
+        unsafe { self.ctx.device().cmd_copy_buffer(self.cmd, src.raw(), dst.raw(), &[region]) };
+        self.pending_writes = true;
+    }
+
+    /// Fills the whole buffer with copies of the 32-bit `value`.
+    pub fn fill_buffer<T: Pod>(&mut self, buffer: &GpuBuffer<T>, value: u32) {
+        if buffer.is_empty() {
+            return;
+        }
+        self.barrier_if_needed();
+        let bytes = buffer.size_bytes() & !3;
+        unsafe { self.ctx.device().cmd_fill_buffer(self.cmd, buffer.raw(), 0, bytes, value) };
+        self.pending_writes = true;
+    }
+
+    /// Starts a named pass; its GPU time is reported by [`Self::submit_and_wait`]. Passes nest.
+    pub fn begin_pass(&mut self, name: &str) {
+        self.timestamps.begin(self.ctx.device(), self.cmd, name);
+    }
+
+    pub fn end_pass(&mut self) {
+        self.timestamps.end(self.ctx.device(), self.cmd);
+    }
+
+    /// Submits everything recorded, waits until the GPU has finished, and returns the pass times.
+    pub fn submit_and_wait(mut self) -> GpuResult<PassTimes> {
+        let device = self.ctx.device();
+        unsafe {
+            // Make every write visible to the host, which reads results after the fence.
+            let to_host = vk::MemoryBarrier::default()
+                .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+                .dst_access_mask(vk::AccessFlags::HOST_READ);
+            device.cmd_pipeline_barrier(self.cmd, STAGES, vk::PipelineStageFlags::HOST, vk::DependencyFlags::empty(), &[to_host], &[], &[]);
+            device.end_command_buffer(self.cmd).during("vkEndCommandBuffer")?;
+            let cmds = [self.cmd];
+            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            {
+                let queue = self.ctx.queue();
+                device.queue_submit(*queue, &[submit], self.fence).during("vkQueueSubmit")?;
+            }
+            self.in_flight = true;
+            device.wait_for_fences(&[self.fence], true, u64::MAX).during("vkWaitForFences")?;
+            self.in_flight = false;
+        }
+        self.timestamps.read(device)
+    }
+
+    fn barrier_if_needed(&mut self) {
+        if !self.pending_writes {
+            return;
+        }
+        let barrier = vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(
+                vk::AccessFlags::SHADER_READ
+                    | vk::AccessFlags::SHADER_WRITE
+                    | vk::AccessFlags::TRANSFER_READ
+                    | vk::AccessFlags::TRANSFER_WRITE,
+            );
+        unsafe {
+            self.ctx.device().cmd_pipeline_barrier(self.cmd, STAGES, STAGES, vk::DependencyFlags::empty(), &[barrier], &[], &[]);
+        }
+        self.pending_writes = false;
+    }
+}
+
+impl Drop for Recorder {
+    fn drop(&mut self) {
+        let device = self.ctx.device();
+        unsafe {
+            // A recorder whose wait failed may still be running on the GPU.
+            if self.in_flight {
+                let _ = device.queue_wait_idle(*self.ctx.queue());
+            }
+            self.timestamps.destroy(device);
+            device.destroy_fence(self.fence, None);
+            device.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+/// A 2-D grid with at least `groups` workgroups within `max` (x first), or `None` if none fits.
+pub(crate) fn grid_for(groups: u64, max: [u32; 3]) -> Option<[u32; 3]> {
+    let x = groups.min(max[0] as u64).max(1);
+    let y = groups.div_ceil(x);
+    (y <= max[1] as u64).then_some([x as u32, y as u32, 1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::grid_for;
+
+    #[test]
+    fn grid_covers_groups_within_limits() {
+        let max = [65535, 65535, 65535];
+        assert_eq!(grid_for(1, max), Some([1, 1, 1]));
+        assert_eq!(grid_for(65535, max), Some([65535, 1, 1]));
+        assert_eq!(grid_for(65536, max), Some([65535, 2, 1]));
+        assert_eq!(grid_for(65535 * 65535 + 1, max), None);
+    }
+}

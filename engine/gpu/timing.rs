@@ -1,0 +1,120 @@
+//! GPU timestamps around named passes. Query pools grow in chunks as passes are recorded, so
+//! there is no fixed cap on the number of passes.
+
+use super::context::GpuContext;
+use super::error::{GpuResult, VkContext};
+use ash::vk;
+
+const QUERIES_PER_POOL: u32 = 128;
+
+/// The GPU time of one recorded pass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassTime {
+    pub name: String,
+    pub ms: f64,
+}
+
+/// The pass times of one submission, in the order the passes began.
+#[derive(Clone, Debug, Default)]
+pub struct PassTimes {
+    pub passes: Vec<PassTime>,
+}
+
+impl PassTimes {
+    /// Total milliseconds of the passes called `name`.
+    pub fn total_ms(&self, name: &str) -> f64 {
+        self.passes.iter().filter(|p| p.name == name).map(|p| p.ms).sum()
+    }
+
+    /// Milliseconds per distinct pass name, summed, in first-seen order.
+    pub fn summed(&self) -> Vec<PassTime> {
+        let mut out: Vec<PassTime> = Vec::new();
+        for pass in &self.passes {
+            match out.iter_mut().find(|p| p.name == pass.name) {
+                Some(p) => p.ms += pass.ms,
+                None => out.push(pass.clone()),
+            }
+        }
+        out
+    }
+}
+
+pub(crate) struct Timestamps {
+    period_ns: Option<f64>,
+    valid_mask: u64,
+    pools: Vec<vk::QueryPool>,
+    used: u32,
+    /// (name, start query, end query) per pass.
+    passes: Vec<(String, u32, Option<u32>)>,
+    open: Vec<usize>,
+}
+
+impl Timestamps {
+    pub(crate) fn new(ctx: &GpuContext) -> Self {
+        let bits = ctx.limits().timestamp_valid_bits;
+        Self {
+            period_ns: ctx.limits().timestamp_period_ns,
+            valid_mask: if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 },
+            pools: Vec::new(),
+            used: 0,
+            passes: Vec::new(),
+            open: Vec::new(),
+        }
+    }
+
+    pub(crate) fn begin(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, name: &str) {
+        if let Some(query) = self.write(device, cmd) {
+            self.open.push(self.passes.len());
+            self.passes.push((name.to_string(), query, None));
+        }
+    }
+
+    pub(crate) fn end(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) {
+        let Some(pass) = self.open.pop() else { return };
+        self.passes[pass].2 = self.write(device, cmd);
+    }
+
+    /// Writes one timestamp once all earlier commands are done; `None` without timestamps.
+    fn write(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) -> Option<u32> {
+        self.period_ns?;
+        if self.used == self.pools.len() as u32 * QUERIES_PER_POOL {
+            let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(QUERIES_PER_POOL);
+            // Without a pool the pass simply goes untimed.
+            let pool = unsafe { device.create_query_pool(&info, None) }.ok()?;
+            unsafe { device.cmd_reset_query_pool(cmd, pool, 0, QUERIES_PER_POOL) };
+            self.pools.push(pool);
+        }
+        let query = self.used;
+        let pool = self.pools[(query / QUERIES_PER_POOL) as usize];
+        unsafe { device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, query % QUERIES_PER_POOL) };
+        self.used += 1;
+        Some(query)
+    }
+
+    /// Reads the timestamps of a finished submission.
+    pub(crate) fn read(&self, device: &ash::Device) -> GpuResult<PassTimes> {
+        let Some(period_ns) = self.period_ns else { return Ok(PassTimes::default()) };
+        let mut ticks = vec![0u64; self.used as usize];
+        for (i, chunk) in ticks.chunks_mut(QUERIES_PER_POOL as usize).enumerate() {
+            unsafe {
+                device.get_query_pool_results(self.pools[i], 0, chunk, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+            }
+            .during("vkGetQueryPoolResults")?;
+        }
+        let passes = self
+            .passes
+            .iter()
+            .filter_map(|(name, start, end)| {
+                let elapsed = ticks[(*end)? as usize].wrapping_sub(ticks[*start as usize]) & self.valid_mask;
+                Some(PassTime { name: name.clone(), ms: elapsed as f64 * period_ns * 1e-6 })
+            })
+            .collect();
+        Ok(PassTimes { passes })
+    }
+
+    pub(crate) fn destroy(&mut self, device: &ash::Device) {
+        for pool in self.pools.drain(..) {
+            unsafe { device.destroy_query_pool(pool, None) };
+        }
+    }
+}

@@ -1,0 +1,17 @@
+//! tagsplat: topology-consistent mesh sequences from multi-view video, on Vulkan compute.
+//!
+//! The engine is a library first; the `tagsplat` command-line program is a thin layer over it.
+//! Modules follow the pipeline stages (see `ARCHITECTURE.md`):
+//! - [`gpu`]: Vulkan context, buffers, compute pipelines, command recording, timestamps,
+//!   validation.
+//! - [`sort`]: exclusive prefix scan and LSD radix sort on the GPU.
+//! - [`rng`]: a small deterministic generator for tests, benchmarks and synthetic data.
+
+pub mod gpu;
+pub mod rng;
+pub mod sort;
+
+/// SPIR-V of every compute shader, compiled from `shaders/` by `build.rs`.
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+}

@@ -1,0 +1,166 @@
+//! Stable LSD radix sort of (key, u32 value) pairs, 8 bits per pass, sorting only the low
+//! `bits` of each key. Each pass: per-tile digit counts, an exclusive scan of those counts
+//! (digit-major, so it yields every (digit, tile) its output start), and a stable scatter.
+//! Passes ping-pong between the caller's buffers and scratch buffers owned by the sorter.
+
+use super::scan::PrefixScan;
+use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes, PipelineDesc, Recorder};
+use crate::shaders;
+use bytemuck::{Pod, Zeroable};
+use std::sync::Arc;
+
+const RADIX_BITS: u32 = 8;
+const KEYS_PER_THREAD: u32 = 16;
+
+/// A key type the GPU radix sort handles: u32 or u64 (stored as two little-endian words).
+pub trait RadixKey: Pod + Ord + Send + Sync {
+    const WORDS: u32;
+    const BITS: u32 = 32 * Self::WORDS;
+    /// The key with every bit from `bits` up cleared.
+    fn low_bits(self, bits: u32) -> Self;
+}
+
+impl RadixKey for u32 {
+    const WORDS: u32 = 1;
+    #[inline]
+    fn low_bits(self, bits: u32) -> Self {
+        if bits >= 32 { self } else { self & ((1 << bits) - 1) }
+    }
+}
+
+impl RadixKey for u64 {
+    const WORDS: u32 = 2;
+    #[inline]
+    fn low_bits(self, bits: u32) -> Self {
+        if bits >= 64 { self } else { self & ((1 << bits) - 1) }
+    }
+}
+
+/// Push constants of radix_histogram.comp / radix_scatter.comp (shaders/sort/radix_common.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct RadixParams {
+    len: u32,
+    key_words: u32,
+    word: u32,
+    shift: u32,
+    digit_bits: u32,
+    tile_count: u32,
+}
+
+pub struct RadixSort<K: RadixKey> {
+    histogram: ComputePipeline,
+    scatter: ComputePipeline,
+    scan: PrefixScan,
+    tile_len: usize,
+    capacity: usize,
+    tile_counts: GpuBuffer<u32>,
+    scratch_keys: GpuBuffer<K>,
+    scratch_values: GpuBuffer<u32>,
+}
+
+impl<K: RadixKey> RadixSort<K> {
+    /// A sorter for up to `capacity` pairs. Scratch memory: one more copy of keys and values,
+    /// plus 256 counts per tile of 16 keys per invocation.
+    pub fn new(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<Self> {
+        let limits = ctx.limits();
+        let workgroup_size = super::workgroup_size(ctx);
+        let shared_bytes = (workgroup_size / limits.subgroup_size) * (1 << RADIX_BITS) * 4;
+        if shared_bytes > limits.max_shared_memory_bytes {
+            return Err(GpuError::LimitExceeded {
+                what: "radix sort digit counts (shared memory bytes)".into(),
+                count: shared_bytes as u64,
+                limit: limits.max_shared_memory_bytes as u64,
+                limit_name: "maxComputeSharedMemorySize",
+            });
+        }
+        let tile_len = (workgroup_size * KEYS_PER_THREAD) as usize;
+        let tile_counts_len = capacity.div_ceil(tile_len) << RADIX_BITS;
+        let specialization = [workgroup_size, limits.subgroup_size, KEYS_PER_THREAD];
+        let pipeline = |name, spirv, bindings| {
+            let push_constant_bytes = size_of::<RadixParams>() as u32;
+            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes, specialization: &specialization })
+        };
+        Ok(Self {
+            histogram: pipeline("radix_histogram", shaders::SORT_RADIX_HISTOGRAM, 2)?,
+            scatter: pipeline("radix_scatter", shaders::SORT_RADIX_SCATTER, 5)?,
+            scan: PrefixScan::new(ctx, tile_counts_len)?,
+            tile_len,
+            capacity,
+            tile_counts: GpuBuffer::new(ctx, "radix tile counts", tile_counts_len)?,
+            scratch_keys: GpuBuffer::new(ctx, "radix scratch keys", capacity)?,
+            scratch_values: GpuBuffer::new(ctx, "radix scratch values", capacity)?,
+        })
+    }
+
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// Number of passes for `bits` significant bits.
+    pub fn passes(bits: u32) -> u32 {
+        bits.min(K::BITS).div_ceil(RADIX_BITS)
+    }
+
+    /// Records a stable sort of the first `len` pairs of `keys` and `values` by the low `bits`
+    /// of each key (higher bits travel with the key but do not affect the order).
+    pub fn record(&self, recorder: &mut Recorder, keys: &GpuBuffer<K>, values: &GpuBuffer<u32>, len: usize, bits: u32) -> GpuResult<()> {
+        let room = self.capacity.min(keys.len()).min(values.len());
+        if len > room {
+            return Err(GpuError::LengthMismatch { what: "radix sort", name: keys.name().into(), len, capacity: room });
+        }
+        if bits > K::BITS {
+            return Err(GpuError::LimitExceeded { what: "radix sort key bits".into(), count: bits as u64, limit: K::BITS as u64, limit_name: "key width" });
+        }
+        let passes = Self::passes(bits);
+        if len <= 1 || passes == 0 {
+            return Ok(());
+        }
+        let tile_count = len.div_ceil(self.tile_len);
+        let buffers = [(keys, values), (&self.scratch_keys, &self.scratch_values)];
+        recorder.begin_pass("radix sort");
+        for pass in 0..passes {
+            let (keys_in, values_in) = buffers[(pass % 2) as usize];
+            let (keys_out, values_out) = buffers[((pass + 1) % 2) as usize];
+            let low = pass * RADIX_BITS;
+            let params = RadixParams {
+                len: len as u32,
+                key_words: K::WORDS,
+                word: low / 32,
+                shift: low % 32,
+                digit_bits: (bits - low).min(RADIX_BITS),
+                tile_count: tile_count as u32,
+            };
+            let counts_len = tile_count << params.digit_bits;
+            recorder.begin_pass("radix histogram");
+            recorder.dispatch_1d(&self.histogram, &[keys_in.binding(), self.tile_counts.binding()], &params, tile_count as u64)?;
+            recorder.end_pass();
+            self.scan.record(recorder, &self.tile_counts, counts_len)?;
+            recorder.begin_pass("radix scatter");
+            let bindings = [keys_in.binding(), values_in.binding(), self.tile_counts.binding(), keys_out.binding(), values_out.binding()];
+            recorder.dispatch_1d(&self.scatter, &bindings, &params, tile_count as u64)?;
+            recorder.end_pass();
+        }
+        if passes % 2 == 1 {
+            // An odd pass count leaves the result in scratch: bring it home.
+            recorder.copy_buffer(&self.scratch_keys, keys, len);
+            recorder.copy_buffer(&self.scratch_values, values, len);
+        }
+        recorder.end_pass();
+        Ok(())
+    }
+
+    /// Sorts in one submission and returns the GPU pass times.
+    pub fn sort(&self, keys: &GpuBuffer<K>, values: &GpuBuffer<u32>, len: usize, bits: u32) -> GpuResult<PassTimes> {
+        let mut recorder = Recorder::new(keys.context())?;
+        self.record(&mut recorder, keys, values, len, bits)?;
+        recorder.submit_and_wait()
+    }
+}
+
+/// The CPU reference: pairs stably sorted by the low `bits` of the key.
+pub fn sort_pairs_cpu<K: RadixKey>(keys: &[K], values: &[u32], bits: u32) -> (Vec<K>, Vec<u32>) {
+    let mut pairs: Vec<(K, u32)> = keys.iter().copied().zip(values.iter().copied()).collect();
+    pairs.sort_by_key(|&(k, _)| k.low_bits(bits));
+    pairs.into_iter().unzip()
+}

@@ -1,0 +1,45 @@
+//! Test harness: a GPU context with the Khronos validation layer (synchronization validation
+//! included) switched on. Dropping a [`TestGpu`] destroys the context and fails the test on any
+//! validation message, those sent during destruction (leaked objects) included.
+
+#![allow(dead_code)] // Each test binary uses its own part of the harness.
+
+use std::sync::Arc;
+use tagsplat::gpu::{ContextOptions, GpuContext, ValidationLog};
+
+pub struct TestGpu {
+    ctx: Option<Arc<GpuContext>>,
+    log: Arc<ValidationLog>,
+}
+
+/// A validated context on the device the environment picks (lavapipe on CI).
+pub fn gpu() -> TestGpu {
+    let options = ContextOptions { device: None, validation: Some(true) };
+    let ctx = GpuContext::new(&options).unwrap_or_else(|e| panic!("cannot create a Vulkan context: {e}"));
+    let log = ctx.validation().clone();
+    TestGpu { ctx: Some(ctx), log }
+}
+
+impl TestGpu {
+    pub fn ctx(&self) -> &Arc<GpuContext> {
+        self.ctx.as_ref().expect("context lives until drop")
+    }
+}
+
+impl Drop for TestGpu {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            return;
+        }
+        // Destroy the context now, so messages about leaked objects are counted too.
+        let ctx = self.ctx.take().expect("dropped once");
+        assert!(Arc::try_unwrap(ctx).is_ok(), "the GPU context is still referenced at the end of the test");
+        let messages = self.log.messages();
+        assert!(messages.is_empty(), "{} validation message(s):\n{}", messages.len(), messages.join("\n"));
+    }
+}
+
+/// Deterministic test data.
+pub fn rng(seed: u64) -> tagsplat::rng::SplitMix64 {
+    tagsplat::rng::SplitMix64::new(seed)
+}

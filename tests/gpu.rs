@@ -1,0 +1,74 @@
+//! GPU core on the real device (lavapipe on CI) with validation on.
+
+mod common;
+
+use tagsplat::gpu::{GpuBuffer, GpuContext, GpuError, Recorder};
+
+#[test]
+fn context_reports_device_and_limits() {
+    let gpu = common::gpu();
+    let ctx = gpu.ctx();
+    assert!(ctx.validation_enabled());
+    assert!(ctx.info().capabilities.missing_features().is_empty());
+    let limits = ctx.limits();
+    assert!(limits.subgroup_size.is_power_of_two());
+    assert!(limits.max_storage_buffer_range >= 1 << 27);
+    let listed = GpuContext::list_devices().unwrap();
+    assert!(listed.iter().any(|d| d.name == ctx.info().name));
+}
+
+#[test]
+fn buffer_round_trip_and_partial_read() {
+    let gpu = common::gpu();
+    let data: Vec<u32> = (0..10_000).map(|i| i * 7 + 1).collect();
+    let buffer = GpuBuffer::from_slice(gpu.ctx(), "round trip", &data).unwrap();
+    assert_eq!(buffer.read().unwrap(), data);
+    assert_eq!(buffer.read_prefix(5).unwrap(), &data[..5]);
+    let too_long = vec![0u32; 10_001];
+    assert!(matches!(buffer.write(&too_long), Err(GpuError::LengthMismatch { .. })));
+    let empty = GpuBuffer::<u32>::new(gpu.ctx(), "empty", 0).unwrap();
+    assert!(empty.read().unwrap().is_empty());
+}
+
+#[test]
+fn copy_and_fill_are_ordered_by_barriers() {
+    let gpu = common::gpu();
+    let n = 1 << 16;
+    let a = GpuBuffer::<u32>::new(gpu.ctx(), "a", n).unwrap();
+    let b = GpuBuffer::<u32>::new(gpu.ctx(), "b", n).unwrap();
+    let mut recorder = Recorder::new(gpu.ctx()).unwrap();
+    recorder.begin_pass("fill");
+    recorder.fill_buffer(&a, 0xABCD_0123);
+    recorder.end_pass();
+    recorder.begin_pass("copy");
+    recorder.copy_buffer(&a, &b, n);
+    recorder.end_pass();
+    recorder.fill_buffer(&a, 5);
+    let times = recorder.submit_and_wait().unwrap();
+    assert!(b.read().unwrap().iter().all(|&x| x == 0xABCD_0123));
+    assert!(a.read().unwrap().iter().all(|&x| x == 5));
+    if gpu.ctx().limits().timestamp_period_ns.is_some() {
+        let names: Vec<_> = times.passes.iter().map(|p| p.name.as_str()).collect();
+        assert_eq!(names, ["fill", "copy"]);
+        assert!(times.passes.iter().all(|p| p.ms >= 0.0 && p.ms.is_finite()));
+    }
+}
+
+#[test]
+fn oversized_buffer_is_refused_with_the_limit_named() {
+    let gpu = common::gpu();
+    let limit = gpu.ctx().limits().max_storage_buffer_range;
+    let len = (limit / 4 + 1) as usize;
+    let err = GpuBuffer::<u32>::new(gpu.ctx(), "huge keys", len).err().expect("must be refused");
+    let text = err.to_string();
+    assert!(text.contains("huge keys") && text.contains("maxStorageBufferRange"), "{text}");
+    let err = GpuBuffer::<u64>::new(gpu.ctx(), "overflow", usize::MAX).err().expect("must be refused");
+    assert!(matches!(err, GpuError::BufferTooLarge { .. }));
+}
+
+#[test]
+fn unknown_device_is_a_named_error() {
+    let options = tagsplat::gpu::ContextOptions { device: Some("no such device 42".into()), validation: Some(false) };
+    let err = GpuContext::new(&options).err().expect("must fail");
+    assert!(err.to_string().contains("no such device 42"), "{err}");
+}

@@ -1,0 +1,117 @@
+//! Prefix scan and radix sort on the real device against CPU references
+//! (`exclusive_scan_cpu`, and a stable sort whose order `sort_unstable` on (key, index) equals).
+
+mod common;
+
+use tagsplat::gpu::{GpuBuffer, Recorder};
+use tagsplat::sort::{exclusive_scan_cpu, PrefixScan, RadixKey, RadixSort};
+
+fn gpu_scan(gpu: &common::TestGpu, data: &[u32]) -> Vec<u32> {
+    let buffer = GpuBuffer::from_slice(gpu.ctx(), "scan data", data).unwrap();
+    let scan = PrefixScan::new(gpu.ctx(), data.len()).unwrap();
+    let mut recorder = Recorder::new(gpu.ctx()).unwrap();
+    scan.record(&mut recorder, &buffer, data.len()).unwrap();
+    recorder.submit_and_wait().unwrap();
+    buffer.read().unwrap()
+}
+
+#[test]
+fn scan_matches_cpu_at_edge_sizes() {
+    let gpu = common::gpu();
+    let block = tagsplat::sort::PrefixScan::new(gpu.ctx(), 1).unwrap();
+    drop(block);
+    let mut rng = common::rng(1);
+    // Around one and two blocks for any workgroup size the device picks, and a deep recursion.
+    for len in [0, 1, 2, 3, 255, 256, 257, 511, 512, 513, 1023, 1024, 1025, 2047, 2048, 2049, 4097, 262_145, 1_234_567] {
+        let data: Vec<u32> = (0..len).map(|_| rng.next_u32() % 1000).collect();
+        assert_eq!(gpu_scan(&gpu, &data), exclusive_scan_cpu(&data), "len {len}");
+    }
+}
+
+#[test]
+fn scan_wraps_like_u32() {
+    let gpu = common::gpu();
+    let data = vec![u32::MAX / 3; 5000];
+    assert_eq!(gpu_scan(&gpu, &data), exclusive_scan_cpu(&data));
+}
+
+/// Sorts on the GPU and checks against the CPU: keys equal `sort_unstable` of the masked keys,
+/// and values show the sort is stable (equal keys keep their input order).
+fn check_sort<K: RadixKey + std::fmt::Debug>(gpu: &common::TestGpu, keys: &[K], bits: u32, what: &str) {
+    let n = keys.len();
+    let values: Vec<u32> = (0..n as u32).collect();
+    let key_buffer = GpuBuffer::from_slice(gpu.ctx(), "keys", keys).unwrap();
+    let value_buffer = GpuBuffer::from_slice(gpu.ctx(), "values", &values).unwrap();
+    let sorter = RadixSort::<K>::new(gpu.ctx(), n).unwrap();
+    sorter.sort(&key_buffer, &value_buffer, n, bits).unwrap();
+    let sorted_keys = key_buffer.read().unwrap();
+    let sorted_values = value_buffer.read().unwrap();
+
+    let mut expected: Vec<(K, u32)> = keys.iter().map(|k| k.low_bits(bits)).zip(values).collect();
+    expected.sort_unstable(); // (key, index) pairs are unique: unstable sort gives the stable order.
+    for (i, &(key, index)) in expected.iter().enumerate() {
+        let got = (sorted_keys[i].low_bits(bits), sorted_values[i]);
+        assert_eq!(got, (key, index), "{what}: n {n}, bits {bits}, first difference at {i}");
+        // Bits above `bits` travel with their key.
+        assert_eq!(sorted_keys[i], keys[index as usize], "{what}: key bits lost at {i}");
+    }
+}
+
+fn random_keys<K: RadixKey>(n: usize, seed: u64, make: impl Fn(u64) -> K) -> Vec<K> {
+    let mut rng = common::rng(seed);
+    (0..n).map(|_| make(rng.next_u64())).collect()
+}
+
+#[test]
+fn sort_u32_distributions_and_sizes() {
+    let gpu = common::gpu();
+    let tile = 16 * 256; // keys per tile on a 256-invocation workgroup: the largest it gets
+    for n in [0, 1, 2, 3, 255, 257, 2047, 2049, tile - 1, tile + 1, 100_003] {
+        check_sort(&gpu, &random_keys(n, n as u64, |x| x as u32), 32, "uniform");
+    }
+    let n = 70_001;
+    check_sort(&gpu, &vec![0xDEAD_BEEFu32; n], 32, "all equal");
+    check_sort(&gpu, &(0..n as u32).collect::<Vec<_>>(), 32, "sorted");
+    check_sort(&gpu, &(0..n as u32).rev().collect::<Vec<_>>(), 32, "reversed");
+    check_sort(&gpu, &random_keys(n, 9, |x| (x % 5) as u32 * 0x0101_0101), 32, "few unique");
+}
+
+#[test]
+fn sort_u32_partial_bits() {
+    let gpu = common::gpu();
+    let n = 50_000;
+    for bits in [1, 13] {
+        check_sort(&gpu, &random_keys(n, bits as u64, |x| (x as u32).low_bits(bits)), bits, "in range");
+        // Garbage above `bits` must not change the order.
+        check_sort(&gpu, &random_keys(n, 77 + bits as u64, |x| x as u32), bits, "high garbage");
+    }
+    check_sort(&gpu, &random_keys(n, 3, |x| x as u32), 0, "zero bits is the identity");
+}
+
+#[test]
+fn sort_u64_keys() {
+    let gpu = common::gpu();
+    let n = 40_001;
+    for bits in [1, 13, 32, 48, 64] {
+        check_sort(&gpu, &random_keys(n, 100 + bits as u64, |x| x.low_bits(bits)), bits, "u64 uniform");
+    }
+    // Tile id in the high word, depth in the low word: the binning key layout.
+    check_sort(&gpu, &random_keys(n, 5, |x| ((x % 37) << 32) | (x >> 40)), 48, "few tiles");
+    check_sort(&gpu, &(0..n as u64).rev().map(|x| x << 20).collect::<Vec<_>>(), 64, "u64 reversed");
+}
+
+#[test]
+fn sort_millions_non_power_of_two() {
+    let gpu = common::gpu();
+    check_sort(&gpu, &random_keys(3_000_017, 11, |x| x as u32), 32, "millions");
+}
+
+#[test]
+fn sort_rejects_bad_arguments() {
+    let gpu = common::gpu();
+    let keys = GpuBuffer::<u32>::from_slice(gpu.ctx(), "keys", &[3, 2, 1]).unwrap();
+    let values = GpuBuffer::<u32>::from_slice(gpu.ctx(), "values", &[0, 1, 2]).unwrap();
+    let sorter = RadixSort::<u32>::new(gpu.ctx(), 3).unwrap();
+    assert!(sorter.sort(&keys, &values, 4, 32).is_err(), "more pairs than the buffers hold");
+    assert!(sorter.sort(&keys, &values, 3, 33).is_err(), "more bits than the key has");
+}
