@@ -5,8 +5,10 @@
 //! - [`gpu`]: Vulkan context, buffers, compute pipelines, command recording, timestamps,
 //!   validation.
 //! - [`sort`]: exclusive prefix scan and LSD radix sort on the GPU.
+//! - [`bench`]: benchmarks measured against bounds from the same run.
 //! - [`rng`]: a small deterministic generator for tests, benchmarks and synthetic data.
 
+pub mod bench;
 pub mod gpu;
 pub mod rng;
 pub mod sort;

@@ -8,7 +8,7 @@ use ash::vk;
 const QUERIES_PER_POOL: u32 = 128;
 
 /// The GPU time of one recorded pass.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PassTime {
     pub name: String,
     pub ms: f64,

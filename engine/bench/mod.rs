@@ -1,0 +1,18 @@
+//! Benchmarks that report speed against a bound measured in the same run: the GPU copy
+//! bandwidth (a compute copy kernel and the transfer engine) and the CPU's `sort_unstable`.
+
+mod copy;
+mod sort;
+
+pub use copy::{measure_copy_bandwidth, CopyBandwidth};
+pub use sort::{bench_sort, SortBenchReport};
+
+/// Median of a sample; 0 for an empty one (nothing was timed).
+fn median(mut samples: Vec<f64>) -> f64 {
+    if samples.is_empty() {
+        return 0.0;
+    }
+    samples.sort_by(f64::total_cmp);
+    let mid = samples.len() / 2;
+    if samples.len() % 2 == 1 { samples[mid] } else { 0.5 * (samples[mid - 1] + samples[mid]) }
+}

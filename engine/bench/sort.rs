@@ -1,0 +1,115 @@
+//! `tagsplat bench sort`: GPU radix sort throughput against the copy-bandwidth bound and the
+//! CPU's `sort_unstable`, all measured in one run.
+//!
+//! The bound: an LSD pass must at least read and write every key and value once, i.e. copy
+//! `n * (key bytes + 4)` bytes; `passes` such copies at the measured compute-copy bandwidth is
+//! the fastest any 8-bit-digit LSD sort could go. `bandwidth_fraction = bound time / sort time`.
+
+use super::copy::{measure_copy_bandwidth, CopyBandwidth};
+use crate::gpu::{GpuBuffer, GpuContext, GpuError, GpuResult, PassTime, Recorder};
+use crate::rng::SplitMix64;
+use crate::sort::{RadixKey, RadixSort};
+use std::sync::Arc;
+use std::time::Instant;
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SortBenchReport {
+    pub device: String,
+    pub n: usize,
+    pub bits: u32,
+    pub key_bytes: u32,
+    pub passes: u32,
+    pub repetitions: usize,
+    /// Median GPU time of one whole sort (timestamps), ms.
+    pub sort_ms: f64,
+    pub keys_per_s: f64,
+    /// Median GPU time per kind of pass within one sort, ms.
+    pub stage_ms: Vec<PassTime>,
+    pub copy: CopyBandwidth,
+    /// Compute-copy bandwidth, GB/s (10^9 bytes copied per second).
+    pub copy_gb_per_s: f64,
+    /// Time a sort would take at copy bandwidth, ms.
+    pub bound_ms: f64,
+    pub bandwidth_fraction: f64,
+    pub cpu_sort_ms: f64,
+    pub cpu_sort_keys_per_s: f64,
+    /// The GPU result was checked to be sorted.
+    pub verified: bool,
+}
+
+/// Sorts `n` random keys with `bits` significant bits (u64 keys above 32 bits) `repetitions`
+/// times and reports the medians.
+pub fn bench_sort(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize) -> GpuResult<SortBenchReport> {
+    if ctx.limits().timestamp_period_ns.is_none() {
+        return Err(GpuError::MissingFeatures { device: ctx.info().name.clone(), missing: vec!["timestamp queries on the compute queue"] });
+    }
+    if bits <= 32 {
+        run::<u32>(ctx, n, bits, repetitions, |x| x as u32)
+    } else {
+        run::<u64>(ctx, n, bits, repetitions, |x| x)
+    }
+}
+
+fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize, make: fn(u64) -> K) -> GpuResult<SortBenchReport> {
+    let repetitions = repetitions.max(1);
+    // Create the GPU side first: an impossible `n` fails here, before host memory is spent.
+    let sorter = RadixSort::<K>::new(ctx, n)?;
+    let input = GpuBuffer::<K>::new(ctx, "bench keys (input)", n)?;
+    let keys = GpuBuffer::<K>::new(ctx, "bench keys", n)?;
+    let values = GpuBuffer::<u32>::new(ctx, "bench values", n)?;
+
+    let mut rng = SplitMix64::new(0x5EED ^ n as u64);
+    let host_keys: Vec<K> = (0..n).map(|_| make(rng.next_u64()).low_bits(bits)).collect();
+    input.write(&host_keys)?;
+
+    let mut recorder = Recorder::new(ctx)?;
+    for _ in 0..repetitions + 1 {
+        recorder.copy_buffer(&input, &keys, n); // Every repetition sorts the same input.
+        recorder.begin_pass("sort");
+        sorter.record(&mut recorder, &keys, &values, n, bits)?;
+        recorder.end_pass();
+    }
+    let times = recorder.submit_and_wait()?;
+    let sorted = keys.read()?;
+    let verified = sorted.windows(2).all(|w| w[0] <= w[1]);
+
+    // Per-repetition totals, the first (warm-up) left out.
+    let sort_ms = super::median(times.passes.iter().filter(|p| p.name == "sort").skip(1).map(|p| p.ms).collect());
+    let stage_ms = times
+        .summed()
+        .into_iter()
+        .filter(|p| p.name != "sort")
+        .map(|p| PassTime { ms: p.ms / (repetitions + 1) as f64, ..p })
+        .collect();
+
+    let pair_bytes = (size_of::<K>() + 4) as u64;
+    let copy_bytes = (n as u64 * pair_bytes).clamp(1 << 20, ctx.limits().max_storage_buffer_range);
+    let copy = measure_copy_bandwidth(ctx, copy_bytes, 5)?;
+    let passes = RadixSort::<K>::passes(bits);
+    let bound_ms = (passes as u64 * n as u64 * pair_bytes) as f64 / copy.compute_bytes_per_s * 1e3;
+
+    let mut pairs: Vec<(K, u32)> = host_keys.into_iter().zip(0..).collect();
+    let start = Instant::now();
+    pairs.sort_unstable_by_key(|p| p.0);
+    let cpu_sort_ms = start.elapsed().as_secs_f64() * 1e3;
+
+    let per_s = |ms: f64| if ms > 0.0 { n as f64 / (ms * 1e-3) } else { 0.0 };
+    Ok(SortBenchReport {
+        device: ctx.info().name.clone(),
+        n,
+        bits,
+        key_bytes: size_of::<K>() as u32,
+        passes,
+        repetitions,
+        sort_ms,
+        keys_per_s: per_s(sort_ms),
+        stage_ms,
+        copy_gb_per_s: copy.compute_bytes_per_s * 1e-9,
+        copy,
+        bound_ms,
+        bandwidth_fraction: if sort_ms > 0.0 { bound_ms / sort_ms } else { 0.0 },
+        cpu_sort_ms,
+        cpu_sort_keys_per_s: per_s(cpu_sort_ms),
+        verified,
+    })
+}
