@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Installs what is missing, then runs every test with the Khronos validation layer on, and
+# builds the benchmarks so they at least compile (running them is scripts/bench.sh's job and
+# `cargo bench`'s). Extra arguments go to `cargo test`, e.g. `scripts/test.sh -- --nocapture`.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+bash scripts/setup.sh
+. scripts/env.sh
+export TAGSPLAT_VALIDATION=1
+
+cargo test --lib --bins --tests "$@"
+cargo build --benches
