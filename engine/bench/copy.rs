@@ -2,12 +2,14 @@
 //! what a memory-bound compute pass can reach) and by vkCmdCopyBuffer (the transfer path).
 //! Bandwidth counts bytes copied, each read once and written once.
 
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder};
+use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PassTimes, PipelineDesc, Recorder};
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
 
 const WORKGROUP_SIZE: u32 = 256;
+const COMPUTE_PASS: &str = "compute copy";
+const TRANSFER_PASS: &str = "transfer copy";
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -16,7 +18,7 @@ struct CopyParams {
     total_threads: u32,
 }
 
-/// Copy bandwidths in bytes copied per second (median of the repetitions).
+/// Copy bandwidths in bytes copied per second (medians).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct CopyBandwidth {
     pub bytes: u64,
@@ -24,40 +26,57 @@ pub struct CopyBandwidth {
     pub transfer_bytes_per_s: f64,
 }
 
-/// Copies `bytes` (rounded down to 16) `repetitions` times each way and times it with GPU
-/// timestamps.
-pub fn measure_copy_bandwidth(ctx: &Arc<GpuContext>, bytes: u64, repetitions: usize) -> GpuResult<CopyBandwidth> {
-    let len = (bytes / 16) as usize;
-    let src = GpuBuffer::<[u32; 4]>::new(ctx, "copy source", len)?;
-    let dst = GpuBuffer::<[u32; 4]>::new(ctx, "copy destination", len)?;
-    let pipeline = ComputePipeline::new(
-        ctx,
-        &PipelineDesc {
+/// Two buffers of `bytes` (rounded down to 16) and the copy kernel, so copies can be recorded
+/// between other work of one submission and both see the same machine state.
+pub struct CopyProbe {
+    pipeline: ComputePipeline,
+    src: GpuBuffer<[u32; 4]>,
+    dst: GpuBuffer<[u32; 4]>,
+}
+
+impl CopyProbe {
+    pub fn new(ctx: &Arc<GpuContext>, bytes: u64) -> GpuResult<Self> {
+        let len = (bytes / 16) as usize;
+        let desc = PipelineDesc {
             name: "copy",
             spirv: shaders::BENCH_COPY,
             bindings: 2,
             push_constant_bytes: size_of::<CopyParams>() as u32,
             specialization: &[WORKGROUP_SIZE],
-        },
-    )?;
-    // Enough workgroups to fill any device, few enough that each invocation loops a while.
-    let groups = (len as u64).div_ceil(WORKGROUP_SIZE as u64 * 8).clamp(1, 4096);
-    let params = CopyParams { len: len as u32, total_threads: groups as u32 * WORKGROUP_SIZE };
-    let mut recorder = Recorder::new(ctx)?;
-    recorder.fill_buffer(&src, 0x5A5A_5A5A);
-    for _ in 0..repetitions + 1 {
-        recorder.begin_pass("compute copy");
-        recorder.dispatch_1d(&pipeline, &[src.binding(), dst.binding()], &params, groups)?;
-        recorder.end_pass();
-        recorder.begin_pass("transfer copy");
-        recorder.copy_buffer(&src, &dst, len);
-        recorder.end_pass();
+        };
+        let probe = Self {
+            pipeline: ComputePipeline::new(ctx, &desc)?,
+            src: GpuBuffer::new(ctx, "copy source", len)?,
+            dst: GpuBuffer::new(ctx, "copy destination", len)?,
+        };
+        let mut recorder = Recorder::new(ctx)?;
+        recorder.fill_buffer(&probe.src, 0x5A5A_5A5A);
+        recorder.submit_and_wait()?;
+        Ok(probe)
     }
-    let times = recorder.submit_and_wait()?;
-    let rate = |name: &str| {
-        // The first repetition warms caches and page tables; it is left out.
-        let ms: Vec<f64> = times.passes.iter().filter(|p| p.name == name).skip(1).map(|p| p.ms).collect();
-        (len * 16) as f64 / (super::median(ms) * 1e-3)
-    };
-    Ok(CopyBandwidth { bytes: (len * 16) as u64, compute_bytes_per_s: rate("compute copy"), transfer_bytes_per_s: rate("transfer copy") })
+
+    /// Records one timed compute copy and one timed transfer copy.
+    pub fn record(&self, recorder: &mut Recorder) -> GpuResult<()> {
+        let len = self.src.len();
+        // Enough workgroups to fill any device, few enough that each invocation loops a while.
+        let groups = (len as u64).div_ceil(WORKGROUP_SIZE as u64 * 8).clamp(1, 4096);
+        let params = CopyParams { len: len as u32, total_threads: groups as u32 * WORKGROUP_SIZE };
+        recorder.begin_pass(COMPUTE_PASS);
+        recorder.dispatch_1d(&self.pipeline, &[self.src.binding(), self.dst.binding()], &params, groups)?;
+        recorder.end_pass();
+        recorder.begin_pass(TRANSFER_PASS);
+        recorder.copy_buffer(&self.src, &self.dst, len);
+        recorder.end_pass();
+        Ok(())
+    }
+
+    /// Median bandwidths over the copies in `times`, leaving out the first (warm-up) pair.
+    pub fn bandwidth(&self, times: &PassTimes) -> CopyBandwidth {
+        let bytes = self.src.size_bytes();
+        let rate = |name: &str| {
+            let ms: Vec<f64> = times.passes.iter().filter(|p| p.name == name).skip(1).map(|p| p.ms).collect();
+            bytes as f64 / (super::median(ms) * 1e-3)
+        };
+        CopyBandwidth { bytes, compute_bytes_per_s: rate(COMPUTE_PASS), transfer_bytes_per_s: rate(TRANSFER_PASS) }
+    }
 }

@@ -4,7 +4,7 @@
 mod copy;
 mod sort;
 
-pub use copy::{measure_copy_bandwidth, CopyBandwidth};
+pub use copy::{CopyBandwidth, CopyProbe};
 pub use sort::{bench_sort, SortBenchReport};
 
 /// Median of a sample; 0 for an empty one (nothing was timed).

@@ -5,12 +5,14 @@
 //! `n * (key bytes + 4)` bytes; `passes` such copies at the measured compute-copy bandwidth is
 //! the fastest any 8-bit-digit LSD sort could go. `bandwidth_fraction = bound time / sort time`.
 
-use super::copy::{measure_copy_bandwidth, CopyBandwidth};
-use crate::gpu::{GpuBuffer, GpuContext, GpuError, GpuResult, PassTime, Recorder};
+use super::copy::{CopyBandwidth, CopyProbe};
+use crate::gpu::{GpuBuffer, GpuContext, GpuError, GpuResult, PassTime, PassTimes, Recorder};
 use crate::rng::SplitMix64;
 use crate::sort::{RadixKey, RadixSort};
 use std::sync::Arc;
 use std::time::Instant;
+
+const SORT_PASS: &str = "sort";
 
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SortBenchReport {
@@ -62,10 +64,16 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
     let host_keys: Vec<K> = (0..n).map(|_| make(rng.next_u64()).low_bits(bits)).collect();
     input.write(&host_keys)?;
 
+    let pair_bytes = (size_of::<K>() + 4) as u64;
+    let copy_bytes = (n as u64 * pair_bytes).clamp(1 << 20, ctx.limits().max_storage_buffer_range);
+    let probe = CopyProbe::new(ctx, copy_bytes)?;
+
+    // Copies and sorts alternate in one submission, so both see the same machine load.
     let mut recorder = Recorder::new(ctx)?;
     for _ in 0..repetitions + 1 {
+        probe.record(&mut recorder)?;
         recorder.copy_buffer(&input, &keys, n); // Every repetition sorts the same input.
-        recorder.begin_pass("sort");
+        recorder.begin_pass(SORT_PASS);
         sorter.record(&mut recorder, &keys, &values, n, bits)?;
         recorder.end_pass();
     }
@@ -73,18 +81,9 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
     let sorted = keys.read()?;
     let verified = sorted.windows(2).all(|w| w[0] <= w[1]);
 
-    // Per-repetition totals, the first (warm-up) left out.
-    let sort_ms = super::median(times.passes.iter().filter(|p| p.name == "sort").skip(1).map(|p| p.ms).collect());
-    let stage_ms = times
-        .summed()
-        .into_iter()
-        .filter(|p| p.name != "sort")
-        .map(|p| PassTime { ms: p.ms / (repetitions + 1) as f64, ..p })
-        .collect();
-
-    let pair_bytes = (size_of::<K>() + 4) as u64;
-    let copy_bytes = (n as u64 * pair_bytes).clamp(1 << 20, ctx.limits().max_storage_buffer_range);
-    let copy = measure_copy_bandwidth(ctx, copy_bytes, 5)?;
+    let sort_ms = super::median(times.passes.iter().filter(|p| p.name == SORT_PASS).skip(1).map(|p| p.ms).collect());
+    let stage_ms = stage_medians(&times);
+    let copy = probe.bandwidth(&times);
     let passes = RadixSort::<K>::passes(bits);
     let bound_ms = (passes as u64 * n as u64 * pair_bytes) as f64 / copy.compute_bytes_per_s * 1e3;
 
@@ -112,4 +111,32 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
         cpu_sort_keys_per_s: per_s(cpu_sort_ms),
         verified,
     })
+}
+
+/// Median time per stage of one sort: passes nested in each top-level "sort" pass are summed
+/// by name per repetition, the warm-up repetition left out.
+fn stage_medians(times: &PassTimes) -> Vec<PassTime> {
+    let mut repetitions: Vec<Vec<PassTime>> = Vec::new();
+    let mut inside_sort = false;
+    for pass in &times.passes {
+        if pass.depth == 0 {
+            inside_sort = pass.name == SORT_PASS;
+            if inside_sort {
+                repetitions.push(Vec::new());
+            }
+        } else if let (true, Some(stages)) = (inside_sort, repetitions.last_mut()) {
+            match stages.iter_mut().find(|s| s.name == pass.name) {
+                Some(stage) => stage.ms += pass.ms,
+                None => stages.push(pass.clone()),
+            }
+        }
+    }
+    let Some(first) = repetitions.get(1) else { return Vec::new() };
+    first
+        .iter()
+        .map(|stage| {
+            let ms = repetitions[1..].iter().filter_map(|r| r.iter().find(|s| s.name == stage.name)).map(|s| s.ms).collect();
+            PassTime { name: stage.name.clone(), ms: super::median(ms), depth: stage.depth }
+        })
+        .collect()
 }

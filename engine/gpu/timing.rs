@@ -12,6 +12,8 @@ const QUERIES_PER_POOL: u32 = 128;
 pub struct PassTime {
     pub name: String,
     pub ms: f64,
+    /// Nesting level: 0 for a top-level pass, 1 inside one, …
+    pub depth: u32,
 }
 
 /// The pass times of one submission, in the order the passes began.
@@ -44,8 +46,8 @@ pub(crate) struct Timestamps {
     valid_mask: u64,
     pools: Vec<vk::QueryPool>,
     used: u32,
-    /// (name, start query, end query) per pass.
-    passes: Vec<(String, u32, Option<u32>)>,
+    /// (name, depth, start query, end query) per pass.
+    passes: Vec<(String, u32, u32, Option<u32>)>,
     open: Vec<usize>,
 }
 
@@ -64,14 +66,15 @@ impl Timestamps {
 
     pub(crate) fn begin(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, name: &str) {
         if let Some(query) = self.write(device, cmd) {
+            let depth = self.open.len() as u32;
             self.open.push(self.passes.len());
-            self.passes.push((name.to_string(), query, None));
+            self.passes.push((name.to_string(), depth, query, None));
         }
     }
 
     pub(crate) fn end(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) {
         let Some(pass) = self.open.pop() else { return };
-        self.passes[pass].2 = self.write(device, cmd);
+        self.passes[pass].3 = self.write(device, cmd);
     }
 
     /// Writes one timestamp once all earlier commands are done; `None` without timestamps.
@@ -104,9 +107,9 @@ impl Timestamps {
         let passes = self
             .passes
             .iter()
-            .filter_map(|(name, start, end)| {
+            .filter_map(|(name, depth, start, end)| {
                 let elapsed = ticks[(*end)? as usize].wrapping_sub(ticks[*start as usize]) & self.valid_mask;
-                Some(PassTime { name: name.clone(), ms: elapsed as f64 * period_ns * 1e-6 })
+                Some(PassTime { name: name.clone(), ms: elapsed as f64 * period_ns * 1e-6, depth: *depth })
             })
             .collect();
         Ok(PassTimes { passes })

@@ -1,11 +1,8 @@
 // Shared by radix_histogram.comp and radix_scatter.comp. Mirrors engine/sort/radix.rs
 // (RadixParams).
 //
-// A workgroup owns a tile of TILE_LEN consecutive keys. Each subgroup owns a contiguous
-// segment of the tile and walks it gl_SubgroupSize keys at a time, in order. Keys with equal
-// digits within one step are found with ballots (8 ballots, one per digit bit: "warp-level
-// multi-split"), so the per-subgroup digit counts need no atomics and ranks keep the input
-// order: the sort is stable.
+// A workgroup owns a tile of TILE_LEN consecutive keys; the histogram and the scatter of one
+// pass agree on the tiles.
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_ballot : require
 
@@ -28,13 +25,28 @@ layout(push_constant) uniform RadixParams {
 
 #include "../common/grid.glsl"
 
-layout(std430, binding = 0) readonly buffer Keys { uint keys[]; };
-
-// Digit counts of each subgroup's segment: [subgroup][digit].
-shared uint subgroup_counts[MAX_SUBGROUPS * RADIX];
 
 // Lanes of this subgroup holding a valid key with the same digit as this lane.
+// Small subgroups (lavapipe's 8 lanes) compare against every lane's digit, one broadcast per
+// lane; wider ones intersect one ballot per digit bit (warp-level multi-split). On lavapipe a
+// ballot is a loop over the lanes while a broadcast is one vector extract: 3x cheaper there.
 uvec4 lanes_with_digit(uint digit, bool valid) {
+    if (SUBGROUP_SIZE <= 8u) {
+        // An invalid lane's "digit" matches no valid digit (those are < 256).
+        uint mine = valid ? digit : 0xFFFFFFFFu;
+        uint peers = 0u;
+        peers |= uint(subgroupBroadcast(mine, 0u) == mine) << 0u;
+        peers |= uint(subgroupBroadcast(mine, 1u) == mine) << 1u;
+        peers |= uint(subgroupBroadcast(mine, 2u) == mine) << 2u;
+        peers |= uint(subgroupBroadcast(mine, 3u) == mine) << 3u;
+        if (SUBGROUP_SIZE == 8u) {
+            peers |= uint(subgroupBroadcast(mine, 4u) == mine) << 4u;
+            peers |= uint(subgroupBroadcast(mine, 5u) == mine) << 5u;
+            peers |= uint(subgroupBroadcast(mine, 6u) == mine) << 6u;
+            peers |= uint(subgroupBroadcast(mine, 7u) == mine) << 7u;
+        }
+        return uvec4(valid ? peers : 0u, 0u, 0u, 0u);
+    }
     uvec4 peers = subgroupBallot(valid);
     for (uint b = 0u; b < params.digit_bits; b++) {
         bool set = ((digit >> b) & 1u) != 0u;
@@ -49,33 +61,6 @@ uint count_lanes(uvec4 lanes) {
     return uint(c.x + c.y + c.z + c.w);
 }
 
-// Index of the i-th key of this subgroup's segment walk (step, lane) in the whole sort.
-uint segment_key_index(uint tile, uint step) {
-    uint segment_len = gl_SubgroupSize * KEYS_PER_THREAD;
-    return tile * TILE_LEN + gl_SubgroupID * segment_len + step * gl_SubgroupSize + gl_SubgroupInvocationID;
-}
-
 uint digit_of(uint word) {
     return (word >> params.shift) & ((1u << params.digit_bits) - 1u);
-}
-
-// Counts the digits of this subgroup's segment of `tile` into subgroup_counts[row..row + RADIX].
-void count_segment(uint tile, uint row) {
-    for (uint d = gl_SubgroupInvocationID; d < RADIX; d += gl_SubgroupSize) {
-        subgroup_counts[row + d] = 0u;
-    }
-    subgroupMemoryBarrierShared();
-    subgroupBarrier();
-    for (uint step = 0u; step < KEYS_PER_THREAD; step++) {
-        uint i = segment_key_index(tile, step);
-        bool valid = i < params.len;
-        uint digit = valid ? digit_of(keys[i * params.key_words + params.word]) : 0u;
-        uvec4 peers = lanes_with_digit(digit, valid);
-        // The lowest lane of each group of equal digits adds the group's size: no atomics.
-        if (valid && count_lanes(peers & gl_SubgroupLtMask) == 0u) {
-            subgroup_counts[row + digit] += count_lanes(peers);
-        }
-        subgroupMemoryBarrierShared();
-        subgroupBarrier();
-    }
 }
