@@ -4,13 +4,13 @@
 //! Passes ping-pong between the caller's buffers and scratch buffers owned by the sorter.
 
 use super::scan::PrefixScan;
+use super::RadixTuning;
 use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes, PipelineDesc, Recorder};
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
 
 const RADIX_BITS: u32 = 8;
-const KEYS_PER_THREAD: u32 = 16;
 
 /// A key type the GPU radix sort handles: u32 or u64 (stored as two little-endian words).
 pub trait RadixKey: Pod + Ord + Send + Sync {
@@ -41,7 +41,6 @@ impl RadixKey for u64 {
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct RadixParams {
     len: u32,
-    key_words: u32,
     word: u32,
     shift: u32,
     digit_bits: u32,
@@ -64,8 +63,9 @@ impl<K: RadixKey> RadixSort<K> {
     /// plus 256 counts per tile of 16 keys per invocation.
     pub fn new(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<Self> {
         let limits = ctx.limits();
-        let workgroup_size = super::workgroup_size(ctx);
-        let shared_bytes = (workgroup_size / limits.subgroup_size) * (1 << RADIX_BITS) * 4;
+        let tuning = RadixTuning::for_device(ctx);
+        let subgroups = tuning.subgroups(ctx);
+        let shared_bytes = subgroups * (1 << RADIX_BITS) * 4;
         if shared_bytes > limits.max_shared_memory_bytes {
             return Err(GpuError::LimitExceeded {
                 what: "radix sort digit counts (shared memory bytes)".into(),
@@ -74,16 +74,21 @@ impl<K: RadixKey> RadixSort<K> {
                 limit_name: "maxComputeSharedMemorySize",
             });
         }
-        let tile_len = (workgroup_size * KEYS_PER_THREAD) as usize;
+        let tile_len = tuning.tile_len();
         let tile_counts_len = capacity.div_ceil(tile_len) << RADIX_BITS;
-        let specialization = [workgroup_size, limits.subgroup_size, KEYS_PER_THREAD];
+        let specialization = [tuning.workgroup_size, limits.subgroup_size, tuning.keys_per_thread, K::WORDS];
         let pipeline = |name, spirv, bindings| {
             let push_constant_bytes = size_of::<RadixParams>() as u32;
             ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes, specialization: &specialization })
         };
+        let scatter = if subgroups == 1 {
+            pipeline("radix_scatter_single_subgroup", shaders::SORT_RADIX_SCATTER_SINGLE_SUBGROUP, 5)?
+        } else {
+            pipeline("radix_scatter", shaders::SORT_RADIX_SCATTER, 5)?
+        };
         Ok(Self {
             histogram: pipeline("radix_histogram", shaders::SORT_RADIX_HISTOGRAM, 2)?,
-            scatter: pipeline("radix_scatter", shaders::SORT_RADIX_SCATTER, 5)?,
+            scatter,
             scan: PrefixScan::new(ctx, tile_counts_len)?,
             tile_len,
             capacity,
@@ -125,7 +130,6 @@ impl<K: RadixKey> RadixSort<K> {
             let low = pass * RADIX_BITS;
             let params = RadixParams {
                 len: len as u32,
-                key_words: K::WORDS,
                 word: low / 32,
                 shift: low % 32,
                 digit_bits: (bits - low).min(RADIX_BITS),

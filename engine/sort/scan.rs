@@ -29,7 +29,7 @@ pub struct PrefixScan {
 impl PrefixScan {
     /// A scan for up to `capacity` elements.
     pub fn new(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<Self> {
-        let workgroup_size = super::workgroup_size(ctx);
+        let workgroup_size = ctx.limits().subgroup_size.max(256).min(ctx.limits().max_workgroup_invocations);
         let specialization = [workgroup_size, ctx.limits().subgroup_size, ITEMS_PER_THREAD];
         let pipeline = |name, spirv| {
             let desc = PipelineDesc { name, spirv, bindings: 2, push_constant_bytes: size_of::<ScanParams>() as u32, specialization: &specialization };

@@ -10,13 +10,13 @@ layout(local_size_x_id = 0) in;
 layout(constant_id = 0) const uint WORKGROUP_SIZE = 128;
 layout(constant_id = 1) const uint SUBGROUP_SIZE = 32;
 layout(constant_id = 2) const uint KEYS_PER_THREAD = 16;
+layout(constant_id = 3) const uint KEY_WORDS = 1; // 32-bit words per key: 1 (u32) or 2 (u64)
 const uint RADIX = 256u;
 const uint MAX_SUBGROUPS = WORKGROUP_SIZE / SUBGROUP_SIZE;
 const uint TILE_LEN = WORKGROUP_SIZE * KEYS_PER_THREAD;
 
 layout(push_constant) uniform RadixParams {
     uint len;         // keys to sort
-    uint key_words;   // 32-bit words per key: 1 or 2
     uint word;        // which word holds this pass's digit
     uint shift;       // digit's lowest bit within that word
     uint digit_bits;  // bits in this pass's digit (8, fewer on the last pass)

@@ -29,12 +29,12 @@ void main() {
     }
     barrier();
     // Word range of this tile; a tile starts on a 16-byte boundary (TILE_LEN is a multiple of 4).
-    uint words_begin = tile * TILE_LEN * params.key_words;
-    uint words_end = min((tile + 1u) * TILE_LEN, params.len) * params.key_words;
+    uint words_begin = tile * TILE_LEN * KEY_WORDS;
+    uint words_end = min((tile + 1u) * TILE_LEN, params.len) * KEY_WORDS;
     uint vectors_end = words_end / 4u;
     for (uint v = words_begin / 4u + gl_LocalInvocationID.x; v < vectors_end; v += WORKGROUP_SIZE) {
         uvec4 w = key_vectors[v];
-        if (params.key_words == 1u) {
+        if (KEY_WORDS == 1u) {
             count_word(w.x);
             count_word(w.y);
             count_word(w.z);
@@ -45,9 +45,9 @@ void main() {
         }
     }
     // At most three keys are left past the last whole vector.
-    uint tail_keys = (words_end - vectors_end * 4u) / params.key_words;
+    uint tail_keys = (words_end - vectors_end * 4u) / KEY_WORDS;
     if (gl_LocalInvocationID.x < tail_keys) {
-        count_word(key_words[vectors_end * 4u + gl_LocalInvocationID.x * params.key_words + params.word]);
+        count_word(key_words[vectors_end * 4u + gl_LocalInvocationID.x * KEY_WORDS + params.word]);
     }
     barrier();
     uint digits = 1u << params.digit_bits;

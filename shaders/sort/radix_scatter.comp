@@ -57,8 +57,8 @@ void main() {
     [[unroll]] for (uint step = 0u; step < KEYS_PER_THREAD; step++) {
         uint i = segment_key_index(tile, step);
         bool valid = i < params.len;
-        lo[step] = valid ? keys_in[i * params.key_words] : 0u;
-        hi[step] = valid && params.key_words == 2u ? keys_in[i * 2u + 1u] : 0u;
+        lo[step] = valid ? keys_in[i * KEY_WORDS] : 0u;
+        hi[step] = valid && KEY_WORDS == 2u ? keys_in[i * 2u + 1u] : 0u;
         value[step] = valid ? values_in[i] : 0u;
         uint digit = digit_of(params.word == 0u ? lo[step] : hi[step]);
         uvec4 peers = lanes_with_digit(digit, valid);
@@ -79,8 +79,8 @@ void main() {
     [[unroll]] for (uint step = 0u; step < KEYS_PER_THREAD; step++) {
         if (segment_key_index(tile, step) < params.len) {
             uint dst = subgroup_digits[row + (digit_rank[step] >> 24)] + (digit_rank[step] & 0xFFFFFFu);
-            keys_out[dst * params.key_words] = lo[step];
-            if (params.key_words == 2u) {
+            keys_out[dst * KEY_WORDS] = lo[step];
+            if (KEY_WORDS == 2u) {
                 keys_out[dst * 2u + 1u] = hi[step];
             }
             values_out[dst] = value[step];
