@@ -72,3 +72,20 @@ fn unknown_device_is_a_named_error() {
     let err = GpuContext::new(&options).err().expect("must fail");
     assert!(err.to_string().contains("no such device 42"), "{err}");
 }
+
+/// The oracle itself: a Vulkan object left alive when the context goes away is reported by the
+/// validation layer, and the messenger counts it.
+#[test]
+fn validation_layer_reports_a_leaked_object() {
+    use ash::vk;
+    let options = tagsplat::gpu::ContextOptions { device: None, validation: Some(true) };
+    let ctx = GpuContext::new(&options).unwrap();
+    let log = ctx.validation().clone();
+    let info = vk::BufferCreateInfo::default().size(64).usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+    let leaked = unsafe { ctx.device().create_buffer(&info, None) }.unwrap();
+    assert_ne!(leaked, vk::Buffer::null());
+    assert_eq!(log.error_count(), 0);
+    drop(ctx);
+    assert!(log.error_count() > 0, "the leak went unreported: {:?}", log.messages());
+    assert!(log.messages().iter().any(|m| m.contains("VkBuffer")), "{:?}", log.messages());
+}

@@ -4,7 +4,7 @@
 mod common;
 
 use tagsplat::gpu::{GpuBuffer, Recorder};
-use tagsplat::sort::{exclusive_scan_cpu, PrefixScan, RadixKey, RadixSort};
+use tagsplat::sort::{exclusive_scan_cpu, PrefixScan, RadixKey, RadixSort, RadixTuning};
 
 fn gpu_scan(gpu: &common::TestGpu, data: &[u32]) -> Vec<u32> {
     let buffer = GpuBuffer::from_slice(gpu.ctx(), "scan data", data).unwrap();
@@ -18,8 +18,6 @@ fn gpu_scan(gpu: &common::TestGpu, data: &[u32]) -> Vec<u32> {
 #[test]
 fn scan_matches_cpu_at_edge_sizes() {
     let gpu = common::gpu();
-    let block = tagsplat::sort::PrefixScan::new(gpu.ctx(), 1).unwrap();
-    drop(block);
     let mut rng = common::rng(1);
     // Around one and two blocks for any workgroup size the device picks, and a deep recursion.
     for len in [0, 1, 2, 3, 255, 256, 257, 511, 512, 513, 1023, 1024, 1025, 2047, 2048, 2049, 4097, 262_145, 1_234_567] {
@@ -35,14 +33,29 @@ fn scan_wraps_like_u32() {
     assert_eq!(gpu_scan(&gpu, &data), exclusive_scan_cpu(&data));
 }
 
-/// Sorts on the GPU and checks against the CPU: keys equal `sort_unstable` of the masked keys,
-/// and values show the sort is stable (equal keys keep their input order).
+/// Both kernel variants: the device's own (the CPU one on lavapipe) and the GPU one.
+fn tunings(gpu: &common::TestGpu) -> Vec<RadixTuning> {
+    let mut tunings = vec![RadixTuning::for_device(gpu.ctx())];
+    if tunings[0] != RadixTuning::subgroups(gpu.ctx()) {
+        tunings.push(RadixTuning::subgroups(gpu.ctx()));
+    }
+    tunings
+}
+
+/// Sorts on the GPU with every variant and checks against the CPU: keys equal `sort_unstable`
+/// of the masked keys, and values show the sort is stable (equal keys keep their input order).
 fn check_sort<K: RadixKey + std::fmt::Debug>(gpu: &common::TestGpu, keys: &[K], bits: u32, what: &str) {
+    for tuning in tunings(gpu) {
+        check_sort_with(gpu, keys, bits, &format!("{what} ({:?})", tuning.variant), tuning);
+    }
+}
+
+fn check_sort_with<K: RadixKey + std::fmt::Debug>(gpu: &common::TestGpu, keys: &[K], bits: u32, what: &str, tuning: RadixTuning) {
     let n = keys.len();
     let values: Vec<u32> = (0..n as u32).collect();
     let key_buffer = GpuBuffer::from_slice(gpu.ctx(), "keys", keys).unwrap();
     let value_buffer = GpuBuffer::from_slice(gpu.ctx(), "values", &values).unwrap();
-    let sorter = RadixSort::<K>::new(gpu.ctx(), n).unwrap();
+    let sorter = RadixSort::<K>::with_tuning(gpu.ctx(), n, tuning).unwrap();
     sorter.sort(&key_buffer, &value_buffer, n, bits).unwrap();
     let sorted_keys = key_buffer.read().unwrap();
     let sorted_values = value_buffer.read().unwrap();
@@ -65,8 +78,8 @@ fn random_keys<K: RadixKey>(n: usize, seed: u64, make: impl Fn(u64) -> K) -> Vec
 #[test]
 fn sort_u32_distributions_and_sizes() {
     let gpu = common::gpu();
-    let tile = 16 * 256; // keys per tile on a 256-invocation workgroup: the largest it gets
-    for n in [0, 1, 2, 3, 255, 257, 2047, 2049, tile - 1, tile + 1, 100_003] {
+    // Around one tile of either variant (4096 keys at most on GPUs, 8192 on lavapipe).
+    for n in [0, 1, 2, 3, 5, 255, 257, 2047, 2049, 4095, 4097, 8191, 8193, 100_003] {
         check_sort(&gpu, &random_keys(n, n as u64, |x| x as u32), 32, "uniform");
     }
     let n = 70_001;

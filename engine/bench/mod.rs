@@ -16,3 +16,8 @@ fn median(mut samples: Vec<f64>) -> f64 {
     let mid = samples.len() / 2;
     if samples.len() % 2 == 1 { samples[mid] } else { 0.5 * (samples[mid - 1] + samples[mid]) }
 }
+
+/// Smallest of a sample; 0 for an empty one.
+fn fastest(samples: Vec<f64>) -> f64 {
+    samples.into_iter().reduce(f64::min).unwrap_or(0.0)
+}

@@ -22,8 +22,10 @@ pub struct SortBenchReport {
     pub key_bytes: u32,
     pub passes: u32,
     pub repetitions: usize,
-    /// Median GPU time of one whole sort (timestamps), ms.
+    /// GPU time of the fastest sort (timestamps), ms; `keys_per_s` and the fraction use it.
     pub sort_ms: f64,
+    /// Median GPU time of one sort, ms.
+    pub sort_median_ms: f64,
     pub keys_per_s: f64,
     /// Median GPU time per kind of pass within one sort, ms.
     pub stage_ms: Vec<PassTime>,
@@ -40,7 +42,8 @@ pub struct SortBenchReport {
 }
 
 /// Sorts `n` random keys with `bits` significant bits (u64 keys above 32 bits) `repetitions`
-/// times and reports the medians.
+/// times. Speeds use the fastest repetition, of the sort as of the copy bound: both are what
+/// the device can do when the (shared, noisy) machine lets it.
 pub fn bench_sort(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize) -> GpuResult<SortBenchReport> {
     if ctx.limits().timestamp_period_ns.is_none() {
         return Err(GpuError::MissingFeatures { device: ctx.info().name.clone(), missing: vec!["timestamp queries on the compute queue"] });
@@ -81,7 +84,9 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
     let sorted = keys.read()?;
     let verified = sorted.windows(2).all(|w| w[0] <= w[1]);
 
-    let sort_ms = super::median(times.passes.iter().filter(|p| p.name == SORT_PASS).skip(1).map(|p| p.ms).collect());
+    let sort_times: Vec<f64> = times.passes.iter().filter(|p| p.name == SORT_PASS).skip(1).map(|p| p.ms).collect();
+    let sort_ms = super::fastest(sort_times.clone());
+    let sort_median_ms = super::median(sort_times);
     let stage_ms = stage_medians(&times);
     let copy = probe.bandwidth(&times);
     let passes = RadixSort::<K>::passes(bits);
@@ -101,6 +106,7 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
         passes,
         repetitions,
         sort_ms,
+        sort_median_ms,
         keys_per_s: per_s(sort_ms),
         stage_ms,
         copy_gb_per_s: copy.compute_bytes_per_s * 1e-9,

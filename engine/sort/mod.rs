@@ -11,31 +11,54 @@ pub use scan::{exclusive_scan_cpu, PrefixScan};
 
 use crate::gpu::GpuContext;
 
-/// How the radix sort splits its work on this device.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct RadixTuning {
+/// Which pair of radix-sort kernels runs, and how they split the work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RadixVariant {
+    /// GPUs: workgroups of many subgroups; ranks from ballot matching within each subgroup,
+    /// keys held in registers between counting and scattering.
+    Subgroups,
+    /// CPU devices (lavapipe): each invocation owns a contiguous run of the tile and a private
+    /// row of digit counters, so there is no cross-lane matching and no atomic.
+    Lanes,
+}
+
+/// How the radix sort splits its work on a device.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RadixTuning {
+    pub variant: RadixVariant,
     pub workgroup_size: u32,
     pub keys_per_thread: u32,
 }
 
 impl RadixTuning {
-    /// GPUs: workgroups of many subgroups (at most 16, at most 256 invocations) with 16 keys per
-    /// invocation held in registers. CPU devices run a workgroup on one core, so a workgroup of
-    /// one subgroup walking a long tile avoids the cross-subgroup bookkeeping.
+    /// The tuning for this device: [`RadixVariant::Lanes`] on CPU devices, where a workgroup
+    /// runs on one core and every memory access is a loop over the SIMD lanes;
+    /// [`RadixVariant::Subgroups`] (at most 16 subgroups, 256 invocations) elsewhere.
     pub fn for_device(ctx: &GpuContext) -> Self {
         let limits = ctx.limits();
         if ctx.info().kind == ash::vk::PhysicalDeviceType::CPU {
-            return Self { workgroup_size: limits.subgroup_size, keys_per_thread: 8192 / limits.subgroup_size };
+            return Self { variant: RadixVariant::Lanes, workgroup_size: limits.subgroup_size.clamp(4, 16), keys_per_thread: 1024 };
         }
-        let workgroup_size = (limits.subgroup_size * 16).min(256).min(limits.max_workgroup_invocations);
-        Self { workgroup_size, keys_per_thread: 16 }
+        Self::subgroups(ctx)
     }
 
-    pub fn subgroups(&self, ctx: &GpuContext) -> u32 {
-        self.workgroup_size / ctx.limits().subgroup_size
+    /// The GPU tuning, on any device (tests run it on lavapipe too).
+    pub fn subgroups(ctx: &GpuContext) -> Self {
+        let limits = ctx.limits();
+        let workgroup_size = (limits.subgroup_size * 16).min(256).min(limits.max_workgroup_invocations);
+        Self { variant: RadixVariant::Subgroups, workgroup_size, keys_per_thread: 16 }
     }
 
     pub fn tile_len(&self) -> usize {
         (self.workgroup_size * self.keys_per_thread) as usize
+    }
+
+    /// Shared memory the kernels need: one row of 256 digit counters per subgroup or invocation.
+    fn shared_bytes(&self, subgroup_size: u32) -> u32 {
+        let rows = match self.variant {
+            RadixVariant::Subgroups => self.workgroup_size / subgroup_size,
+            RadixVariant::Lanes => self.workgroup_size,
+        };
+        rows * 256 * 4
     }
 }

@@ -4,13 +4,14 @@
 //! Passes ping-pong between the caller's buffers and scratch buffers owned by the sorter.
 
 use super::scan::PrefixScan;
-use super::RadixTuning;
+use super::{RadixTuning, RadixVariant};
 use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes, PipelineDesc, Recorder};
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
 
 const RADIX_BITS: u32 = 8;
+const RADIX: usize = 1 << RADIX_BITS;
 
 /// A key type the GPU radix sort handles: u32 or u64 (stored as two little-endian words).
 pub trait RadixKey: Pod + Ord + Send + Sync {
@@ -48,51 +49,63 @@ struct RadixParams {
 }
 
 pub struct RadixSort<K: RadixKey> {
+    tuning: RadixTuning,
     histogram: ComputePipeline,
     scatter: ComputePipeline,
     scan: PrefixScan,
-    tile_len: usize,
     capacity: usize,
     tile_counts: GpuBuffer<u32>,
+    /// Digit counts per invocation run ([`RadixVariant::Lanes`] only).
+    run_counts: Option<GpuBuffer<u32>>,
     scratch_keys: GpuBuffer<K>,
     scratch_values: GpuBuffer<u32>,
 }
 
 impl<K: RadixKey> RadixSort<K> {
-    /// A sorter for up to `capacity` pairs. Scratch memory: one more copy of keys and values,
-    /// plus 256 counts per tile of 16 keys per invocation.
+    /// A sorter for up to `capacity` pairs, tuned for the device. Scratch memory: one more
+    /// copy of keys and values, plus 256 counts per tile (and per run on CPU devices).
     pub fn new(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<Self> {
+        Self::with_tuning(ctx, capacity, RadixTuning::for_device(ctx))
+    }
+
+    /// A sorter with an explicit tuning, e.g. [`RadixTuning::subgroups`] on a CPU device.
+    pub fn with_tuning(ctx: &Arc<GpuContext>, capacity: usize, tuning: RadixTuning) -> GpuResult<Self> {
         let limits = ctx.limits();
-        let tuning = RadixTuning::for_device(ctx);
-        let subgroups = tuning.subgroups(ctx);
-        let shared_bytes = subgroups * (1 << RADIX_BITS) * 4;
+        let shared_bytes = tuning.shared_bytes(limits.subgroup_size);
         if shared_bytes > limits.max_shared_memory_bytes {
             return Err(GpuError::LimitExceeded {
-                what: "radix sort digit counts (shared memory bytes)".into(),
+                what: "radix sort digit counters (shared memory bytes)".into(),
                 count: shared_bytes as u64,
                 limit: limits.max_shared_memory_bytes as u64,
                 limit_name: "maxComputeSharedMemorySize",
             });
         }
-        let tile_len = tuning.tile_len();
-        let tile_counts_len = capacity.div_ceil(tile_len) << RADIX_BITS;
+        let tiles = capacity.div_ceil(tuning.tile_len());
         let specialization = [tuning.workgroup_size, limits.subgroup_size, tuning.keys_per_thread, K::WORDS];
         let pipeline = |name, spirv, bindings| {
             let push_constant_bytes = size_of::<RadixParams>() as u32;
             ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes, specialization: &specialization })
         };
-        let scatter = if subgroups == 1 {
-            pipeline("radix_scatter_single_subgroup", shaders::SORT_RADIX_SCATTER_SINGLE_SUBGROUP, 5)?
-        } else {
-            pipeline("radix_scatter", shaders::SORT_RADIX_SCATTER, 5)?
+        let (histogram, scatter, run_counts) = match tuning.variant {
+            RadixVariant::Subgroups => (
+                pipeline("radix_histogram", shaders::SORT_RADIX_HISTOGRAM, 2)?,
+                pipeline("radix_scatter", shaders::SORT_RADIX_SCATTER, 5)?,
+                None,
+            ),
+            RadixVariant::Lanes => (
+                pipeline("radix_histogram_lanes", shaders::SORT_RADIX_HISTOGRAM_LANES, 3)?,
+                pipeline("radix_scatter_lanes", shaders::SORT_RADIX_SCATTER_LANES, 6)?,
+                Some(GpuBuffer::new(ctx, "radix run counts", tiles * tuning.workgroup_size as usize * RADIX)?),
+            ),
         };
         Ok(Self {
-            histogram: pipeline("radix_histogram", shaders::SORT_RADIX_HISTOGRAM, 2)?,
+            tuning,
+            histogram,
             scatter,
-            scan: PrefixScan::new(ctx, tile_counts_len)?,
-            tile_len,
+            scan: PrefixScan::new(ctx, tiles * RADIX)?,
             capacity,
-            tile_counts: GpuBuffer::new(ctx, "radix tile counts", tile_counts_len)?,
+            tile_counts: GpuBuffer::new(ctx, "radix tile counts", tiles * RADIX)?,
+            run_counts,
             scratch_keys: GpuBuffer::new(ctx, "radix scratch keys", capacity)?,
             scratch_values: GpuBuffer::new(ctx, "radix scratch values", capacity)?,
         })
@@ -121,7 +134,7 @@ impl<K: RadixKey> RadixSort<K> {
         if len <= 1 || passes == 0 {
             return Ok(());
         }
-        let tile_count = len.div_ceil(self.tile_len);
+        let tile_count = len.div_ceil(self.tuning.tile_len());
         let buffers = [(keys, values), (&self.scratch_keys, &self.scratch_values)];
         recorder.begin_pass("radix sort");
         for pass in 0..passes {
@@ -136,13 +149,23 @@ impl<K: RadixKey> RadixSort<K> {
                 tile_count: tile_count as u32,
             };
             let counts_len = tile_count << params.digit_bits;
+            let counts = self.tile_counts.binding();
             recorder.begin_pass("radix histogram");
-            recorder.dispatch_1d(&self.histogram, &[keys_in.binding(), self.tile_counts.binding()], &params, tile_count as u64)?;
+            match &self.run_counts {
+                None => recorder.dispatch_1d(&self.histogram, &[keys_in.binding(), counts], &params, tile_count as u64)?,
+                Some(runs) => recorder.dispatch_1d(&self.histogram, &[keys_in.binding(), counts, runs.binding()], &params, tile_count as u64)?,
+            }
             recorder.end_pass();
             self.scan.record(recorder, &self.tile_counts, counts_len)?;
             recorder.begin_pass("radix scatter");
-            let bindings = [keys_in.binding(), values_in.binding(), self.tile_counts.binding(), keys_out.binding(), values_out.binding()];
-            recorder.dispatch_1d(&self.scatter, &bindings, &params, tile_count as u64)?;
+            let (inputs, outputs) = ([keys_in.binding(), values_in.binding(), counts], [keys_out.binding(), values_out.binding()]);
+            match &self.run_counts {
+                None => recorder.dispatch_1d(&self.scatter, &[inputs[0], inputs[1], inputs[2], outputs[0], outputs[1]], &params, tile_count as u64)?,
+                Some(runs) => {
+                    let bindings = [inputs[0], inputs[1], inputs[2], runs.binding(), outputs[0], outputs[1]];
+                    recorder.dispatch_1d(&self.scatter, &bindings, &params, tile_count as u64)?
+                }
+            }
             recorder.end_pass();
         }
         if passes % 2 == 1 {

@@ -26,27 +26,9 @@ layout(push_constant) uniform RadixParams {
 #include "../common/grid.glsl"
 
 
-// Lanes of this subgroup holding a valid key with the same digit as this lane.
-// Small subgroups (lavapipe's 8 lanes) compare against every lane's digit, one broadcast per
-// lane; wider ones intersect one ballot per digit bit (warp-level multi-split). On lavapipe a
-// ballot is a loop over the lanes while a broadcast is one vector extract: 3x cheaper there.
+// Lanes of this subgroup holding a valid key with the same digit as this lane: the
+// intersection of one ballot per digit bit (warp-level multi-split).
 uvec4 lanes_with_digit(uint digit, bool valid) {
-    if (SUBGROUP_SIZE <= 8u) {
-        // An invalid lane's "digit" matches no valid digit (those are < 256).
-        uint mine = valid ? digit : 0xFFFFFFFFu;
-        uint peers = 0u;
-        peers |= uint(subgroupBroadcast(mine, 0u) == mine) << 0u;
-        peers |= uint(subgroupBroadcast(mine, 1u) == mine) << 1u;
-        peers |= uint(subgroupBroadcast(mine, 2u) == mine) << 2u;
-        peers |= uint(subgroupBroadcast(mine, 3u) == mine) << 3u;
-        if (SUBGROUP_SIZE == 8u) {
-            peers |= uint(subgroupBroadcast(mine, 4u) == mine) << 4u;
-            peers |= uint(subgroupBroadcast(mine, 5u) == mine) << 5u;
-            peers |= uint(subgroupBroadcast(mine, 6u) == mine) << 6u;
-            peers |= uint(subgroupBroadcast(mine, 7u) == mine) << 7u;
-        }
-        return uvec4(valid ? peers : 0u, 0u, 0u, 0u);
-    }
     uvec4 peers = subgroupBallot(valid);
     for (uint b = 0u; b < params.digit_bits; b++) {
         bool set = ((digit >> b) & 1u) != 0u;
