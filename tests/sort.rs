@@ -78,8 +78,8 @@ fn random_keys<K: RadixKey>(n: usize, seed: u64, make: impl Fn(u64) -> K) -> Vec
 #[test]
 fn sort_u32_distributions_and_sizes() {
     let gpu = common::gpu();
-    // Around one tile of either variant (4096 keys at most on GPUs, 8192 on lavapipe).
-    for n in [0, 1, 2, 3, 5, 255, 257, 2047, 2049, 4095, 4097, 8191, 8193, 100_003] {
+    // Around a workgroup, a GPU tile (at most 4096 keys) and a lavapipe tile (8 runs of 4096).
+    for n in [0, 1, 2, 3, 5, 255, 257, 2047, 2049, 4095, 4097, 32_767, 32_769, 100_003] {
         check_sort(&gpu, &random_keys(n, n as u64, |x| x as u32), 32, "uniform");
     }
     let n = 70_001;

@@ -2,6 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use std::process::ExitCode;
 use std::sync::Arc;
 use tagsplat::bench::{bench_sort, SortBenchReport};
 use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
@@ -48,8 +49,18 @@ enum Bench {
     },
 }
 
-fn main() -> Result<()> {
-    let cli = Cli::parse();
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // The whole cause chain on one line; no backtrace, this is a user-facing error.
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
     let options = ContextOptions { device: cli.device.clone(), validation: cli.validation.then_some(true) };
     match cli.command {
         Command::Devices => devices(options.device.as_deref()),

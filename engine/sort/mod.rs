@@ -37,7 +37,7 @@ impl RadixTuning {
     pub fn for_device(ctx: &GpuContext) -> Self {
         let limits = ctx.limits();
         if ctx.info().kind == ash::vk::PhysicalDeviceType::CPU {
-            return Self { variant: RadixVariant::Lanes, workgroup_size: limits.subgroup_size.clamp(4, 16), keys_per_thread: 1024 };
+            return Self { variant: RadixVariant::Lanes, workgroup_size: limits.subgroup_size.clamp(4, 16), keys_per_thread: 4096 };
         }
         Self::subgroups(ctx)
     }

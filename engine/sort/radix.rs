@@ -80,6 +80,9 @@ impl<K: RadixKey> RadixSort<K> {
                 limit_name: "maxComputeSharedMemorySize",
             });
         }
+        // Scratch first: an impossible capacity fails here, before any size arithmetic.
+        let scratch_keys = GpuBuffer::new(ctx, "radix scratch keys", capacity)?;
+        let scratch_values = GpuBuffer::new(ctx, "radix scratch values", capacity)?;
         let tiles = capacity.div_ceil(tuning.tile_len());
         let specialization = [tuning.workgroup_size, limits.subgroup_size, tuning.keys_per_thread, K::WORDS];
         let pipeline = |name, spirv, bindings| {
@@ -106,8 +109,8 @@ impl<K: RadixKey> RadixSort<K> {
             capacity,
             tile_counts: GpuBuffer::new(ctx, "radix tile counts", tiles * RADIX)?,
             run_counts,
-            scratch_keys: GpuBuffer::new(ctx, "radix scratch keys", capacity)?,
-            scratch_values: GpuBuffer::new(ctx, "radix scratch values", capacity)?,
+            scratch_keys,
+            scratch_values,
         })
     }
 
