@@ -21,7 +21,7 @@ fn context_reports_device_and_limits() {
 fn buffer_round_trip_and_partial_read() {
     let gpu = common::gpu();
     let data: Vec<u32> = (0..10_000).map(|i| i * 7 + 1).collect();
-    let buffer = GpuBuffer::from_slice(gpu.ctx(), "round trip", &data).unwrap();
+    let mut buffer = GpuBuffer::from_slice(gpu.ctx(), "round trip", &data).unwrap();
     assert_eq!(buffer.read().unwrap(), data);
     assert_eq!(buffer.read_prefix(5).unwrap(), &data[..5]);
     let too_long = vec![0u32; 10_001];

@@ -46,7 +46,7 @@ fn tunings(gpu: &common::TestGpu) -> Vec<RadixTuning> {
 /// of the masked keys, and values show the sort is stable (equal keys keep their input order).
 fn check_sort<K: RadixKey + std::fmt::Debug>(gpu: &common::TestGpu, keys: &[K], bits: u32, what: &str) {
     for tuning in tunings(gpu) {
-        check_sort_with(gpu, keys, bits, &format!("{what} ({:?})", tuning.variant), tuning);
+        check_sort_with(gpu, keys, bits, &format!("{what} ({:?})", tuning.variant()), tuning);
     }
 }
 

@@ -57,7 +57,7 @@ impl CopyProbe {
     }
 
     /// Records one timed compute copy and one timed transfer copy.
-    pub fn record(&self, recorder: &mut Recorder) -> GpuResult<()> {
+    pub fn record<'a>(&'a self, recorder: &mut Recorder<'a>) -> GpuResult<()> {
         let len = self.src.len();
         // Enough workgroups to fill any device, few enough that each invocation loops a while.
         let groups = (len as u64).div_ceil(WORKGROUP_SIZE as u64 * 8).clamp(1, 4096);

@@ -13,6 +13,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 const SORT_PASS: &str = "sort";
+const MAX_REPETITIONS: usize = 1000;
 
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SortBenchReport {
@@ -56,10 +57,13 @@ pub fn bench_sort(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize
 }
 
 fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize, make: fn(u64) -> K) -> GpuResult<SortBenchReport> {
+    if repetitions > MAX_REPETITIONS {
+        return Err(GpuError::LimitExceeded { what: "bench sort repetitions".into(), count: repetitions as u64, limit: MAX_REPETITIONS as u64, limit_name: "one submission's passes" });
+    }
     let repetitions = repetitions.max(1);
     // Create the GPU side first: an impossible `n` fails here, before host memory is spent.
     let sorter = RadixSort::<K>::new(ctx, n)?;
-    let input = GpuBuffer::<K>::new(ctx, "bench keys (input)", n)?;
+    let mut input = GpuBuffer::<K>::new(ctx, "bench keys (input)", n)?;
     let keys = GpuBuffer::<K>::new(ctx, "bench keys", n)?;
     let values = GpuBuffer::<u32>::new(ctx, "bench values", n)?;
 

@@ -23,12 +23,14 @@ pub struct GpuBuffer<T: Pod> {
     _element: PhantomData<T>,
 }
 
-/// A range of a buffer bound to one storage-buffer slot of a dispatch.
+/// A range of a buffer bound to one storage-buffer slot of a dispatch. It borrows the buffer,
+/// so a buffer cannot be dropped while a recorder that uses it is alive.
 #[derive(Clone, Copy, Debug)]
-pub struct BufferBinding {
+pub struct BufferBinding<'a> {
     pub(crate) buffer: vk::Buffer,
     pub(crate) offset: u64,
     pub(crate) range: u64,
+    _buffer: PhantomData<&'a ()>,
 }
 
 impl<T: Pod> GpuBuffer<T> {
@@ -40,7 +42,7 @@ impl<T: Pod> GpuBuffer<T> {
 
     /// A device buffer holding a copy of `data`.
     pub fn from_slice(ctx: &Arc<GpuContext>, name: &str, data: &[T]) -> GpuResult<Self> {
-        let buffer = Self::new(ctx, name, data.len())?;
+        let mut buffer = Self::new(ctx, name, data.len())?;
         buffer.write(data)?;
         Ok(buffer)
     }
@@ -97,8 +99,8 @@ impl<T: Pod> GpuBuffer<T> {
 
     /// The whole buffer as a dispatch binding.
     #[inline]
-    pub fn binding(&self) -> BufferBinding {
-        BufferBinding { buffer: self.raw, offset: 0, range: vk::WHOLE_SIZE }
+    pub fn binding(&self) -> BufferBinding<'_> {
+        BufferBinding { buffer: self.raw, offset: 0, range: vk::WHOLE_SIZE, _buffer: PhantomData }
     }
 
     #[inline]
@@ -106,9 +108,10 @@ impl<T: Pod> GpuBuffer<T> {
         self.raw
     }
 
-    /// Writes `data` to the start of the buffer. No GPU work may be using the buffer (every
-    /// [`Recorder::submit_and_wait`] returns only when its work is done, so this holds).
-    pub fn write(&self, data: &[T]) -> GpuResult<()> {
+    /// Writes `data` to the start of the buffer. `&mut` because it writes through a shared
+    /// mapping; no GPU work can be using the buffer, since recorders borrow what they use and
+    /// [`Recorder::submit_and_wait`] returns only when the work is done.
+    pub fn write(&mut self, data: &[T]) -> GpuResult<()> {
         self.check_len("write", data.len())?;
         if data.is_empty() {
             return Ok(());
@@ -118,7 +121,7 @@ impl<T: Pod> GpuBuffer<T> {
             unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), mapped, bytes.len()) };
             return Ok(());
         }
-        let staging = Self::with_location(&self.ctx, "staging upload", data.len(), MemoryLocation::CpuToGpu)?;
+        let mut staging = Self::with_location(&self.ctx, "staging upload", data.len(), MemoryLocation::CpuToGpu)?;
         staging.write(data)?;
         let mut recorder = Recorder::new(&self.ctx)?;
         recorder.copy_buffer(&staging, self, data.len());

@@ -26,13 +26,13 @@ pub struct DeviceLimits {
     pub max_workgroup_count: [u32; 3],
     pub max_workgroup_invocations: u32,
     pub max_shared_memory_bytes: u32,
-    pub max_push_constants_bytes: u32,
     pub subgroup_size: u32,
     /// Nanoseconds per timestamp tick; `None` when the compute queue cannot write timestamps.
     pub timestamp_period_ns: Option<f64>,
     pub timestamp_valid_bits: u32,
-    /// Sum of the device-local heaps.
-    pub device_local_bytes: u64,
+    /// Pipelines can require full subgroups (see [`DeviceCapabilities::full_subgroups`]).
+    pub full_subgroups: bool,
+    pub max_subgroup_size: u32,
 }
 
 pub struct GpuContext {
@@ -76,7 +76,7 @@ impl GpuContext {
                 return Err(e);
             }
         };
-        let built = unsafe { create_device(&instance, physical_device) };
+        let built = unsafe { create_device(&instance, physical_device, info.capabilities.full_subgroups) };
         let (device, queue_family) = match built {
             Ok(v) => v,
             Err(e) => {
@@ -94,21 +94,21 @@ impl GpuContext {
             debug_settings: Default::default(),
             buffer_device_address: false,
             allocation_sizes: Default::default(),
+        })
+        .map_err(|e| GpuError::OutOfMemory { name: "allocator".into(), bytes: 0, reason: e.to_string() });
+        let pipeline_cache = allocator.and_then(|allocator| {
+            let cache = unsafe { device.create_pipeline_cache(&vk::PipelineCacheCreateInfo::default(), None) };
+            cache.during("vkCreatePipelineCache").map(|cache| (allocator, cache))
         });
-        let pipeline_cache = unsafe { device.create_pipeline_cache(&vk::PipelineCacheCreateInfo::default(), None) };
-        let (allocator, pipeline_cache) = match (allocator, pipeline_cache) {
-            (Ok(a), Ok(c)) => (a, c),
-            (allocator, cache) => {
-                let error = match (allocator.err(), cache.err()) {
-                    (Some(e), _) => GpuError::OutOfMemory { name: "allocator".into(), bytes: 0, reason: e.to_string() },
-                    (None, Some(r)) => GpuError::Vulkan { call: "vkCreatePipelineCache", result: r },
-                    (None, None) => unreachable!(),
-                };
+        let (allocator, pipeline_cache) = match pipeline_cache {
+            Ok(v) => v,
+            Err(e) => {
+                // The allocator, if it was made, is dropped here: it holds no memory yet.
                 unsafe {
                     device.destroy_device(None);
                     destroy_instance(&instance, messenger);
                 }
-                return Err(error);
+                return Err(e);
             }
         };
         Ok(Arc::new(Self {
@@ -283,17 +283,23 @@ unsafe fn compute_queue_family(instance: &ash::Instance, physical_device: vk::Ph
 unsafe fn create_device(
     instance: &ash::Instance,
     physical_device: vk::PhysicalDevice,
+    full_subgroups: bool,
 ) -> GpuResult<(ash::Device, u32)> {
     let queue_family = compute_queue_family(instance, physical_device);
     let priorities = [1.0];
     let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-    let extensions: Vec<*const i8> = REQUIRED_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+    let mut extensions: Vec<*const i8> = REQUIRED_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
     let core = vk::PhysicalDeviceFeatures::default().shader_int64(true);
     let mut vk12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
     let mut atomic_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
         .shader_buffer_float32_atomics(true)
         .shader_buffer_float32_atomic_add(true);
+    let mut size_control = vk::PhysicalDeviceSubgroupSizeControlFeatures::default().compute_full_subgroups(true);
     let mut features = vk::PhysicalDeviceFeatures2::default().features(core).push_next(&mut vk12).push_next(&mut atomic_float);
+    if full_subgroups {
+        extensions.push(ash::ext::subgroup_size_control::NAME.as_ptr());
+        features = features.push_next(&mut size_control);
+    }
     let create_info = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queues)
         .enabled_extension_names(&extensions)
@@ -313,22 +319,16 @@ unsafe fn read_limits(
     instance.get_physical_device_properties2(physical_device, &mut properties2);
     let limits = properties2.properties.limits;
     let family = instance.get_physical_device_queue_family_properties(physical_device)[queue_family as usize];
-    let memory = instance.get_physical_device_memory_properties(physical_device);
-    let device_local_bytes = memory.memory_heaps_as_slice()
-        .iter()
-        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
-        .map(|h| h.size)
-        .sum();
     DeviceLimits {
         max_storage_buffer_range: limits.max_storage_buffer_range as u64,
         max_memory_allocation_size: maintenance3.max_memory_allocation_size,
         max_workgroup_count: limits.max_compute_work_group_count,
         max_workgroup_invocations: limits.max_compute_work_group_invocations,
         max_shared_memory_bytes: limits.max_compute_shared_memory_size,
-        max_push_constants_bytes: limits.max_push_constants_size,
         subgroup_size: capabilities.subgroup_size,
         timestamp_period_ns: (family.timestamp_valid_bits > 0).then_some(limits.timestamp_period as f64),
         timestamp_valid_bits: family.timestamp_valid_bits,
-        device_local_bytes,
+        full_subgroups: capabilities.full_subgroups,
+        max_subgroup_size: capabilities.max_subgroup_size,
     }
 }

@@ -24,6 +24,8 @@ pub enum GpuError {
     LengthMismatch { what: &'static str, name: String, len: usize, capacity: usize },
     #[error("the GPU device was lost (driver crash or timeout) during {0}")]
     DeviceLost(&'static str),
+    #[error("cannot create compute pipeline {name}: {result}")]
+    Pipeline { name: &'static str, result: vk::Result },
     #[error("Vulkan call {call} failed: {result}")]
     Vulkan { call: &'static str, result: vk::Result },
 }

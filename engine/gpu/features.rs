@@ -18,6 +18,10 @@ pub struct DeviceCapabilities {
     pub subgroup_ballot: bool,
     pub subgroup_shuffle: bool,
     pub has_compute_queue: bool,
+    /// Optional: VK_EXT_subgroup_size_control with computeFullSubgroups, so pipelines can ask
+    /// for full subgroups (some drivers, Intel's, may otherwise launch partial ones).
+    pub full_subgroups: bool,
+    pub max_subgroup_size: u32,
 }
 
 /// Device extensions the engine enables.
@@ -70,15 +74,23 @@ impl DeviceCapabilities {
             subgroup_ballot: false,
             subgroup_shuffle: false,
             has_compute_queue: queues.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE)),
+            full_subgroups: false,
+            max_subgroup_size: 0,
         };
         if properties.api_version < vk::API_VERSION_1_2 {
             return capabilities; // The 1.2 feature structs below are not defined on such a device.
         }
+        let has_size_control = has_extension(ash::ext::subgroup_size_control::NAME);
         let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        let mut size_control = vk::PhysicalDeviceSubgroupSizeControlProperties::default();
         let mut properties2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+        if has_size_control {
+            properties2 = properties2.push_next(&mut size_control);
+        }
         instance.get_physical_device_properties2(physical_device, &mut properties2);
         let ops = subgroup.supported_operations;
         capabilities.subgroup_size = subgroup.subgroup_size;
+        capabilities.max_subgroup_size = size_control.max_subgroup_size.max(subgroup.subgroup_size);
         capabilities.subgroup_in_compute = subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE);
         capabilities.subgroup_arithmetic = ops.contains(vk::SubgroupFeatureFlags::ARITHMETIC);
         capabilities.subgroup_ballot = ops.contains(vk::SubgroupFeatureFlags::BALLOT);
@@ -86,14 +98,19 @@ impl DeviceCapabilities {
 
         let mut vk12 = vk::PhysicalDeviceVulkan12Features::default();
         let mut atomic_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
+        let mut size_control_features = vk::PhysicalDeviceSubgroupSizeControlFeatures::default();
         let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut vk12);
         if has_extension(ash::ext::shader_atomic_float::NAME) {
             features2 = features2.push_next(&mut atomic_float);
+        }
+        if has_size_control {
+            features2 = features2.push_next(&mut size_control_features);
         }
         instance.get_physical_device_features2(physical_device, &mut features2);
         capabilities.shader_int64 = features2.features.shader_int64 == vk::TRUE;
         capabilities.buffer_int64_atomics = vk12.shader_buffer_int64_atomics == vk::TRUE;
         capabilities.buffer_float32_atomic_add = atomic_float.shader_buffer_float32_atomic_add == vk::TRUE;
+        capabilities.full_subgroups = size_control_features.compute_full_subgroups == vk::TRUE;
         capabilities
     }
 }
@@ -115,6 +132,8 @@ mod tests {
             subgroup_ballot: true,
             subgroup_shuffle: true,
             has_compute_queue: true,
+            full_subgroups: false,
+            max_subgroup_size: 32,
         }
     }
 

@@ -73,7 +73,15 @@ impl ComputePipeline {
         let specialization = vk::SpecializationInfo::default()
             .map_entries(&entries)
             .data(bytemuck::cast_slice(desc.specialization));
+        // Subgroup code sizes shared arrays by the subgroup count: ask for full subgroups where
+        // the device can promise them (the workgroup size must then be a multiple of the
+        // largest subgroup size).
+        let limits = ctx.limits();
+        let workgroup_size = desc.specialization.first().copied().unwrap_or(1);
+        let full = limits.full_subgroups && workgroup_size % limits.max_subgroup_size == 0;
+        let flags = if full { vk::PipelineShaderStageCreateFlags::REQUIRE_FULL_SUBGROUPS } else { Default::default() };
         let stage = vk::PipelineShaderStageCreateInfo::default()
+            .flags(flags)
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main")
@@ -81,7 +89,7 @@ impl ComputePipeline {
         let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(pipeline.layout);
         let created = unsafe { device.create_compute_pipelines(ctx.pipeline_cache(), &[info], None) };
         unsafe { device.destroy_shader_module(module, None) };
-        pipeline.pipeline = created.map_err(|(_, result)| result).during(desc.name)?[0];
+        pipeline.pipeline = created.map_err(|(_, result)| GpuError::Pipeline { name: desc.name, result })?[0];
         Ok(pipeline)
     }
 }

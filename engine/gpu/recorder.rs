@@ -13,9 +13,12 @@ use super::pipeline::ComputePipeline;
 use super::timing::{PassTimes, Timestamps};
 use ash::vk;
 use bytemuck::Pod;
+use std::marker::PhantomData;
 use std::sync::Arc;
 
-pub struct Recorder {
+/// Records commands; `'a` is the lifetime of the buffers and pipelines they use, so none of
+/// them can be dropped before the recorder is submitted or dropped.
+pub struct Recorder<'a> {
     ctx: Arc<GpuContext>,
     pool: vk::CommandPool,
     cmd: vk::CommandBuffer,
@@ -25,13 +28,14 @@ pub struct Recorder {
     pending_writes: bool,
     /// Submitted and not yet waited for: Drop must wait before freeing.
     in_flight: bool,
+    _resources: PhantomData<&'a ()>,
 }
 
 const STAGES: vk::PipelineStageFlags = vk::PipelineStageFlags::from_raw(
     vk::PipelineStageFlags::COMPUTE_SHADER.as_raw() | vk::PipelineStageFlags::TRANSFER.as_raw(),
 );
 
-impl Recorder {
+impl<'a> Recorder<'a> {
     pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
         let device = ctx.device();
         let pool_info = vk::CommandPoolCreateInfo::default()
@@ -45,6 +49,7 @@ impl Recorder {
             timestamps: Timestamps::new(ctx),
             pending_writes: false,
             in_flight: false,
+            _resources: PhantomData,
         };
         let alloc_info = vk::CommandBufferAllocateInfo::default()
             .command_pool(recorder.pool)
@@ -59,7 +64,7 @@ impl Recorder {
 
     /// Records `pipeline` over `groups` workgroups with `buffers` at bindings 0.. and `push` as
     /// push constants.
-    pub fn dispatch<P: Pod>(&mut self, pipeline: &ComputePipeline, buffers: &[BufferBinding], push: &P, groups: [u32; 3]) {
+    pub fn dispatch<P: Pod>(&mut self, pipeline: &'a ComputePipeline, buffers: &[BufferBinding<'a>], push: &P, groups: [u32; 3]) {
         assert_eq!(buffers.len() as u32, pipeline.bindings, "{}: wrong number of buffers", pipeline.name);
         assert_eq!(size_of::<P>() as u32, pipeline.push_constant_bytes, "{}: wrong push-constant size", pipeline.name);
         if groups.contains(&0) {
@@ -103,7 +108,7 @@ impl Recorder {
     /// Like [`Self::dispatch`] for a 1-D grid of `groups` workgroups, folded into x and y when
     /// it exceeds `maxComputeWorkGroupCount[0]`. Shaders recover the flat index with
     /// `flat_workgroup_id()` (shaders/common/grid.glsl) and skip ids past their work.
-    pub fn dispatch_1d<P: Pod>(&mut self, pipeline: &ComputePipeline, buffers: &[BufferBinding], push: &P, groups: u64) -> GpuResult<()> {
+    pub fn dispatch_1d<P: Pod>(&mut self, pipeline: &'a ComputePipeline, buffers: &[BufferBinding<'a>], push: &P, groups: u64) -> GpuResult<()> {
         let grid = grid_for(groups, self.ctx.limits().max_workgroup_count).ok_or_else(|| GpuError::LimitExceeded {
             what: format!("{}: workgroups", pipeline.name),
             count: groups,
@@ -115,7 +120,7 @@ impl Recorder {
     }
 
     /// Copies the first `len` elements of `src` to `dst`.
-    pub fn copy_buffer<T: Pod>(&mut self, src: &GpuBuffer<T>, dst: &GpuBuffer<T>, len: usize) {
+    pub fn copy_buffer<T: Pod>(&mut self, src: &'a GpuBuffer<T>, dst: &'a GpuBuffer<T>, len: usize) {
         assert!(len <= src.len() && len <= dst.len(), "copy of {len} elements out of bounds");
         if len == 0 {
             return;
@@ -127,7 +132,7 @@ impl Recorder {
     }
 
     /// Fills the whole buffer with copies of the 32-bit `value`.
-    pub fn fill_buffer<T: Pod>(&mut self, buffer: &GpuBuffer<T>, value: u32) {
+    pub fn fill_buffer<T: Pod>(&mut self, buffer: &'a GpuBuffer<T>, value: u32) {
         if buffer.is_empty() {
             return;
         }
@@ -188,7 +193,7 @@ impl Recorder {
     }
 }
 
-impl Drop for Recorder {
+impl Drop for Recorder<'_> {
     fn drop(&mut self) {
         let device = self.ctx.device();
         unsafe {

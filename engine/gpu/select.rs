@@ -100,6 +100,8 @@ mod tests {
             subgroup_ballot: true,
             subgroup_shuffle: true,
             has_compute_queue: true,
+            full_subgroups: true,
+            max_subgroup_size: 32,
         };
         DeviceInfo { index, name: name.into(), kind, capabilities }
     }

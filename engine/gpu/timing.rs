@@ -22,32 +22,14 @@ pub struct PassTimes {
     pub passes: Vec<PassTime>,
 }
 
-impl PassTimes {
-    /// Total milliseconds of the passes called `name`.
-    pub fn total_ms(&self, name: &str) -> f64 {
-        self.passes.iter().filter(|p| p.name == name).map(|p| p.ms).sum()
-    }
-
-    /// Milliseconds per distinct pass name, summed, in first-seen order.
-    pub fn summed(&self) -> Vec<PassTime> {
-        let mut out: Vec<PassTime> = Vec::new();
-        for pass in &self.passes {
-            match out.iter_mut().find(|p| p.name == pass.name) {
-                Some(p) => p.ms += pass.ms,
-                None => out.push(pass.clone()),
-            }
-        }
-        out
-    }
-}
-
 pub(crate) struct Timestamps {
     period_ns: Option<f64>,
     valid_mask: u64,
     pools: Vec<vk::QueryPool>,
     used: u32,
-    /// (name, depth, start query, end query) per pass.
-    passes: Vec<(String, u32, u32, Option<u32>)>,
+    /// (name, depth, start query, end query) per pass; a query is `None` where no timestamp
+    /// could be written, and that pass goes untimed (begins and ends still pair up).
+    passes: Vec<(String, u32, Option<u32>, Option<u32>)>,
     open: Vec<usize>,
 }
 
@@ -65,11 +47,10 @@ impl Timestamps {
     }
 
     pub(crate) fn begin(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, name: &str) {
-        if let Some(query) = self.write(device, cmd) {
-            let depth = self.open.len() as u32;
-            self.open.push(self.passes.len());
-            self.passes.push((name.to_string(), depth, query, None));
-        }
+        let start = self.write(device, cmd);
+        let depth = self.open.len() as u32;
+        self.open.push(self.passes.len());
+        self.passes.push((name.to_string(), depth, start, None));
     }
 
     pub(crate) fn end(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) {
@@ -108,7 +89,7 @@ impl Timestamps {
             .passes
             .iter()
             .filter_map(|(name, depth, start, end)| {
-                let elapsed = ticks[(*end)? as usize].wrapping_sub(ticks[*start as usize]) & self.valid_mask;
+                let elapsed = ticks[(*end)? as usize].wrapping_sub(ticks[(*start)? as usize]) & self.valid_mask;
                 Some(PassTime { name: name.clone(), ms: elapsed as f64 * period_ns * 1e-6, depth: *depth })
             })
             .collect();

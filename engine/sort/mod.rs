@@ -1,12 +1,11 @@
 //! Sorting building blocks for tile binning: an exclusive prefix scan over u32 and a stable
 //! LSD radix sort of u32 or u64 keys with a u32 payload. Both are correct for any subgroup
-//! size from 4 to 128 (lavapipe 8, NVIDIA 32, AMD 64).
+//! size from 4 to 128 (lavapipe 8, NVIDIA 32, AMD 64) whose subgroups are full (see README).
 
 mod radix;
 mod scan;
 
 pub use radix::{RadixKey, RadixSort};
-pub use radix::sort_pairs_cpu;
 pub use scan::{exclusive_scan_cpu, PrefixScan};
 
 use crate::gpu::GpuContext;
@@ -14,8 +13,8 @@ use crate::gpu::GpuContext;
 /// Which pair of radix-sort kernels runs, and how they split the work.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RadixVariant {
-    /// GPUs: workgroups of many subgroups; ranks from ballot matching within each subgroup,
-    /// keys held in registers between counting and scattering.
+    /// GPUs: workgroups of many subgroups; the scatter ranks keys by ballot matching within
+    /// each subgroup and holds them in registers until the subgroups' offsets are known.
     Subgroups,
     /// CPU devices (lavapipe): each invocation owns a contiguous run of the tile and a private
     /// row of digit counters, so there is no cross-lane matching and no atomic.
@@ -25,9 +24,9 @@ pub enum RadixVariant {
 /// How the radix sort splits its work on a device.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RadixTuning {
-    pub variant: RadixVariant,
-    pub workgroup_size: u32,
-    pub keys_per_thread: u32,
+    variant: RadixVariant,
+    workgroup_size: u32,
+    keys_per_thread: u32,
 }
 
 impl RadixTuning {
@@ -49,12 +48,24 @@ impl RadixTuning {
         Self { variant: RadixVariant::Subgroups, workgroup_size, keys_per_thread: 16 }
     }
 
+    pub fn variant(&self) -> RadixVariant {
+        self.variant
+    }
+
+    pub(crate) fn workgroup_size(&self) -> u32 {
+        self.workgroup_size
+    }
+
+    pub(crate) fn keys_per_thread(&self) -> u32 {
+        self.keys_per_thread
+    }
+
     pub fn tile_len(&self) -> usize {
         (self.workgroup_size * self.keys_per_thread) as usize
     }
 
     /// Shared memory the kernels need: one row of 256 digit counters per subgroup or invocation.
-    fn shared_bytes(&self, subgroup_size: u32) -> u32 {
+    pub(crate) fn shared_bytes(&self, subgroup_size: u32) -> u32 {
         let rows = match self.variant {
             RadixVariant::Subgroups => self.workgroup_size / subgroup_size,
             RadixVariant::Lanes => self.workgroup_size,

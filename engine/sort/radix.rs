@@ -84,12 +84,12 @@ impl<K: RadixKey> RadixSort<K> {
         let scratch_keys = GpuBuffer::new(ctx, "radix scratch keys", capacity)?;
         let scratch_values = GpuBuffer::new(ctx, "radix scratch values", capacity)?;
         let tiles = capacity.div_ceil(tuning.tile_len());
-        let specialization = [tuning.workgroup_size, limits.subgroup_size, tuning.keys_per_thread, K::WORDS];
+        let specialization = [tuning.workgroup_size(), limits.subgroup_size, tuning.keys_per_thread(), K::WORDS];
         let pipeline = |name, spirv, bindings| {
             let push_constant_bytes = size_of::<RadixParams>() as u32;
             ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes, specialization: &specialization })
         };
-        let (histogram, scatter, run_counts) = match tuning.variant {
+        let (histogram, scatter, run_counts) = match tuning.variant() {
             RadixVariant::Subgroups => (
                 pipeline("radix_histogram", shaders::SORT_RADIX_HISTOGRAM, 2)?,
                 pipeline("radix_scatter", shaders::SORT_RADIX_SCATTER, 5)?,
@@ -98,7 +98,7 @@ impl<K: RadixKey> RadixSort<K> {
             RadixVariant::Lanes => (
                 pipeline("radix_histogram_lanes", shaders::SORT_RADIX_HISTOGRAM_LANES, 3)?,
                 pipeline("radix_scatter_lanes", shaders::SORT_RADIX_SCATTER_LANES, 6)?,
-                Some(GpuBuffer::new(ctx, "radix run counts", tiles * tuning.workgroup_size as usize * RADIX)?),
+                Some(GpuBuffer::new(ctx, "radix run counts", tiles * tuning.workgroup_size() as usize * RADIX)?),
             ),
         };
         Ok(Self {
@@ -125,7 +125,7 @@ impl<K: RadixKey> RadixSort<K> {
 
     /// Records a stable sort of the first `len` pairs of `keys` and `values` by the low `bits`
     /// of each key (higher bits travel with the key but do not affect the order).
-    pub fn record(&self, recorder: &mut Recorder, keys: &GpuBuffer<K>, values: &GpuBuffer<u32>, len: usize, bits: u32) -> GpuResult<()> {
+    pub fn record<'a>(&'a self, recorder: &mut Recorder<'a>, keys: &'a GpuBuffer<K>, values: &'a GpuBuffer<u32>, len: usize, bits: u32) -> GpuResult<()> {
         let room = self.capacity.min(keys.len()).min(values.len());
         if len > room {
             return Err(GpuError::LengthMismatch { what: "radix sort", name: keys.name().into(), len, capacity: room });
@@ -152,23 +152,21 @@ impl<K: RadixKey> RadixSort<K> {
                 tile_count: tile_count as u32,
             };
             let counts_len = tile_count << params.digit_bits;
+            // The Lanes kernels also read and write the per-run counts, after the tile counts.
+            let runs = self.run_counts.as_ref().map(|r| r.binding());
             let counts = self.tile_counts.binding();
+            let histogram_bindings: Vec<_> = [keys_in.binding(), counts].into_iter().chain(runs).collect();
+            let scatter_bindings: Vec<_> = [keys_in.binding(), values_in.binding(), counts]
+                .into_iter()
+                .chain(runs)
+                .chain([keys_out.binding(), values_out.binding()])
+                .collect();
             recorder.begin_pass("radix histogram");
-            match &self.run_counts {
-                None => recorder.dispatch_1d(&self.histogram, &[keys_in.binding(), counts], &params, tile_count as u64)?,
-                Some(runs) => recorder.dispatch_1d(&self.histogram, &[keys_in.binding(), counts, runs.binding()], &params, tile_count as u64)?,
-            }
+            recorder.dispatch_1d(&self.histogram, &histogram_bindings, &params, tile_count as u64)?;
             recorder.end_pass();
             self.scan.record(recorder, &self.tile_counts, counts_len)?;
             recorder.begin_pass("radix scatter");
-            let (inputs, outputs) = ([keys_in.binding(), values_in.binding(), counts], [keys_out.binding(), values_out.binding()]);
-            match &self.run_counts {
-                None => recorder.dispatch_1d(&self.scatter, &[inputs[0], inputs[1], inputs[2], outputs[0], outputs[1]], &params, tile_count as u64)?,
-                Some(runs) => {
-                    let bindings = [inputs[0], inputs[1], inputs[2], runs.binding(), outputs[0], outputs[1]];
-                    recorder.dispatch_1d(&self.scatter, &bindings, &params, tile_count as u64)?
-                }
-            }
+            recorder.dispatch_1d(&self.scatter, &scatter_bindings, &params, tile_count as u64)?;
             recorder.end_pass();
         }
         if passes % 2 == 1 {
@@ -186,11 +184,4 @@ impl<K: RadixKey> RadixSort<K> {
         self.record(&mut recorder, keys, values, len, bits)?;
         recorder.submit_and_wait()
     }
-}
-
-/// The CPU reference: pairs stably sorted by the low `bits` of the key.
-pub fn sort_pairs_cpu<K: RadixKey>(keys: &[K], values: &[u32], bits: u32) -> (Vec<K>, Vec<u32>) {
-    let mut pairs: Vec<(K, u32)> = keys.iter().copied().zip(values.iter().copied()).collect();
-    pairs.sort_by_key(|&(k, _)| k.low_bits(bits));
-    pairs.into_iter().unzip()
 }

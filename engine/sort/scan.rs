@@ -55,7 +55,7 @@ impl PrefixScan {
 
     /// Records an in-place exclusive scan of the first `len` elements of `data`:
     /// `data[i] = data[0] + … + data[i - 1]` (wrapping), `data[0] = 0`.
-    pub fn record(&self, recorder: &mut Recorder, data: &GpuBuffer<u32>, len: usize) -> GpuResult<()> {
+    pub fn record<'a>(&'a self, recorder: &mut Recorder<'a>, data: &'a GpuBuffer<u32>, len: usize) -> GpuResult<()> {
         if len > self.capacity || len > data.len() {
             return Err(GpuError::LengthMismatch { what: "prefix scan", name: data.name().into(), len, capacity: self.capacity.min(data.len()) });
         }

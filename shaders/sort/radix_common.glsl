@@ -1,4 +1,4 @@
-// Shared by radix_histogram.comp and radix_scatter.comp. Mirrors engine/sort/radix.rs
+// Shared by every radix-sort kernel. Mirrors engine/sort/radix.rs
 // (RadixParams).
 //
 // A workgroup owns a tile of TILE_LEN consecutive keys; the histogram and the scatter of one

@@ -4,8 +4,7 @@
 // (digit, tile) its first output position.
 //
 // Order does not matter here, so keys are read 16 bytes at a time and counted with shared
-// atomics: on lavapipe every memory access is a loop over the SIMD lanes, so wide loads
-// and no ballots make this pass about 3x faster than counting the way the scatter ranks.
+// atomics (GPU variant; CPU devices run radix_histogram_lanes.comp).
 #include "radix_common.glsl"
 
 // The same buffer twice: whole 16-byte vectors, and single words for the tail.
