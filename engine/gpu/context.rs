@@ -64,10 +64,9 @@ impl GpuContext {
         // From here on, a failure must destroy the instance: build the rest in a closure.
         let messenger = if validation { Some(create_messenger(&entry, &instance, &validation_log)) } else { None };
         let rest = (|| {
-            let devices = unsafe { enumerate(&instance)? };
+            let (handles, devices) = unsafe { enumerate(&instance)? };
             let chosen = choose_device(&devices, wanted.as_deref())?;
-            let physical_device = unsafe { instance.enumerate_physical_devices() }.during("vkEnumeratePhysicalDevices")?[chosen];
-            Ok((devices[chosen].clone(), physical_device))
+            Ok((devices[chosen].clone(), handles[chosen]))
         })();
         let (info, physical_device) = match rest {
             Ok(v) => v,
@@ -134,7 +133,7 @@ impl GpuContext {
         let instance = create_instance(&entry, false, &ValidationLog::default())?;
         let devices = unsafe { enumerate(&instance) };
         unsafe { instance.destroy_instance(None) };
-        devices
+        devices.map(|(_, devices)| devices)
     }
 
     pub fn info(&self) -> &DeviceInfo {
@@ -251,10 +250,12 @@ unsafe fn destroy_instance(
     instance.destroy_instance(None);
 }
 
-unsafe fn enumerate(instance: &ash::Instance) -> GpuResult<Vec<DeviceInfo>> {
+/// The physical devices and, at the same indices, what the user sees of them.
+unsafe fn enumerate(instance: &ash::Instance) -> GpuResult<(Vec<vk::PhysicalDevice>, Vec<DeviceInfo>)> {
     let physical_devices = instance.enumerate_physical_devices().during("vkEnumeratePhysicalDevices")?;
-    Ok(physical_devices
-        .into_iter()
+    let infos = physical_devices
+        .iter()
+        .copied()
         .enumerate()
         .map(|(index, pd)| {
             let properties = instance.get_physical_device_properties(pd);
@@ -265,7 +266,8 @@ unsafe fn enumerate(instance: &ash::Instance) -> GpuResult<Vec<DeviceInfo>> {
                 capabilities: DeviceCapabilities::query(instance, pd),
             }
         })
-        .collect())
+        .collect();
+    Ok((physical_devices, infos))
 }
 
 /// The compute queue family: one that also writes timestamps if any does.
