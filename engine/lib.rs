@@ -9,6 +9,7 @@
 //! - [`rng`]: a small deterministic generator for tests, benchmarks and synthetic data.
 
 pub mod bench;
+pub mod eval;
 pub mod gpu;
 pub mod rng;
 pub mod sort;

@@ -1,0 +1,57 @@
+//! Evaluation metrics, each with its exact definition and unit in its own file:
+//! - [`psnr`]: peak signal-to-noise ratio of images in [0, 1], in dB.
+//! - [`ssim`]: structural similarity (11×11 Gaussian window, σ = 1.5), unitless; equals
+//!   scikit-image's `structural_similarity(gaussian_weights=True, sigma=1.5,
+//!   use_sample_covariance=False, data_range=1)`.
+//! - [`chamfer`]: symmetric Chamfer distance between area-uniform surface samples of two meshes.
+//! - [`emd`]: earth mover's distance between equal-size surface samples (exact assignment).
+//! - [`tracking`]: MSE / RMSE of tracked points against ground-truth trajectories.
+//!
+//! Inputs are plain arrays; [`sample`] draws the surface samples, [`trajectories`] reads and
+//! writes the trajectory CSV (`id,frame,x,y,z`).
+
+pub mod assignment;
+pub mod chamfer;
+pub mod emd;
+pub mod psnr;
+pub mod sample;
+pub mod ssim;
+pub mod tracking;
+pub mod trajectories;
+
+pub use chamfer::{chamfer_distance, chamfer_meshes, ChamferReport};
+pub use emd::{emd_meshes, emd_points, EmdReport};
+pub use psnr::psnr;
+pub use sample::{sample_surface, surface_points, SurfaceSample};
+pub use ssim::ssim;
+pub use tracking::{tracking_error, TrackingReport};
+pub use trajectories::{read_trajectories_csv, write_trajectories_csv, TrackPoint};
+
+use std::path::PathBuf;
+
+/// Why a metric could not be computed.
+#[derive(Debug, thiserror::Error)]
+pub enum EvalError {
+    #[error("inputs differ in size: {0} vs {1} values")]
+    SizeMismatch(usize, usize),
+    #[error("empty input: {0}")]
+    Empty(&'static str),
+    #[error("non-finite value in {0}")]
+    NonFinite(&'static str),
+    #[error("image {width}×{height} is smaller than the {window}×{window} SSIM window")]
+    ImageTooSmall { width: usize, height: usize, window: usize },
+    #[error("image buffer holds {len} values, expected {width}×{height}×{channels}")]
+    ImageShape { len: usize, width: usize, height: usize, channels: usize },
+    #[error("face {face} refers to vertex {index}, but the mesh has {vertices} vertices")]
+    FaceIndex { face: usize, index: u32, vertices: usize },
+    #[error("a surface sample lies on face {face}, but the mesh has {faces} faces")]
+    SampleFace { face: u32, faces: usize },
+    #[error("the mesh has no surface area to sample")]
+    NoArea,
+    #[error("{path}: line {line}: {problem}")]
+    Csv { path: PathBuf, line: usize, problem: String },
+    #[error("{path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("ground-truth point {id} at frame {frame} has no prediction")]
+    MissingPrediction { id: u64, frame: u32 },
+}

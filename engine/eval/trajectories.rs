@@ -1,0 +1,85 @@
+//! The trajectory CSV shared by the tracker, the generator and `eval`: a header line
+//! `id,frame,x,y,z`, then one row per point and frame (id and frame unsigned integers,
+//! positions in scene units). Rows may come in any order; an (id, frame) pair appears once.
+
+use super::EvalError;
+use std::collections::HashSet;
+use std::io::Write;
+use std::path::Path;
+
+/// One point of a trajectory: point `id` at `frame`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrackPoint {
+    pub id: u64,
+    pub frame: u32,
+    pub position: [f64; 3],
+}
+
+const HEADER: &str = "id,frame,x,y,z";
+
+/// Writes the CSV (header and rows in the given order) with shortest round-trip floats.
+pub fn write_trajectories_csv(out: &mut impl Write, points: &[TrackPoint]) -> std::io::Result<()> {
+    writeln!(out, "{HEADER}")?;
+    for p in points {
+        writeln!(out, "{},{},{},{},{}", p.id, p.frame, p.position[0], p.position[1], p.position[2])?;
+    }
+    Ok(())
+}
+
+/// Reads the CSV at `path`. Every malformed line, non-finite coordinate or repeated
+/// (id, frame) pair is an error naming the file and the line.
+pub fn read_trajectories_csv(path: &Path) -> Result<Vec<TrackPoint>, EvalError> {
+    let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io { path: path.to_owned(), source })?;
+    parse_trajectories_csv(&text).map_err(|(line, problem)| EvalError::Csv { path: path.to_owned(), line, problem })
+}
+
+/// Parses CSV text; errors carry the 1-based line number.
+pub fn parse_trajectories_csv(text: &str) -> Result<Vec<TrackPoint>, (usize, String)> {
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    match lines.next() {
+        Some((_, h)) if h.trim().replace(' ', "") == HEADER => {}
+        Some((i, h)) => return Err((i + 1, format!("expected the header `{HEADER}`, found `{h}`"))),
+        None => return Err((1, format!("empty file, expected the header `{HEADER}`"))),
+    }
+    let mut seen = HashSet::new();
+    let mut points = Vec::new();
+    for (i, line) in lines {
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if fields.len() != 5 {
+            return Err((i + 1, format!("expected 5 fields, found {}", fields.len())));
+        }
+        let id: u64 = fields[0].parse().map_err(|_| (i + 1, format!("id `{}` is not an unsigned integer", fields[0])))?;
+        let frame: u32 = fields[1].parse().map_err(|_| (i + 1, format!("frame `{}` is not an unsigned integer", fields[1])))?;
+        let mut position = [0.0; 3];
+        for (k, p) in position.iter_mut().enumerate() {
+            *p = fields[2 + k].parse::<f64>().ok().filter(|v| v.is_finite()).ok_or((i + 1, format!("coordinate `{}` is not a finite number", fields[2 + k])))?;
+        }
+        if !seen.insert((id, frame)) {
+            return Err((i + 1, format!("point {id} at frame {frame} appears twice")));
+        }
+        points.push(TrackPoint { id, frame, position });
+    }
+    Ok(points)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_and_errors() {
+        let pts = vec![
+            TrackPoint { id: 3, frame: 0, position: [0.1, -2.5e-7, 1.0 / 3.0] },
+            TrackPoint { id: 3, frame: 1, position: [1e10, 0.0, -0.0] },
+        ];
+        let mut buf = Vec::new();
+        write_trajectories_csv(&mut buf, &pts).unwrap();
+        assert_eq!(parse_trajectories_csv(std::str::from_utf8(&buf).unwrap()).unwrap(), pts);
+        assert_eq!(parse_trajectories_csv("x,y\n").unwrap_err().0, 1);
+        assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n1,0,1,2\n").unwrap_err().0, 2);
+        assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n1,0,1,2,nan\n").unwrap_err().0, 2);
+        assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n1,0,1,2,3\n\n1,0,1,2,3\n").unwrap_err().0, 4);
+        assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n-1,0,1,2,3\n").unwrap_err().0, 2);
+        assert!(parse_trajectories_csv("").is_err());
+    }
+}
