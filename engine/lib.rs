@@ -7,9 +7,15 @@
 //! - [`sort`]: exclusive prefix scan and LSD radix sort on the GPU.
 //! - [`bench`]: benchmarks measured against bounds from the same run.
 //! - [`rng`]: a small deterministic generator for tests, benchmarks and synthetic data.
+//! - [`camera`]: the pinhole camera (OpenCV axes) and its `cam.json` form.
+//! - [`io`]: file formats (PLY) and atomic writes.
+//! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
 
 pub mod bench;
+pub mod camera;
 pub mod gpu;
+pub mod io;
+pub mod mesh;
 pub mod rng;
 pub mod sort;
 
