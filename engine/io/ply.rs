@@ -267,7 +267,7 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, PlyError> {
         let words: Vec<&str> = line.split_whitespace().collect();
         match words.as_slice() {
             [] => {}
-            ["comment", ..] | ["obj_info", ..] => comments.push(line.splitn(2, ' ').nth(1).unwrap_or("").to_string()),
+            ["comment", ..] | ["obj_info", ..] => comments.push(line.split_once(' ').map_or("", |(_, rest)| rest).to_string()),
             ["format", kind, _version] => {
                 format = Some(match *kind {
                     "ascii" => Format::Ascii,
