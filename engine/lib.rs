@@ -9,6 +9,7 @@
 //! - [`rng`]: a small deterministic generator for tests, benchmarks and synthetic data.
 //! - [`camera`]: the pinhole camera (OpenCV axes) and its `cam.json` form.
 //! - [`io`]: file formats (PLY) and atomic writes.
+//! - [`splat`]: differentiable Gaussian splatting (forward, backward, CPU reference).
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
 
 pub mod bench;
@@ -18,6 +19,7 @@ pub mod io;
 pub mod mesh;
 pub mod rng;
 pub mod sort;
+pub mod splat;
 
 /// SPIR-V of every compute shader, compiled from `shaders/` by `build.rs`.
 pub mod shaders {
