@@ -1,0 +1,61 @@
+#version 460
+// Rasterization, forward: front-to-back compositing of the tile's depth-sorted Gaussians.
+// Besides colour, alpha and expected depth, it keeps per pixel what the backward pass needs to
+// walk the same Gaussians back to front: the final transmittance and how many it walked.
+#include "raster_common.glsl"
+
+layout(std430, binding = 3) writeonly buffer Rgba { vec4 out_rgba[]; };        // colour, alpha
+layout(std430, binding = 4) writeonly buffer Depth { float out_depth[]; };
+layout(std430, binding = 5) writeonly buffer PixelState { uvec2 pixel_state[]; }; // T bits, walked
+
+shared uint done_count;
+
+void main() {
+    Pixel px = this_pixel();
+    uvec2 range = tile_ranges[px.tile];
+    float transmittance = 1.0;
+    vec3 color = vec3(0.0);
+    float depth = 0.0;
+    uint walked = 0u;
+    bool done = !px.inside;
+    for (uint start = range.x; start < range.y; start += BATCH) {
+        barrier(); // the previous batch is consumed
+        if (gl_LocalInvocationIndex == 0u) {
+            done_count = 0u;
+        }
+        barrier();
+        if (done) {
+            atomicAdd(done_count, 1u);
+        }
+        load_batch(start, range.y);
+        barrier();
+        if (done_count == BATCH) {
+            break;
+        }
+        uint count = min(BATCH, range.y - start);
+        for (uint j = 0u; j < count && !done; j++) {
+            float falloff;
+            vec2 d;
+            float alpha = alpha_at(j, px.center, falloff, d);
+            if (alpha < ALPHA_MIN) {
+                continue;
+            }
+            float next = transmittance * (1.0 - alpha);
+            if (next < TRANSMITTANCE_MIN) {
+                done = true;
+                break;
+            }
+            float weight = alpha * transmittance;
+            color += batch_color[j].rgb * weight;
+            depth += batch_mean_opacity_depth[j].w * weight;
+            transmittance = next;
+            walked = start - range.x + j + 1u;
+        }
+    }
+    if (px.inside) {
+        float alpha = 1.0 - transmittance;
+        out_rgba[px.index] = vec4(color + transmittance * frame.background_far.rgb, alpha);
+        out_depth[px.index] = alpha >= DEPTH_ALPHA_MIN ? depth / alpha : 0.0;
+        pixel_state[px.index] = uvec2(floatBitsToUint(transmittance), walked);
+    }
+}

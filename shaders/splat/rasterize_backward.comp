@@ -1,0 +1,109 @@
+#version 460
+// Rasterization, backward: each pixel walks the Gaussians it composited back to front,
+// recovering the transmittance before each by division, and forms the gradients of its
+// colour, alpha and expected depth with respect to every Gaussian's 2D mean, conic, opacity,
+// colour and depth. All pixels of a tile visit the same Gaussian at once, so each subgroup sums
+// its pixels' gradients before one lane adds them to the Gaussian's row with float atomics.
+#extension GL_EXT_shader_atomic_float : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_vote : require
+#include "raster_common.glsl"
+#include "grad2d.glsl"
+
+layout(std430, binding = 3) readonly buffer Rgba { vec4 rgba[]; };
+layout(std430, binding = 4) readonly buffer Depth { float depth_out[]; };
+layout(std430, binding = 5) readonly buffer PixelState { uvec2 pixel_state[]; };
+layout(std430, binding = 6) readonly buffer GradRgba { vec4 grad_rgba[]; };    // dL/dcolour, dL/dalpha
+layout(std430, binding = 7) readonly buffer GradDepth { float grad_depth[]; };
+layout(std430, binding = 8) buffer Grad2d { float grad2d[]; };                // GRAD2D_STRIDE per Gaussian
+
+shared uint max_walked;
+
+void add_to_gaussian(uint id, float values[GRAD2D_STRIDE]) {
+    for (uint k = 0u; k < GRAD2D_STRIDE; k++) {
+        float sum = subgroupAdd(values[k]);
+        if (subgroupElect()) {
+            atomicAdd(grad2d[id * GRAD2D_STRIDE + k], sum);
+        }
+    }
+}
+
+void main() {
+    Pixel px = this_pixel();
+    uvec2 range = tile_ranges[px.tile];
+    uvec2 state = px.inside ? pixel_state[px.index] : uvec2(floatBitsToUint(1.0), 0u);
+    if (gl_LocalInvocationIndex == 0u) {
+        max_walked = 0u;
+    }
+    barrier();
+    atomicMax(max_walked, state.y);
+
+    // Colour and alpha gradients as they are; depth is D / A, so its gradient splits into one
+    // on D (the weighted depth sum) and one more on A.
+    vec4 g_rgba = px.inside ? grad_rgba[px.index] : vec4(0.0);
+    float final_t = uintBitsToFloat(state.x);
+    float alpha_out = 1.0 - final_t;
+    float g_depth_sum = 0.0;
+    float g_alpha = g_rgba.a;
+    if (px.inside && alpha_out >= DEPTH_ALPHA_MIN) {
+        float g_depth = grad_depth[px.index];
+        g_depth_sum = g_depth / alpha_out;
+        g_alpha -= g_depth * depth_out[px.index] / alpha_out;
+    }
+    vec3 behind_color = final_t * frame.background_far.rgb; // what lies behind, background included
+    float behind_depth = 0.0;
+    float transmittance = final_t;
+    barrier();
+    uint end = range.x + max_walked;
+    uint batches = (max_walked + BATCH - 1u) / BATCH;
+    for (uint b = batches; b > 0u; b--) {
+        uint start = range.x + (b - 1u) * BATCH;
+        barrier();
+        load_batch(start, end);
+        barrier();
+        uint count = min(BATCH, end - start);
+        for (uint j = count; j > 0u; j--) {
+            uint jj = j - 1u;
+            float falloff;
+            vec2 d;
+            float alpha = alpha_at(jj, px.center, falloff, d);
+            bool contributes = px.inside && start - range.x + jj < state.y && alpha >= ALPHA_MIN;
+            if (!subgroupAny(contributes)) {
+                continue;
+            }
+            float values[GRAD2D_STRIDE];
+            for (uint k = 0u; k < GRAD2D_STRIDE; k++) {
+                values[k] = 0.0;
+            }
+            if (contributes) {
+                vec4 mod_ = batch_mean_opacity_depth[jj];
+                vec3 conic = batch_conic[jj].xyz;
+                vec3 c = batch_color[jj].rgb;
+                float one_minus = 1.0 - alpha;
+                transmittance /= one_minus;
+                float weight = alpha * transmittance;
+                float g_a = dot(g_rgba.rgb, c * transmittance - behind_color / one_minus)
+                          + g_alpha * final_t / one_minus
+                          + g_depth_sum * (mod_.w * transmittance - behind_depth / one_minus);
+                behind_color += c * weight;
+                behind_depth += mod_.w * weight;
+                // alpha = min(0.99, o G): the cap passes no gradient.
+                if (mod_.z * falloff < ALPHA_MAX) {
+                    float g_sigma = -g_a * mod_.z * falloff;
+                    vec2 g_mean = -g_sigma * vec2(conic.x * d.x + conic.y * d.y, conic.y * d.x + conic.z * d.y);
+                    values[GRAD2D_MEAN] = g_mean.x;
+                    values[GRAD2D_MEAN + 1u] = g_mean.y;
+                    values[GRAD2D_CONIC] = g_sigma * 0.5 * d.x * d.x;
+                    values[GRAD2D_CONIC + 1u] = g_sigma * d.x * d.y;
+                    values[GRAD2D_CONIC + 2u] = g_sigma * 0.5 * d.y * d.y;
+                    values[GRAD2D_OPACITY] = g_a * falloff;
+                }
+                values[GRAD2D_COLOR] = g_rgba.r * weight;
+                values[GRAD2D_COLOR + 1u] = g_rgba.g * weight;
+                values[GRAD2D_COLOR + 2u] = g_rgba.b * weight;
+                values[GRAD2D_DEPTH] = g_depth_sum * weight;
+            }
+            add_to_gaussian(floatBitsToUint(batch_conic[jj].w), values);
+        }
+    }
+}
