@@ -8,8 +8,6 @@ layout(std430, binding = 3) writeonly buffer Rgba { vec4 out_rgba[]; };        /
 layout(std430, binding = 4) writeonly buffer Depth { float out_depth[]; };
 layout(std430, binding = 5) writeonly buffer PixelState { uvec2 pixel_state[]; }; // T bits, walked
 
-shared uint done_count;
-
 void main() {
     Pixel px = this_pixel();
     uvec2 range = tile_ranges[px.tile];
@@ -18,38 +16,27 @@ void main() {
     float depth = 0.0;
     uint walked = 0u;
     bool done = !px.inside;
-    for (uint start = range.x; start < range.y; start += BATCH) {
-        barrier(); // the previous batch is consumed
-        if (gl_LocalInvocationIndex == 0u) {
-            done_count = 0u;
-        }
-        barrier();
-        if (done) {
-            atomicAdd(done_count, 1u);
-        }
-        load_batch(start, range.y);
-        barrier();
-        if (done_count == BATCH) {
-            break;
-        }
-        uint count = min(BATCH, range.y - start);
-        for (uint j = 0u; j < count && !done; j++) {
+    for (uint start = range.x; start < range.y && !subgroupAll(done); start += gl_SubgroupSize) {
+        Chunk mine = load_chunk(start, range.y);
+        uint count = min(gl_SubgroupSize, range.y - start);
+        for (uint g = 0u; g < count; g++) {
+            Chunk c = broadcast(mine, g);
             float falloff;
             vec2 d;
-            float alpha = alpha_at(j, px.center, falloff, d);
-            if (alpha < ALPHA_MIN) {
+            float alpha = alpha_at(c, px.center, falloff, d);
+            float next = transmittance * (1.0 - alpha);
+            if (done || alpha < ALPHA_MIN) {
                 continue;
             }
-            float next = transmittance * (1.0 - alpha);
             if (next < TRANSMITTANCE_MIN) {
                 done = true;
-                break;
+                continue;
             }
             float weight = alpha * transmittance;
-            color += batch_color[j].rgb * weight;
-            depth += batch_mean_opacity_depth[j].w * weight;
+            color += c.color * weight;
+            depth += c.mean_opacity_depth.w * weight;
             transmittance = next;
-            walked = start - range.x + j + 1u;
+            walked = start - range.x + g + 1u;
         }
     }
     if (px.inside) {

@@ -2,11 +2,10 @@
 // Rasterization, backward: each pixel walks the Gaussians it composited back to front,
 // recovering the transmittance before each by division, and forms the gradients of its
 // colour, alpha and expected depth with respect to every Gaussian's 2D mean, conic, opacity,
-// colour and depth. All pixels of a tile visit the same Gaussian at once, so each subgroup sums
-// its pixels' gradients before one lane adds them to the Gaussian's row with float atomics.
+// colour and depth. Per Gaussian, the subgroup sums its pixels' gradients and the sum is kept
+// by the lane that loaded that Gaussian; after each chunk every lane adds its Gaussian's sums
+// to the global row with float atomics, all lanes in one instruction.
 #extension GL_EXT_shader_atomic_float : require
-#extension GL_KHR_shader_subgroup_arithmetic : require
-#extension GL_KHR_shader_subgroup_vote : require
 #include "raster_common.glsl"
 #include "grad2d.glsl"
 
@@ -17,26 +16,10 @@ layout(std430, binding = 6) readonly buffer GradRgba { vec4 grad_rgba[]; };    /
 layout(std430, binding = 7) readonly buffer GradDepth { float grad_depth[]; };
 layout(std430, binding = 8) buffer Grad2d { float grad2d[]; };                // GRAD2D_STRIDE per Gaussian
 
-shared uint max_walked;
-
-void add_to_gaussian(uint id, float values[GRAD2D_STRIDE]) {
-    for (uint k = 0u; k < GRAD2D_STRIDE; k++) {
-        float sum = subgroupAdd(values[k]);
-        if (subgroupElect()) {
-            atomicAdd(grad2d[id * GRAD2D_STRIDE + k], sum);
-        }
-    }
-}
-
 void main() {
     Pixel px = this_pixel();
     uvec2 range = tile_ranges[px.tile];
     uvec2 state = px.inside ? pixel_state[px.index] : uvec2(floatBitsToUint(1.0), 0u);
-    if (gl_LocalInvocationIndex == 0u) {
-        max_walked = 0u;
-    }
-    barrier();
-    atomicMax(max_walked, state.y);
 
     // Colour and alpha gradients as they are; depth is D / A, so its gradient splits into one
     // on D (the weighted depth sum) and one more on A.
@@ -53,21 +36,22 @@ void main() {
     vec3 behind_color = final_t * frame.background_far.rgb; // what lies behind, background included
     float behind_depth = 0.0;
     float transmittance = final_t;
-    barrier();
-    uint end = range.x + max_walked;
-    uint batches = (max_walked + BATCH - 1u) / BATCH;
-    for (uint b = batches; b > 0u; b--) {
-        uint start = range.x + (b - 1u) * BATCH;
-        barrier();
-        load_batch(start, end);
-        barrier();
-        uint count = min(BATCH, end - start);
-        for (uint j = count; j > 0u; j--) {
-            uint jj = j - 1u;
+
+    uint walked = subgroupMax(state.y);
+    for (uint chunk = (walked + gl_SubgroupSize - 1u) / gl_SubgroupSize; chunk > 0u; chunk--) {
+        uint start = range.x + (chunk - 1u) * gl_SubgroupSize;
+        uint end = range.x + walked;
+        Chunk mine = load_chunk(start, end);
+        float sums[GRAD2D_STRIDE]; // of the Gaussian this lane loaded
+        for (uint k = 0u; k < GRAD2D_STRIDE; k++) {
+            sums[k] = 0.0;
+        }
+        for (uint g = min(gl_SubgroupSize, end - start); g > 0u; g--) {
+            Chunk c = broadcast(mine, g - 1u);
             float falloff;
             vec2 d;
-            float alpha = alpha_at(jj, px.center, falloff, d);
-            bool contributes = px.inside && start - range.x + jj < state.y && alpha >= ALPHA_MIN;
+            float alpha = alpha_at(c, px.center, falloff, d);
+            bool contributes = start - range.x + g - 1u < state.y && alpha >= ALPHA_MIN;
             if (!subgroupAny(contributes)) {
                 continue;
             }
@@ -76,20 +60,20 @@ void main() {
                 values[k] = 0.0;
             }
             if (contributes) {
-                vec4 mod_ = batch_mean_opacity_depth[jj];
-                vec3 conic = batch_conic[jj].xyz;
-                vec3 c = batch_color[jj].rgb;
+                float opacity = c.mean_opacity_depth.z;
+                float depth = c.mean_opacity_depth.w;
+                vec3 conic = c.conic_id.xyz;
                 float one_minus = 1.0 - alpha;
                 transmittance /= one_minus;
                 float weight = alpha * transmittance;
-                float g_a = dot(g_rgba.rgb, c * transmittance - behind_color / one_minus)
+                float g_a = dot(g_rgba.rgb, c.color * transmittance - behind_color / one_minus)
                           + g_alpha * final_t / one_minus
-                          + g_depth_sum * (mod_.w * transmittance - behind_depth / one_minus);
-                behind_color += c * weight;
-                behind_depth += mod_.w * weight;
+                          + g_depth_sum * (depth * transmittance - behind_depth / one_minus);
+                behind_color += c.color * weight;
+                behind_depth += depth * weight;
                 // alpha = min(0.99, o G): the cap passes no gradient.
-                if (mod_.z * falloff < ALPHA_MAX) {
-                    float g_sigma = -g_a * mod_.z * falloff;
+                if (opacity * falloff < ALPHA_MAX) {
+                    float g_sigma = -g_a * opacity * falloff;
                     vec2 g_mean = -g_sigma * vec2(conic.x * d.x + conic.y * d.y, conic.y * d.x + conic.z * d.y);
                     values[GRAD2D_MEAN] = g_mean.x;
                     values[GRAD2D_MEAN + 1u] = g_mean.y;
@@ -103,7 +87,18 @@ void main() {
                 values[GRAD2D_COLOR + 2u] = g_rgba.b * weight;
                 values[GRAD2D_DEPTH] = g_depth_sum * weight;
             }
-            add_to_gaussian(floatBitsToUint(batch_conic[jj].w), values);
+            for (uint k = 0u; k < GRAD2D_STRIDE; k++) {
+                float sum = subgroupAdd(values[k]);
+                sums[k] = gl_SubgroupInvocationID == g - 1u ? sum : sums[k];
+            }
+        }
+        if (start + gl_SubgroupInvocationID < end) {
+            uint id = floatBitsToUint(mine.conic_id.w);
+            for (uint k = 0u; k < GRAD2D_STRIDE; k++) {
+                if (sums[k] != 0.0) {
+                    atomicAdd(grad2d[id * GRAD2D_STRIDE + k], sums[k]);
+                }
+            }
         }
     }
 }
