@@ -87,9 +87,12 @@ void main() {
                 values[GRAD2D_COLOR + 2u] = g_rgba.b * weight;
                 values[GRAD2D_DEPTH] = g_depth_sum * weight;
             }
-            for (uint k = 0u; k < GRAD2D_STRIDE; k++) {
-                float sum = subgroupAdd(values[k]);
-                sums[k] = gl_SubgroupInvocationID == g - 1u ? sum : sums[k];
+            // Three vector reductions rather than ten scalar ones.
+            vec4 a = subgroupAdd(vec4(values[0], values[1], values[2], values[3]));
+            vec4 b = subgroupAdd(vec4(values[4], values[5], values[6], values[7]));
+            vec2 e = subgroupAdd(vec2(values[8], values[9]));
+            if (gl_SubgroupInvocationID == g - 1u) {
+                sums = float[GRAD2D_STRIDE](a.x, a.y, a.z, a.w, b.x, b.y, b.z, b.w, e.x, e.y);
             }
         }
         if (start + gl_SubgroupInvocationID < end) {
