@@ -35,6 +35,7 @@
 //! Backward: the exact derivative of the above (a clamp or a `min` that is active passes no
 //! gradient), from dL/dcolour, dL/dalpha and dL/ddepth to every stored parameter.
 
+pub mod reference;
 mod scene;
 
 pub use scene::{GaussianScene, SceneError};
