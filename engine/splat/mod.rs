@@ -37,6 +37,7 @@
 
 mod buffers;
 mod frame;
+pub mod reference;
 mod scene;
 mod splatter;
 mod stages;
