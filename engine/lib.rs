@@ -7,12 +7,21 @@
 //! - [`sort`]: exclusive prefix scan and LSD radix sort on the GPU.
 //! - [`bench`]: benchmarks measured against bounds from the same run.
 //! - [`rng`]: a small deterministic generator for tests, benchmarks and synthetic data.
+//! - [`camera`]: the pinhole camera (OpenCV axes) and its `cam.json` form.
+//! - [`io`]: file formats (PLY) and atomic writes.
+//! - [`splat`]: differentiable Gaussian splatting (forward, backward, CPU reference).
+//! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
+//! - [`eval`]: image, surface and tracking metrics.
 
 pub mod bench;
+pub mod camera;
 pub mod eval;
 pub mod gpu;
+pub mod io;
+pub mod mesh;
 pub mod rng;
 pub mod sort;
+pub mod splat;
 
 /// SPIR-V of every compute shader, compiled from `shaders/` by `build.rs`.
 pub mod shaders {
