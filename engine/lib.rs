@@ -12,6 +12,7 @@
 //! - [`splat`]: differentiable Gaussian splatting (forward, backward, CPU reference).
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
 //! - [`eval`]: image, surface and tracking metrics.
+//! - [`synth`]: synthetic dynamic scenes with ground truth (procedural body, glTF skinning).
 
 pub mod bench;
 pub mod camera;
@@ -22,6 +23,7 @@ pub mod mesh;
 pub mod rng;
 pub mod sort;
 pub mod splat;
+pub mod synth;
 
 /// SPIR-V of every compute shader, compiled from `shaders/` by `build.rs`.
 pub mod shaders {

@@ -4,6 +4,10 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 use std::sync::Arc;
+
+mod dataset;
+mod eval;
+mod synth;
 use tagsplat::bench::{bench_sort, bench_splat, SortBenchReport, SplatBenchConfig, SplatBenchReport};
 use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
 
@@ -25,6 +29,13 @@ struct Cli {
 enum Command {
     /// List the Vulkan devices, their missing features, and which one would be chosen.
     Devices,
+    /// Inspect a multi-view video dataset.
+    #[command(subcommand)]
+    Dataset(dataset::DatasetCommand),
+    /// Generate a synthetic dynamic scene with ground truth.
+    Synth(synth::SynthArgs),
+    /// Metrics of a prediction folder against a ground-truth folder.
+    Eval(eval::EvalArgs),
     /// Measure engine kernels against bounds measured in the same run.
     #[command(subcommand)]
     Bench(Bench),
@@ -82,6 +93,9 @@ fn run(cli: Cli) -> Result<()> {
     let options = ContextOptions { device: cli.device.clone(), validation: cli.validation.then_some(true) };
     match cli.command {
         Command::Devices => devices(options.device.as_deref()),
+        Command::Dataset(command) => dataset::run(command),
+        Command::Synth(args) => synth::run(args),
+        Command::Eval(args) => eval::run(args),
         Command::Bench(Bench::Sort { n, bits, repetitions, json }) => {
             let ctx = context(&options)?;
             let report = bench_sort(&ctx, n, bits, repetitions as usize).with_context(|| format!("bench sort --n {n} --bits {bits}"))?;

@@ -8,11 +8,13 @@
 //! - [`tracking`]: MSE / RMSE of tracked points against ground-truth trajectories.
 //!
 //! Inputs are plain arrays; [`sample`] draws the surface samples, [`trajectories`] reads and
-//! writes the trajectory CSV (`id,frame,x,y,z`).
+//! writes the trajectory CSV (`id,frame,x,y,z`), [`folder`] compares a prediction folder with a
+//! ground-truth folder.
 
 pub mod assignment;
 pub mod chamfer;
 pub mod emd;
+pub mod folder;
 pub mod psnr;
 pub mod sample;
 pub mod ssim;
@@ -21,6 +23,7 @@ pub mod trajectories;
 
 pub use chamfer::{chamfer_distance, chamfer_meshes, ChamferReport};
 pub use emd::{emd_meshes, emd_points, EmdReport};
+pub use folder::{evaluate_folders, FolderError, FolderOptions, FolderReport};
 pub use psnr::psnr;
 pub use sample::{sample_surface, surface_points, SurfaceSample};
 pub use ssim::ssim;

@@ -1,9 +1,13 @@
 //! File formats and the one way this project writes files.
 //!
 //! - [`ply`]: generic PLY (ascii and binary in, binary little-endian out).
+//! - [`image`]: PNG / EXR as float arrays.
+//! - [`dataset`]: synchronized multi-view video (own layout, Panoptic, nerfstudio / D-NeRF).
 //! - [`write_atomically`]: every output goes to a temporary name and is renamed into place, so a
 //!   crash never leaves a half-written file behind.
 
+pub mod dataset;
+pub mod image;
 pub mod ply;
 
 use std::fs::File;

@@ -1,0 +1,239 @@
+//! Synchronized multi-view video: cameras (pinhole, OpenCV world-to-camera), frames in time
+//! order, per frame and view an image and a mask, and a train/test split of the cameras.
+//!
+//! Loaders convert at load time and nowhere else:
+//! - [`own`]: this project's layout (`dataset.json`, written by `tagsplat synth`);
+//! - [`panoptic`]: Dynamic 3D Gaussians / CMU Panoptic (`train_meta.json`, `ims/`, `seg/`);
+//! - [`nerfstudio`]: nerfstudio / D-NeRF `transforms*.json` (OpenGL camera-to-world).
+//!
+//! Loading reads only the metadata and checks that every file exists; images are decoded on
+//! demand through a bounded cache ([`cache::ImageCache`], 1 GiB by default).
+
+pub mod cache;
+pub mod nerfstudio;
+pub mod own;
+pub mod panoptic;
+
+use crate::camera::Camera;
+use crate::io::image::{read_image, Image, ImageError};
+use cache::ImageCache;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Default budget of decoded pixel data kept in memory.
+pub const DEFAULT_CACHE_BYTES: usize = 1 << 30;
+
+#[derive(Debug, thiserror::Error)]
+pub enum DatasetError {
+    #[error("{}: {problem}", path.display())]
+    File { path: PathBuf, problem: String },
+    #[error("{}: camera {camera}: {problem}", path.display())]
+    Camera { path: PathBuf, camera: String, problem: String },
+    #[error("missing image {}", .0.display())]
+    MissingImage(PathBuf),
+    #[error("{}: image is {width}×{height} but camera {camera} is {camera_width}×{camera_height}", path.display())]
+    SizeMismatch { path: PathBuf, camera: String, width: u32, height: u32, camera_width: u32, camera_height: u32 },
+    #[error(transparent)]
+    Image(#[from] ImageError),
+    #[error("{}: has no alpha channel to use as the mask", .0.display())]
+    NoMask(PathBuf),
+    #[error("frame {frame}: the mask is empty in every view")]
+    EmptyMasks { frame: usize },
+    #[error("{}: frame {frame} has cameras [{found}] but frame {first} has [{expected}]", path.display())]
+    CameraSets { path: PathBuf, frame: usize, first: usize, found: String, expected: String },
+    #[error("{}: no dataset here (looked for dataset.json, train_meta.json, transforms*.json)", .0.display())]
+    Unknown(PathBuf),
+}
+
+/// Which layout a dataset came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Format {
+    Own,
+    Panoptic,
+    Nerfstudio,
+}
+
+/// Where a view's mask comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaskSource {
+    /// A separate PNG; its first channel (> 0.5 is foreground).
+    File(PathBuf),
+    /// The alpha channel of the image itself.
+    Alpha,
+}
+
+/// One image of one camera at one frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct View {
+    pub camera: usize,
+    pub image: PathBuf,
+    pub mask: MaskSource,
+}
+
+/// The views captured at one time (seconds, or the frame index where the source has no clock).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub time: f64,
+    pub views: Vec<View>,
+}
+
+#[derive(Debug)]
+pub struct Dataset {
+    pub root: PathBuf,
+    pub format: Format,
+    pub camera_names: Vec<String>,
+    pub cameras: Vec<Camera>,
+    /// In time order.
+    pub frames: Vec<Frame>,
+    /// Camera indices for training and for held-out evaluation.
+    pub train: Vec<usize>,
+    pub test: Vec<usize>,
+    cache: ImageCache,
+}
+
+impl Dataset {
+    /// Detects the layout of `dir` and loads it: `dataset.json` (own), `train_meta.json`
+    /// (Panoptic), `transforms*.json` (nerfstudio / D-NeRF).
+    pub fn load(dir: &Path) -> Result<Self, DatasetError> {
+        if dir.join(own::META).is_file() {
+            own::load(dir)
+        } else if dir.join(panoptic::TRAIN_META).is_file() {
+            panoptic::load(dir)
+        } else if !nerfstudio::transform_files(dir).is_empty() {
+            nerfstudio::load(dir)
+        } else {
+            Err(DatasetError::Unknown(dir.to_owned()))
+        }
+    }
+
+    /// Assembles a dataset, sorting frames by time and checking that every frame has the
+    /// same set of cameras (unless every frame has exactly one view: a monocular sequence).
+    pub(crate) fn assemble(root: &Path, meta: &Path, format: Format, camera_names: Vec<String>, cameras: Vec<Camera>, mut frames: Vec<Frame>, train: Vec<usize>, test: Vec<usize>) -> Result<Self, DatasetError> {
+        if frames.is_empty() {
+            return Err(DatasetError::File { path: meta.to_owned(), problem: "has no frames".into() });
+        }
+        frames.sort_by(|a, b| a.time.total_cmp(&b.time));
+        for f in &mut frames {
+            f.views.sort_by_key(|v| v.camera);
+        }
+        let monocular = frames.iter().all(|f| f.views.len() == 1);
+        let set = |f: &Frame| f.views.iter().map(|v| camera_names[v.camera].as_str()).collect::<Vec<_>>().join(", ");
+        if !monocular {
+            let first: Vec<usize> = frames[0].views.iter().map(|v| v.camera).collect();
+            for (t, f) in frames.iter().enumerate() {
+                if !f.views.iter().map(|v| v.camera).eq(first.iter().copied()) {
+                    return Err(DatasetError::CameraSets { path: meta.to_owned(), frame: t, first: 0, found: set(f), expected: set(&frames[0]) });
+                }
+            }
+        }
+        Ok(Self { root: root.to_owned(), format, camera_names, cameras, frames, train, test, cache: ImageCache::new(DEFAULT_CACHE_BYTES) })
+    }
+
+    /// Replaces the image cache with one of `bytes` capacity.
+    pub fn with_cache_bytes(mut self, bytes: usize) -> Self {
+        self.cache = ImageCache::new(bytes);
+        self
+    }
+
+    /// Bytes of decoded pixels held in the cache now.
+    pub fn cached_bytes(&self) -> usize {
+        self.cache.bytes()
+    }
+
+    /// Image files and mask files that do not exist.
+    pub fn missing_files(&self) -> Vec<PathBuf> {
+        let mut missing = Vec::new();
+        for v in self.frames.iter().flat_map(|f| &f.views) {
+            if !v.image.is_file() {
+                missing.push(v.image.clone());
+            }
+            if let MaskSource::File(m) = &v.mask {
+                if !m.is_file() {
+                    missing.push(m.clone());
+                }
+            }
+        }
+        missing
+    }
+
+    fn view(&self, frame: usize, view: usize) -> &View {
+        &self.frames[frame].views[view]
+    }
+
+    /// The image of view `view` (index into the frame's views) of `frame`, decoded (cached);
+    /// its size must match the camera's.
+    pub fn image(&self, frame: usize, view: usize) -> Result<Arc<Image>, DatasetError> {
+        let v = self.view(frame, view);
+        self.load_checked(&v.image, v.camera)
+    }
+
+    /// The mask of a view as one value per pixel in [0, 1] (> 0.5 is foreground).
+    pub fn mask(&self, frame: usize, view: usize) -> Result<Vec<f32>, DatasetError> {
+        let v = self.view(frame, view);
+        match &v.mask {
+            MaskSource::File(path) => Ok(self.load_checked(path, v.camera)?.first_channel()),
+            MaskSource::Alpha => self.load_checked(&v.image, v.camera)?.alpha().ok_or_else(|| DatasetError::NoMask(v.image.clone())),
+        }
+    }
+
+    fn load_checked(&self, path: &Path, camera: usize) -> Result<Arc<Image>, DatasetError> {
+        if !path.is_file() {
+            return Err(DatasetError::MissingImage(path.to_owned()));
+        }
+        let image = self.cache.get_or_load(path, read_image)?;
+        self.check_size(path, camera, (image.width, image.height))?;
+        Ok(image)
+    }
+
+    fn check_size(&self, path: &Path, camera: usize, (width, height): (u32, u32)) -> Result<(), DatasetError> {
+        let c = &self.cameras[camera];
+        if (width, height) != (c.width, c.height) {
+            return Err(DatasetError::SizeMismatch { path: path.to_owned(), camera: self.camera_names[camera].clone(), width, height, camera_width: c.width, camera_height: c.height });
+        }
+        Ok(())
+    }
+
+    /// Every problem found by reading every file: missing files, sizes that disagree with
+    /// their camera, files that do not decode, masks missing, frames whose masks are empty in
+    /// every view. Decodes every image and mask through the cache (memory stays bounded).
+    pub fn check(&self) -> Vec<DatasetError> {
+        let mut problems = Vec::new();
+        for (t, frame) in self.frames.iter().enumerate() {
+            let mut any_foreground = false;
+            let mut masks_read = 0;
+            for (k, v) in frame.views.iter().enumerate() {
+                if !v.image.is_file() {
+                    problems.push(DatasetError::MissingImage(v.image.clone()));
+                    continue;
+                }
+                if let Err(e) = self.image(t, k) {
+                    problems.push(e);
+                    continue;
+                }
+                match self.mask(t, k) {
+                    Ok(m) => {
+                        masks_read += 1;
+                        any_foreground |= m.iter().any(|&x| x > 0.5);
+                    }
+                    Err(e) => problems.push(e),
+                }
+            }
+            if masks_read == frame.views.len() && !any_foreground {
+                problems.push(DatasetError::EmptyMasks { frame: t });
+            }
+        }
+        problems
+    }
+}
+
+/// Camera `index % 8 == 7` is held out for testing (every eighth camera), the rest train.
+pub fn every_eighth_held_out(count: usize) -> (Vec<usize>, Vec<usize>) {
+    (0..count).partition(|i| i % 8 != 7)
+}
+
+/// Reads a JSON file into `T`, naming the file on failure.
+pub(crate) fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, DatasetError> {
+    let text = std::fs::read_to_string(path).map_err(|e| DatasetError::File { path: path.to_owned(), problem: format!("cannot read: {e}") })?;
+    serde_json::from_str(&text).map_err(|e| DatasetError::File { path: path.to_owned(), problem: format!("invalid JSON: {e}") })
+}

@@ -1,0 +1,85 @@
+//! The project's own layout (written by `tagsplat synth`, documented in the README):
+//!
+//! ```text
+//! DIR/dataset.json            {"format": "tagsplat-dataset", "version": 1, "frames": T,
+//!                              "fps": 30, "cameras": ["cam000", ...], "test_cameras": [...]}
+//! DIR/cameras/<name>.json     one cam.json per camera (see `camera`)
+//! DIR/images/<name>/<t>.png   RGB (or RGBA), t = frame index as 6 digits
+//! DIR/masks/<name>/<t>.png    first channel is the mask
+//! ```
+//! Ground truth, when present, sits beside it: `meshes/<t>.ply`, `bindings.csv`,
+//! `trajectories.csv` (see `synth::generate`).
+
+use super::{read_json, Dataset, DatasetError, Format, Frame, MaskSource, View};
+use crate::camera::Camera;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+pub const META: &str = "dataset.json";
+pub const FORMAT_NAME: &str = "tagsplat-dataset";
+
+/// The contents of `dataset.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OwnMeta {
+    pub format: String,
+    pub version: u32,
+    pub frames: usize,
+    pub fps: f64,
+    pub cameras: Vec<String>,
+    pub test_cameras: Vec<String>,
+}
+
+/// `<t>` of the file names: the frame index as six digits.
+pub fn frame_name(t: usize) -> String {
+    format!("{t:06}")
+}
+
+pub fn camera_path(dir: &Path, camera: &str) -> PathBuf {
+    dir.join("cameras").join(format!("{camera}.json"))
+}
+
+pub fn image_path(dir: &Path, camera: &str, t: usize) -> PathBuf {
+    dir.join("images").join(camera).join(format!("{}.png", frame_name(t)))
+}
+
+pub fn mask_path(dir: &Path, camera: &str, t: usize) -> PathBuf {
+    dir.join("masks").join(camera).join(format!("{}.png", frame_name(t)))
+}
+
+pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
+    let meta_path = dir.join(META);
+    let meta: OwnMeta = read_json(&meta_path)?;
+    let bad = |problem: String| DatasetError::File { path: meta_path.clone(), problem };
+    if meta.format != FORMAT_NAME || meta.version != 1 {
+        return Err(bad(format!("format `{}` version {} is not {FORMAT_NAME} version 1", meta.format, meta.version)));
+    }
+    if !(meta.fps > 0.0 && meta.fps.is_finite()) {
+        return Err(bad(format!("fps {} must be positive", meta.fps)));
+    }
+    if meta.cameras.is_empty() {
+        return Err(bad("lists no cameras".into()));
+    }
+    for (i, name) in meta.cameras.iter().enumerate() {
+        if name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.') || meta.cameras[..i].contains(name) {
+            return Err(bad(format!("camera name `{name}` is empty, a path, or repeated")));
+        }
+    }
+    let mut cameras = Vec::with_capacity(meta.cameras.len());
+    for name in &meta.cameras {
+        let path = camera_path(dir, name);
+        cameras.push(Camera::load_json(&path).map_err(|e| DatasetError::Camera { path, camera: name.clone(), problem: e.to_string() })?);
+    }
+    let mut test = Vec::new();
+    for name in &meta.test_cameras {
+        test.push(meta.cameras.iter().position(|c| c == name).ok_or_else(|| bad(format!("test camera `{name}` is not in `cameras`")))?);
+    }
+    let train = (0..cameras.len()).filter(|i| !test.contains(i)).collect();
+    let frames = (0..meta.frames)
+        .map(|t| Frame {
+            time: t as f64 / meta.fps,
+            views: meta.cameras.iter().enumerate().map(|(c, name)| View { camera: c, image: image_path(dir, name, t), mask: MaskSource::File(mask_path(dir, name, t)) }).collect(),
+        })
+        .collect();
+    Dataset::assemble(dir, &meta_path, Format::Own, meta.cameras.clone(), cameras, frames, train, test)
+}

@@ -1,0 +1,63 @@
+//! Synthetic dynamic scenes with known ground truth.
+//!
+//! - [`procedural`]: an articulated body (closed manifold, 5 limbs bending at joints).
+//! - [`gltf`]: a rigged glTF 2.0 character (skin, joints, animation channels).
+//! - [`skinning`]: linear blend skinning, shared by both subjects.
+//! - [`texture`]: the coloured procedural texture painted on the rest pose.
+//! - [`raster`]: the supersampled CPU reference renderer (RGB + anti-aliased mask).
+//! - [`generate`]: cameras, renders, per-frame meshes and point trajectories on disk.
+
+pub mod generate;
+pub mod gltf;
+pub mod icosphere;
+pub mod manifold;
+pub mod procedural;
+pub mod raster;
+pub mod skinning;
+pub mod texture;
+
+pub use generate::{generate, SynthOptions, SynthReport, SubjectSource};
+pub use raster::{render, Render, RenderError};
+pub use skinning::{skin, SkinWeights};
+pub use texture::Texture;
+
+use glam::DMat4;
+
+/// A skinned subject: one rest mesh, its weights, and how its joints move.
+#[derive(Clone, Debug)]
+pub struct Subject {
+    pub rest: Vec<[f32; 3]>,
+    pub faces: Vec<[u32; 3]>,
+    pub skin: SkinWeights,
+    pub motion: Motion,
+}
+
+/// Where the skinning matrices of a frame come from.
+#[derive(Clone, Debug)]
+pub enum Motion {
+    /// [`procedural::procedural_pose`].
+    Procedural,
+    /// A glTF animation sampled at `frame / fps` seconds (wrapping at its duration).
+    Gltf(gltf::GltfRig),
+}
+
+impl Subject {
+    /// The procedural body with `subdivisions` levels of icosphere refinement.
+    pub fn procedural(subdivisions: u32) -> Self {
+        let (rest, faces, skin) = procedural::procedural_subject(subdivisions);
+        Self { rest, faces, skin, motion: Motion::Procedural }
+    }
+
+    /// Skinning matrices at `frame`.
+    pub fn joint_matrices(&self, frame: usize) -> Vec<DMat4> {
+        match &self.motion {
+            Motion::Procedural => procedural::procedural_pose(frame),
+            Motion::Gltf(rig) => rig.joint_matrices(frame),
+        }
+    }
+
+    /// Vertex positions at `frame` (same vertex order and faces as the rest mesh).
+    pub fn positions(&self, frame: usize) -> Vec<[f32; 3]> {
+        skin(&self.rest, &self.skin, &self.joint_matrices(frame))
+    }
+}

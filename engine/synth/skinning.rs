@@ -1,0 +1,43 @@
+//! Linear blend skinning.
+
+use glam::{DMat4, DVec3};
+
+/// Up to four joint influences per vertex; weights sum to 1 (unused slots have weight 0).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkinWeights {
+    pub joints: Vec<[u32; 4]>,
+    pub weights: Vec<[f32; 4]>,
+}
+
+/// Posed positions `p' = Σ wₖ · M[jₖ] · p` for rest positions `rest` and skinning matrices
+/// `joint_matrices` (each already multiplied by its inverse bind matrix). Every joint index
+/// must be below `joint_matrices.len()` (checked where the weights are built).
+pub fn skin(rest: &[[f32; 3]], skin: &SkinWeights, joint_matrices: &[DMat4]) -> Vec<[f32; 3]> {
+    rest.iter()
+        .zip(skin.joints.iter().zip(&skin.weights))
+        .map(|(p, (joints, weights))| {
+            let p = DVec3::from(p.map(f64::from));
+            let mut out = DVec3::ZERO;
+            for (&j, &w) in joints.iter().zip(weights) {
+                if w != 0.0 {
+                    out += w as f64 * joint_matrices[j as usize].transform_point3(p);
+                }
+            }
+            out.as_vec3().to_array()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blends_two_transforms_linearly() {
+        let rest = [[1.0, 0.0, 0.0], [0.0, 2.0, 0.0]];
+        let w = SkinWeights { joints: vec![[0, 1, 0, 0], [1, 0, 0, 0]], weights: vec![[0.25, 0.75, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]] };
+        let m = [DMat4::IDENTITY, DMat4::from_translation(DVec3::new(0.0, 0.0, 4.0))];
+        let out = skin(&rest, &w, &m);
+        assert_eq!(out, vec![[1.0, 0.0, 3.0], [0.0, 2.0, 4.0]]);
+    }
+}

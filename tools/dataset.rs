@@ -1,0 +1,62 @@
+//! `tagsplat dataset info`: what a dataset folder holds and what it lacks.
+
+use anyhow::{Context, Result};
+use std::path::PathBuf;
+use tagsplat::io::dataset::Dataset;
+
+#[derive(clap::Subcommand)]
+pub enum DatasetCommand {
+    /// Cameras, frames, resolution, and missing files (with --check: every file decoded).
+    Info {
+        #[arg(long)]
+        data: PathBuf,
+        /// Decode every image and mask: sizes, corrupt files, frames with empty masks.
+        #[arg(long)]
+        check: bool,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+pub fn run(command: DatasetCommand) -> Result<()> {
+    let DatasetCommand::Info { data, check, json } = command;
+    let d = Dataset::load(&data).with_context(|| format!("cannot load the dataset in {}", data.display()))?;
+    let missing: Vec<String> = d.missing_files().iter().map(|p| p.display().to_string()).collect();
+    let problems: Vec<String> = if check { d.check().iter().map(ToString::to_string).collect() } else { Vec::new() };
+    let cameras: Vec<_> = d
+        .cameras
+        .iter()
+        .zip(&d.camera_names)
+        .enumerate()
+        .map(|(i, (c, name))| {
+            let center = c.center();
+            serde_json::json!({ "name": name, "width": c.width, "height": c.height, "fx": c.fx, "fy": c.fy, "cx": c.cx, "cy": c.cy,
+                "center": [center.x, center.y, center.z], "split": if d.test.contains(&i) { "test" } else { "train" } })
+        })
+        .collect();
+    let views: usize = d.frames.iter().map(|f| f.views.len()).sum();
+    if json {
+        let out = serde_json::json!({ "root": d.root, "format": d.format, "cameras": cameras, "frames": d.frames.len(), "views": views,
+            "times": [d.frames.first().map(|f| f.time), d.frames.last().map(|f| f.time)], "missing": missing, "problems": problems });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    println!("dataset   {} ({:?})", d.root.display(), d.format);
+    println!("frames    {} (time {:.4} .. {:.4}), {} images", d.frames.len(), d.frames[0].time, d.frames[d.frames.len() - 1].time, views);
+    println!("cameras   {} ({} train, {} test)", d.cameras.len(), d.train.len(), d.test.len());
+    for c in &cameras {
+        println!("  {:<10} {}×{}  fx {:.2} fy {:.2}  cx {:.2} cy {:.2}  {}", c["name"].as_str().unwrap_or(""), c["width"], c["height"],
+            c["fx"].as_f64().unwrap_or(0.0), c["fy"].as_f64().unwrap_or(0.0), c["cx"].as_f64().unwrap_or(0.0), c["cy"].as_f64().unwrap_or(0.0), c["split"].as_str().unwrap_or(""));
+    }
+    println!("missing   {} file(s)", missing.len());
+    for m in missing.iter().take(20) {
+        println!("  {m}");
+    }
+    if check {
+        println!("problems  {}", problems.len());
+        for p in problems.iter().take(20) {
+            println!("  {p}");
+        }
+    }
+    Ok(())
+}
