@@ -9,7 +9,7 @@ fn pattern(w: usize, h: usize, c: usize, salt: i64) -> Vec<i64> {
     for y in 0..h as i64 {
         for x in 0..w as i64 {
             for ch in 0..c as i64 {
-                v.push((x * 73856093 ^ y * 19349663 ^ (ch + salt) * 83492791) % 257);
+                v.push(((x * 73856093) ^ (y * 19349663) ^ ((ch + salt) * 83492791)) % 257);
             }
         }
     }
@@ -142,4 +142,43 @@ fn cube_and_a_scaled_cube_are_close_to_the_analytic_distance() {
     let c = chamfer_meshes((&b, &f), (&a, &f), 20_000, 4).unwrap();
     assert!(c.mean > 0.1 && c.mean < 0.125, "mean {}", c.mean);
     assert!(c.squared > 0.01 && c.squared < 0.0165, "squared {}", c.squared);
+}
+
+#[test]
+fn folders_compare_meshes_trajectories_and_images() {
+    use tagsplat::eval::{evaluate_folders, read_trajectories_csv, write_trajectories_csv, FolderOptions};
+    use tagsplat::mesh::TriMesh;
+    use tagsplat::synth::{generate, SubjectSource, SynthOptions};
+    let root = std::env::temp_dir().join(format!("tagsplat-eval-folders-{}", std::process::id()));
+    let (gt, pred) = (root.join("gt"), root.join("pred"));
+    std::fs::create_dir_all(pred.join("meshes")).unwrap();
+    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 2 }, views: 2, frames: 2, resolution: 24, seed: 1, samples: 1, track_vertices: 5, track_surface: 5 };
+    generate(&o, &gt).unwrap();
+    let options = FolderOptions { chamfer_samples: 2000, emd_samples: 200, seed: 3 };
+    let same = evaluate_folders(&gt, &gt, &options).unwrap();
+    assert_eq!((same.chamfer_mean, same.emd_mean), (Some(0.0), Some(0.0)));
+    assert_eq!(same.tracking.as_ref().unwrap().mse, 0.0);
+    assert_eq!(same.images.as_ref().unwrap().images, 4);
+    assert!((same.images.as_ref().unwrap().ssim - 1.0).abs() < 1e-12);
+
+    // Prediction: trajectories moved by (0.03, 0.04, 0): RMSE 0.05 exactly (up to f64 text).
+    let shifted: Vec<_> = read_trajectories_csv(&gt.join("trajectories.csv")).unwrap().into_iter().map(|mut p| {
+        p.position[0] += 0.03;
+        p.position[1] += 0.04;
+        p
+    }).collect();
+    tagsplat::io::write_atomically(&pred.join("trajectories.csv"), |w| write_trajectories_csv(w, &shifted)).unwrap();
+    // Frame 0 only: frame 1 is missing and named.
+    std::fs::copy(gt.join("meshes/000000.ply"), pred.join("meshes/000000.ply")).unwrap();
+    let e = evaluate_folders(&pred, &gt, &options).unwrap_err().to_string();
+    assert!(e.contains("000001.ply"), "{e}");
+    let m = TriMesh::read_ply(&gt.join("meshes/000001.ply")).unwrap();
+    m.write_ply(&pred.join("meshes/000001.ply")).unwrap();
+    let r = evaluate_folders(&pred, &gt, &options).unwrap();
+    let t = r.tracking.unwrap();
+    assert!((t.rmse - 0.05).abs() < 1e-9 && (t.max - 0.05).abs() < 1e-9, "{t:?}");
+    assert_eq!(t.pairs, 20);
+    assert_eq!(r.chamfer_mean, Some(0.0));
+    assert!(r.images.is_none());
+    std::fs::remove_dir_all(&root).unwrap();
 }

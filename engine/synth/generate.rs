@@ -226,7 +226,7 @@ fn track_points(subject: &Subject, o: &SynthOptions) -> Result<Vec<(u32, [f64; 3
         .collect();
     if o.track_surface > 0 {
         let frame0 = subject.positions(0);
-        points.extend(sample_surface(&frame0, &subject.faces, o.track_surface, o.seed ^ 0x7472_6163_6b)?.into_iter().map(|s| (s.face, s.bary)));
+        points.extend(sample_surface(&frame0, &subject.faces, o.track_surface, o.seed ^ 0x74_7261_636b)?.into_iter().map(|s| (s.face, s.bary)));
     }
     Ok(points)
 }

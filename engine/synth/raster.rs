@@ -163,11 +163,20 @@ mod tests {
         let r = render(&camera(64), &p, &p, &f, &tex, 4).unwrap();
         let left = r.alpha[32 * 64 + 16];
         assert!((left - 0.75).abs() < 1e-6, "{left}");
-        let centre = 32 * 64 + 32;
-        let expect = tex.color(DVec3::new((32.5 - 32.0) / 16.0, (32.5 - 32.0) / 16.0, 4.0));
-        for c in 0..3 {
-            assert!((r.rgb[centre * 3 + c] - expect[c]).abs() < 0.02, "texture at the pixel centre");
+        // Pixel (32, 32): the mean of the texture at its 16 samples, which lie on the square
+        // at world (u − 32)/16, (v − 32)/16, 4 (rest = posed here).
+        let mut expect = [0.0f32; 3];
+        for b in 0..4 {
+            for a in 0..4 {
+                let (u, v) = (32.0 + (a as f64 + 0.5) / 4.0, 32.0 + (b as f64 + 0.5) / 4.0);
+                let c = tex.color(DVec3::new((u - 32.0) / 16.0, (v - 32.0) / 16.0, 4.0));
+                for k in 0..3 {
+                    expect[k] += c[k] / 16.0;
+                }
+            }
         }
+        let got = &r.rgb[(32 * 64 + 32) * 3..][..3];
+        assert!(got.iter().zip(expect).all(|(g, e)| (g - e).abs() < 1e-5), "{got:?} vs {expect:?}");
     }
 
     #[test]

@@ -109,6 +109,7 @@ impl Dataset {
 
     /// Assembles a dataset, sorting frames by time and checking that every frame has the
     /// same set of cameras (unless every frame has exactly one view: a monocular sequence).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn assemble(root: &Path, meta: &Path, format: Format, camera_names: Vec<String>, cameras: Vec<Camera>, mut frames: Vec<Frame>, train: Vec<usize>, test: Vec<usize>) -> Result<Self, DatasetError> {
         if frames.is_empty() {
             return Err(DatasetError::File { path: meta.to_owned(), problem: "has no frames".into() });

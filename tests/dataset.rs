@@ -1,0 +1,226 @@
+//! Each loader on a fixture the test writes: cameras checked by projecting known points
+//! against hand-computed pixels, frames, splits, masks; and every kind of bad input.
+
+use glam::{DMat4, DVec3, DVec4};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use tagsplat::io::dataset::{Dataset, DatasetError, Format};
+use tagsplat::io::image::{write_png, Image};
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tagsplat-dataset-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn png(path: &Path, w: u32, h: u32, channels: u8, value: f32) {
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    write_png(path, &Image { width: w, height: h, channels, data: vec![value; (w * h * channels as u32) as usize] }).unwrap();
+}
+
+/// A rigid world-to-camera: rotation about y by `angle`, then a translation.
+fn w2c(angle: f64, t: [f64; 3]) -> DMat4 {
+    DMat4::from_translation(DVec3::from(t)) * DMat4::from_rotation_y(angle)
+}
+
+fn rows(m: DMat4) -> Vec<Vec<f64>> {
+    (0..4).map(|r| m.row(r).to_array().to_vec()).collect()
+}
+
+/// Panoptic fixture: `frames` frames of cameras `ids` (8×6 px), K = [[10,0,4],[0,12,3],[0,0,1]].
+fn panoptic(dir: &Path, file: &str, frames: usize, ids: &[i64]) {
+    let (mut k, mut w, mut f, mut c) = (vec![], vec![], vec![], vec![]);
+    for t in 0..frames {
+        k.push(ids.iter().map(|_| json!([[10.0, 0.0, 4.0], [0.0, 12.0, 3.0], [0.0, 0.0, 1.0]])).collect::<Vec<_>>());
+        w.push(ids.iter().map(|&id| json!(rows(w2c(0.3 * id as f64, [0.1 * id as f64, 0.0, 5.0])))).collect::<Vec<_>>());
+        f.push(ids.iter().map(|&id| json!(format!("{id}/{t:06}.jpg"))).collect::<Vec<_>>());
+        c.push(ids.to_vec());
+        for &id in ids {
+            png(&dir.join(format!("ims/{id}/{t:06}.jpg")), 8, 6, 3, 0.5);
+            png(&dir.join(format!("seg/{id}/{t:06}.png")), 8, 6, 1, 1.0);
+        }
+    }
+    std::fs::write(dir.join(file), json!({"w": 8, "h": 6, "k": k, "w2c": w, "fn": f, "cam_id": c}).to_string()).unwrap();
+}
+
+#[test]
+fn panoptic_cameras_project_known_points() {
+    let dir = temp("panoptic");
+    panoptic(&dir, "train_meta.json", 2, &[0, 3]);
+    panoptic(&dir, "test_meta.json", 2, &[5]);
+    let d = Dataset::load(&dir).unwrap();
+    assert_eq!(d.format, Format::Panoptic);
+    assert_eq!(d.camera_names, ["0", "3", "5"]);
+    assert_eq!((d.train.clone(), d.test.clone()), (vec![0, 1], vec![2]));
+    assert_eq!(d.frames.len(), 2);
+    assert_eq!(d.frames[1].views.len(), 3);
+    // Hand projection: x_c = R x + t, u = fx x/z + cx + 0.5 (OpenCV pixel centres → ours).
+    let x = DVec3::new(0.2, -0.3, 0.4);
+    let m = w2c(0.9, [0.3, 0.0, 5.0]);
+    let xc = m * DVec4::new(x.x, x.y, x.z, 1.0);
+    let (u, v) = (10.0 * xc.x / xc.z + 4.0 + 0.5, 12.0 * xc.y / xc.z + 3.0 + 0.5);
+    let p = d.cameras[1].project(x).unwrap();
+    assert!((p.x - u).abs() < 1e-12 && (p.y - v).abs() < 1e-12, "{p} vs ({u}, {v})");
+    assert_eq!(d.mask(1, 2).unwrap(), vec![1.0; 48]);
+    assert!(d.check().is_empty());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn panoptic_bad_input_is_named() {
+    let dir = temp("panoptic-bad");
+    panoptic(&dir, "train_meta.json", 2, &[0, 1]);
+    // Missing image: listed, and named by the accessor.
+    let gone = dir.join("ims/1/000001.jpg");
+    std::fs::remove_file(&gone).unwrap();
+    let d = Dataset::load(&dir).unwrap();
+    assert_eq!(d.missing_files(), vec![gone.clone()]);
+    assert!(matches!(d.image(1, 1), Err(DatasetError::MissingImage(p)) if p == gone));
+    // Wrong size.
+    png(&gone, 9, 6, 3, 0.5);
+    let e = Dataset::load(&dir).unwrap().image(1, 1).unwrap_err().to_string();
+    assert!(e.contains("000001.jpg") && e.contains("9×6") && e.contains("8×6"), "{e}");
+    // Corrupt PNG.
+    std::fs::write(&gone, b"\x89PNG\r\n\x1a\n\0\0\0\rIHDRtruncated").unwrap();
+    let problems: Vec<String> = Dataset::load(&dir).unwrap().check().iter().map(ToString::to_string).collect();
+    assert!(problems.iter().any(|p| p.contains("000001.jpg")), "{problems:?}");
+    // Empty masks in every view of frame 0.
+    png(&gone, 8, 6, 3, 0.5);
+    png(&dir.join("seg/0/000000.png"), 8, 6, 1, 0.0);
+    png(&dir.join("seg/1/000000.png"), 8, 6, 1, 0.2);
+    let problems = Dataset::load(&dir).unwrap().check();
+    assert!(matches!(problems.as_slice(), [DatasetError::EmptyMasks { frame: 0 }]), "{problems:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    // Non-rigid camera, different camera sets, missing test frames: errors naming the file.
+    let dir = temp("panoptic-bad2");
+    panoptic(&dir, "train_meta.json", 2, &[0, 1]);
+    let meta = dir.join("train_meta.json");
+    let mut j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&meta).unwrap()).unwrap();
+    j["w2c"][1][1][0][0] = json!(2.0);
+    std::fs::write(&meta, j.to_string()).unwrap();
+    let e = Dataset::load(&dir).unwrap_err().to_string();
+    assert!(e.contains("train_meta.json") && e.contains("camera 1") && e.contains("rigid"), "{e}");
+    let mut j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&meta).unwrap()).unwrap();
+    j["w2c"][1][1] = j["w2c"][0][1].clone();
+    for key in ["k", "w2c", "fn", "cam_id"] {
+        j[key][1].as_array_mut().unwrap().pop();
+    }
+    std::fs::write(&meta, j.to_string()).unwrap();
+    let e = Dataset::load(&dir).unwrap_err();
+    assert!(matches!(e, DatasetError::CameraSets { frame: 1, .. }), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// OpenGL camera-to-world looking at the origin from `eye` (y up): columns right, up,
+/// backward (−forward), eye.
+fn gl_c2w(eye: DVec3) -> DMat4 {
+    let forward = (-eye).normalize();
+    let right = forward.cross(DVec3::Y).normalize();
+    let up = right.cross(forward);
+    DMat4::from_cols(right.extend(0.0), up.extend(0.0), (-forward).extend(0.0), eye.extend(1.0))
+}
+
+fn nerfstudio(dir: &Path, file: &str, times: &[f64], eyes: &[DVec3], prefix: &str) {
+    let mut frames = vec![];
+    for (t, &time) in times.iter().enumerate() {
+        for (c, &eye) in eyes.iter().enumerate() {
+            let name = format!("{prefix}/r_{t}_{c}");
+            png(&dir.join(format!("{name}.png")), 10, 8, 4, if c == 0 { 1.0 } else { 0.0 });
+            frames.push(json!({"file_path": format!("./{name}"), "time": time, "transform_matrix": rows(gl_c2w(eye))}));
+        }
+    }
+    std::fs::write(dir.join(file), json!({"camera_angle_x": 0.8, "frames": frames}).to_string()).unwrap();
+}
+
+#[test]
+fn nerfstudio_opengl_cameras_project_known_points() {
+    let dir = temp("nerfstudio");
+    let eyes = [DVec3::new(0.0, 1.0, 4.0), DVec3::new(3.0, 0.5, 2.0)];
+    nerfstudio(&dir, "transforms_train.json", &[0.5, 0.0, 1.0], &eyes, "train");
+    // A test camera seen at time 0 only: the frames' camera sets differ.
+    nerfstudio(&dir, "transforms_test.json", &[0.0], &[DVec3::new(-3.0, 0.0, 1.0)], "test");
+    assert!(matches!(Dataset::load(&dir), Err(DatasetError::CameraSets { frame: 1, .. })));
+    nerfstudio(&dir, "transforms_test.json", &[1.0, 0.0, 0.5], &[DVec3::new(-3.0, 0.0, 1.0)], "test");
+    let d = Dataset::load(&dir).unwrap();
+    assert_eq!(d.format, Format::Nerfstudio);
+    assert_eq!(d.cameras.len(), 3);
+    assert_eq!((d.train.clone(), d.test.clone()), (vec![0, 1], vec![2]));
+    // Frames sorted by time, views grouped by time across files.
+    assert_eq!(d.frames.iter().map(|f| f.time).collect::<Vec<_>>(), vec![0.0, 0.5, 1.0]);
+    assert!(d.frames.iter().all(|f| f.views.len() == 3));
+    // Hand projection in OpenGL terms: camera looks down −z, y up.
+    let x = DVec3::new(0.3, 0.2, -0.1);
+    let xg = gl_c2w(eyes[1]).inverse().transform_point3(x);
+    let f = 0.5 * 10.0 / (0.4f64).tan();
+    let (u, v) = (f * xg.x / -xg.z + 5.0, -f * xg.y / -xg.z + 4.0);
+    let p = d.cameras[1].project(x).unwrap();
+    assert!((p.x - u).abs() < 1e-9 && (p.y - v).abs() < 1e-9, "{p} vs ({u}, {v})");
+    // Alpha is the mask.
+    assert_eq!(d.mask(0, 0).unwrap(), vec![1.0; 80]);
+    assert_eq!(d.mask(0, 1).unwrap(), vec![0.0; 80]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn nerfstudio_monocular_and_bad_input() {
+    // D-NeRF: one moving camera, one view per time.
+    let dir = temp("dnerf");
+    let mut frames = vec![];
+    for t in 0..3 {
+        png(&dir.join(format!("train/r_{t:03}.png")), 6, 6, 4, 1.0);
+        frames.push(json!({"file_path": format!("./train/r_{t:03}"), "time": t as f64 / 2.0, "transform_matrix": rows(gl_c2w(DVec3::new(t as f64, 1.0, 4.0)))}));
+    }
+    std::fs::write(dir.join("transforms_train.json"), json!({"camera_angle_x": 0.7, "frames": frames}).to_string()).unwrap();
+    let d = Dataset::load(&dir).unwrap();
+    assert_eq!((d.frames.len(), d.cameras.len()), (3, 3));
+    // Different camera sets in a multi-view file.
+    frames.push(json!({"file_path": "./train/r_000", "time": 0.0, "transform_matrix": rows(gl_c2w(DVec3::new(5.0, 1.0, 4.0)))}));
+    std::fs::write(dir.join("transforms_train.json"), json!({"camera_angle_x": 0.7, "frames": frames}).to_string()).unwrap();
+    assert!(matches!(Dataset::load(&dir), Err(DatasetError::CameraSets { .. })));
+    // Non-finite intrinsics, a non-rigid matrix, an image without alpha, a missing image.
+    let one = |extra: serde_json::Value, m: DMat4| {
+        let mut frame = json!({"file_path": "./train/r_000", "time": 0.0, "transform_matrix": rows(m)});
+        frame.as_object_mut().unwrap().extend(extra.as_object().unwrap().clone());
+        std::fs::write(dir.join("transforms_train.json"), json!({"camera_angle_x": 0.7, "frames": [frame]}).to_string()).unwrap();
+        Dataset::load(&dir)
+    };
+    let e = one(json!({"fl_x": "x"}), gl_c2w(DVec3::Z * 3.0)).unwrap_err().to_string();
+    assert!(e.contains("transforms_train.json") && e.contains("fl_x"), "{e}");
+    let e = one(json!({}), DMat4::from_scale(DVec3::splat(2.0))).unwrap_err().to_string();
+    assert!(e.contains("transforms_train.json") && e.contains("rigid"), "{e}");
+    png(&dir.join("train/r_000.png"), 6, 6, 3, 1.0);
+    let d = one(json!({}), gl_c2w(DVec3::Z * 3.0)).unwrap();
+    assert!(matches!(d.mask(0, 0), Err(DatasetError::NoMask(_))));
+    let e = one(json!({"file_path": "./train/gone"}), gl_c2w(DVec3::Z * 3.0)).unwrap_err().to_string();
+    assert!(e.contains("gone.png"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(matches!(Dataset::load(&temp("empty")), Err(DatasetError::Unknown(_))));
+}
+
+#[test]
+fn own_layout_with_a_bounded_cache() {
+    use tagsplat::synth::{generate, SubjectSource, SynthOptions};
+    let dir = temp("own");
+    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 2 }, views: 9, frames: 2, resolution: 16, seed: 4, samples: 1, track_vertices: 3, track_surface: 3 };
+    generate(&o, &dir).unwrap();
+    let budget = 3 * 16 * 16 * 3 * 4; // three RGB images of f32
+    let d = Dataset::load(&dir).unwrap().with_cache_bytes(budget);
+    assert_eq!(d.format, Format::Own);
+    assert_eq!(d.test, vec![7], "every eighth camera is held out");
+    for t in 0..2 {
+        for k in 0..9 {
+            d.image(t, k).unwrap();
+            assert!(d.cached_bytes() <= budget);
+        }
+    }
+    // A camera file that is not rigid: named in the error.
+    let cam = dir.join("cameras/cam004.json");
+    let mut j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&cam).unwrap()).unwrap();
+    j["world_to_camera"][0] = json!(3.0);
+    std::fs::write(&cam, j.to_string()).unwrap();
+    let e = Dataset::load(&dir).unwrap_err().to_string();
+    assert!(e.contains("cam004.json"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
