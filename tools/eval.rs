@@ -16,7 +16,7 @@ pub struct EvalArgs {
     #[arg(long, default_value_t = 30_000)]
     chamfer_samples: usize,
     /// Surface samples per mesh for EMD (exact assignment, O(n³)).
-    #[arg(long, default_value_t = 500)]
+    #[arg(long, default_value_t = 1000)]
     emd_samples: usize,
     #[arg(long, default_value_t = 0)]
     seed: u64,

@@ -24,7 +24,7 @@ pub struct FolderOptions {
 
 impl Default for FolderOptions {
     fn default() -> Self {
-        Self { chamfer_samples: 30_000, emd_samples: 500, seed: 0 }
+        Self { chamfer_samples: 30_000, emd_samples: 1000, seed: 0 }
     }
 }
 

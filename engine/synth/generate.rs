@@ -125,8 +125,8 @@ pub fn generate(options: &SynthOptions, out: &Path) -> Result<SynthReport, Synth
     for dir in [out.join("cameras"), out.join("meshes")].into_iter().chain(names.iter().flat_map(|n| [out.join("images").join(n), out.join("masks").join(n)])) {
         std::fs::create_dir_all(&dir).map_err(|source| SynthError::Io { path: dir.clone(), source })?;
     }
-    for (camera, name) in cameras.iter().zip(&names) {
-        camera.save_json(&own::camera_path(out, name)).map_err(|source| SynthError::Camera { camera: 0, source })?;
+    for (k, (camera, name)) in cameras.iter().zip(&names).enumerate() {
+        camera.save_json(&own::camera_path(out, name)).map_err(|source| SynthError::Camera { camera: k, source })?;
     }
     for (t, positions) in frames.iter().enumerate() {
         let mesh = TriMesh { positions: positions.clone(), faces: subject.faces.clone(), colors: Some(colors.clone()) };
