@@ -4,7 +4,10 @@
 //! - [`write_atomically`]: every output goes to a temporary name and is renamed into place, so a
 //!   crash never leaves a half-written file behind.
 
+pub mod glb;
+pub mod pc2;
 pub mod ply;
+pub mod sequence;
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
