@@ -7,6 +7,8 @@ use std::sync::Arc;
 use tagsplat::bench::{bench_sort, SortBenchReport};
 use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
 
+mod track;
+
 #[derive(Parser)]
 #[command(name = "tagsplat", version, about = "Topology-consistent mesh sequences from multi-view video, on Vulkan compute")]
 struct Cli {
@@ -28,10 +30,16 @@ enum Command {
     /// Measure engine kernels against bounds measured in the same run.
     #[command(subcommand)]
     Bench(Bench),
+    /// Track surface points through a topology-consistent mesh sequence.
+    Track(track::TrackArgs),
+    /// Convert a mesh sequence between a folder of frames, OBJ + PC2 and GLB.
+    Convert(track::ConvertArgs),
 }
 
 #[derive(Subcommand)]
 enum Bench {
+    /// BVH build time and closest-point / ray-cast throughput against brute force.
+    Track(track::BenchTrackArgs),
     /// GPU radix sort of random (key, u32) pairs: pairs/s, copy bandwidth, CPU sort_unstable.
     Sort {
         /// Number of pairs.
@@ -64,6 +72,9 @@ fn run(cli: Cli) -> Result<()> {
     let options = ContextOptions { device: cli.device.clone(), validation: cli.validation.then_some(true) };
     match cli.command {
         Command::Devices => devices(options.device.as_deref()),
+        Command::Track(args) => track::track(args),
+        Command::Convert(args) => track::convert(args),
+        Command::Bench(Bench::Track(args)) => track::bench(args),
         Command::Bench(Bench::Sort { n, bits, repetitions, json }) => {
             let ctx = context(&options)?;
             let report = bench_sort(&ctx, n, bits, repetitions as usize).with_context(|| format!("bench sort --n {n} --bits {bits}"))?;

@@ -327,7 +327,7 @@ fn document(sequence: &MeshSequence, fps: f64, body: &mut Body) -> Document {
         nodes: vec![Node { mesh: Some(0), name: Some("sequence".into()) }],
         meshes: vec![Mesh {
             primitives: vec![Primitive { attributes, indices: Some(indices), mode: Some(TRIANGLES), targets }],
-            weights: Some(vec![0.0; frames]),
+            weights: None,
             extras: Some(serde_json::json!({ "targetNames": names })),
         }],
         accessors,

@@ -11,7 +11,9 @@
 //! - [`queries`]: `points.csv` / `pixels.csv` readers; [`output`]: `tracks.csv` / JSON writers.
 //! - [`plot`]: a PNG of the trajectories.
 //! - [`run`]: one tracking run from queries to report.
+//! - [`sphere`]: a subdivided-octahedron sphere; [`bench`]: the `bench track` measurement.
 
+pub mod bench;
 pub mod bind;
 pub mod brute;
 pub mod bvh;
@@ -19,6 +21,7 @@ pub mod output;
 pub mod plot;
 pub mod queries;
 pub mod run;
+pub mod sphere;
 pub mod trajectory;
 pub mod triangle;
 

@@ -15,9 +15,9 @@ use glam::DVec3;
 pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
     let ab = b - a;
     let ac = c - a;
-    // |ab × ac|² against its rounding error: a flat triangle has no interior, and the region
-    // tests below would divide by its zero-length edges.
-    if !(ab.cross(ac).length_squared() > 8.0 * f64::EPSILON * ab.length_squared() * ac.length_squared()) {
+    // A flat triangle has no interior, and the region tests below would divide by its
+    // zero-length edges.
+    if is_degenerate(ab, ac) {
         return closest_on_edges(p, a, b, c);
     }
     let ap = p - a;
@@ -63,6 +63,13 @@ pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
     [1.0 - v - w, v, w]
 }
 
+/// Whether the triangle with edges `ab`, `ac` has no area: |ab × ac|² within its rounding
+/// error (~ε·|ab|²|ac|²) of zero, which covers collinear and coincident corners.
+#[inline]
+fn is_degenerate(ab: DVec3, ac: DVec3) -> bool {
+    !(ab.cross(ac).length_squared() > 8.0 * f64::EPSILON * ab.length_squared() * ac.length_squared())
+}
+
 /// The closest point on the three edges of (a, b, c), as barycentrics.
 fn closest_on_edges(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
     let (tab, tbc, tca) = (segment_parameter(p, a, b), segment_parameter(p, b, c), segment_parameter(p, c, a));
@@ -98,7 +105,8 @@ pub fn interpolate(bary: [f64; 3], a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
 }
 
 /// First intersection of the ray `origin + t·dir`, t in [0, t_max), with triangle (a, b, c),
-/// seen from either side: `(t, barycentric)`, or None for a miss or a degenerate triangle.
+/// seen from either side: `(t, barycentric)`, or None for a miss or a degenerate triangle
+/// (it has no surface to hit, and its rounding noise would fake hits).
 ///
 /// Möller–Trumbore (1997). Points on an edge count as hits, so a ray through a shared edge hits
 /// one of the two faces instead of slipping between them.
@@ -106,6 +114,9 @@ pub fn interpolate(bary: [f64; 3], a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
 pub fn ray_triangle(origin: DVec3, dir: DVec3, t_max: f64, a: DVec3, b: DVec3, c: DVec3) -> Option<(f64, [f64; 3])> {
     let e1 = b - a;
     let e2 = c - a;
+    if is_degenerate(e1, e2) {
+        return None;
+    }
     let pvec = dir.cross(e2);
     let det = e1.dot(pvec);
     if det == 0.0 || !det.is_finite() {
@@ -194,5 +205,7 @@ mod tests {
         assert!(ray_triangle(DVec3::new(0.8, 0.8, 0.0), DVec3::Z, f64::INFINITY, a, b, c).is_none());
         assert!(ray_triangle(DVec3::new(0.2, 0.3, 2.0), DVec3::X, f64::INFINITY, a, b, c).is_none());
         assert!(ray_triangle(DVec3::new(0.2, 0.0, 0.0), DVec3::Z, f64::INFINITY, a, b, b).is_none());
+        let (p, q) = (DVec3::new(-0.7198970913887024, 0.8706438541412354, 0.3532657325267792), DVec3::new(-0.6692429184913635, 0.6974490880966187, 0.39339834451675415));
+        assert!(ray_triangle(DVec3::new(-3.0, 0.75, 0.38), DVec3::X, f64::INFINITY, p, q, q).is_none(), "coincident corners never hit");
     }
 }
