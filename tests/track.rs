@@ -86,9 +86,12 @@ fn ray_casts_equal_brute_force_on_random_meshes() {
                 (Some(fast), Some(slow)) => {
                     hits += 1;
                     assert_relative_eq(fast.distance, slow.distance, 1e-12, "ray parameter");
+                    // The hit point from barycentrics and from t agree up to the triangle's
+                    // conditioning: slivers (rounded collinear corners) amplify rounding.
+                    let [a, b, c] = corners[fast.face as usize];
+                    let sine = (b - a).cross(c - a).length() / ((b - a).length() * (c - a).length());
                     let gap = fast.position.distance(origin + dir * fast.distance);
-                    // Slivers (rounded collinear corners) make the barycentrics ill-conditioned.
-                    assert!(gap <= 1e-7, "gap {gap} t {} face {:?}", fast.distance, corners[fast.face as usize]);
+                    assert!(gap <= 1e-11 * (1.0 + fast.distance) / sine, "gap {gap}, t {}, sine {sine}", fast.distance);
                 }
                 (None, None) => {}
                 (fast, slow) => panic!("ray {origin} {dir}: BVH {fast:?}, brute force {slow:?}"),
