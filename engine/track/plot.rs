@@ -69,8 +69,8 @@ fn draw_panel(image: &mut RgbImage, left: u32, curves: &[Vec<DVec2>], equal_scal
         min = min.min(*p);
         max = max.max(*p);
     }
-    if !(min.x <= max.x) {
-        return;
+    if min.x > max.x {
+        return; // No finite point.
     }
     let mut scale = (max - min).max(DVec2::splat(f64::MIN_POSITIVE));
     if equal_scale {

@@ -55,7 +55,7 @@ pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
     }
     // va + vb + vc = |ab × ac|² (Lagrange identity), positive after the test above.
     let area2 = va + vb + vc;
-    if !(area2 > 0.0) {
+    if area2.is_nan() || area2 <= 0.0 {
         return closest_on_edges(p, a, b, c);
     }
     let v = vb / area2;
@@ -67,7 +67,8 @@ pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
 /// error (~ε·|ab|²|ac|²) of zero, which covers collinear and coincident corners.
 #[inline]
 fn is_degenerate(ab: DVec3, ac: DVec3) -> bool {
-    !(ab.cross(ac).length_squared() > 8.0 * f64::EPSILON * ab.length_squared() * ac.length_squared())
+    let area2 = ab.cross(ac).length_squared();
+    area2.is_nan() || area2 <= 8.0 * f64::EPSILON * ab.length_squared() * ac.length_squared()
 }
 
 /// The closest point on the three edges of (a, b, c), as barycentrics.
