@@ -62,13 +62,11 @@ pub fn track(args: TrackArgs) -> Result<()> {
         eprintln!("{}: point {} not bound: {}", if args.skip_unbound { "warning" } else { "error" }, u.id, u.reason);
     }
     if !report.unbound.is_empty() && !args.skip_unbound {
-        bail!(
-            "{} of {} points not bound (max distance {} = {} x the frame-0 extent); fix them, raise --max-distance, or pass --skip-unbound",
-            report.unbound.len(),
-            report.unbound.len() + report.points.len(),
-            report.max_distance,
-            args.max_distance
-        );
+        let hint = match queries {
+            Queries::Points(_) => format!(" (farther than --max-distance {} x the frame-0 extent = {})", args.max_distance, report.max_distance),
+            Queries::Pixels { .. } => String::new(),
+        };
+        bail!("{} of {} points not bound{hint}; fix them, or pass --skip-unbound to track the rest", report.unbound.len(), report.unbound.len() + report.points.len());
     }
     write_tracks_csv(&args.out, &report.points)?;
     if let Some(json) = &args.json {

@@ -48,8 +48,6 @@ pub enum TrackError {
     FaceOutOfRange { binding: usize, face: u32, faces: usize },
     #[error("{path}: line {line}: {message}")]
     Csv { path: PathBuf, line: usize, message: String },
-    #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
-    #[error("{path}: cannot encode the image: {message}")]
-    Image { path: PathBuf, message: String },
+    #[error("{path}: {error}")]
+    Io { path: PathBuf, error: std::io::Error },
 }

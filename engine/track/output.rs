@@ -51,7 +51,7 @@ pub fn write_tracks_csv(path: &Path, points: &[TrackedPoint]) -> Result<(), Trac
         }
         Ok(())
     })
-    .map_err(|source| TrackError::Io { path: path.to_owned(), source })
+    .map_err(|error| TrackError::Io { path: path.to_owned(), error })
 }
 
 /// Writes the report as pretty JSON, atomically.
@@ -60,5 +60,5 @@ pub fn write_report_json(path: &Path, report: &TrackReport) -> Result<(), TrackE
         serde_json::to_writer_pretty(&mut *w, report)?;
         writeln!(w)
     })
-    .map_err(|source| TrackError::Io { path: path.to_owned(), source })
+    .map_err(|error| TrackError::Io { path: path.to_owned(), error })
 }

@@ -35,7 +35,7 @@ pub fn draw_trajectories(trajectories: &[Vec<DVec3>]) -> RgbImage {
 pub fn write_plot(path: &Path, trajectories: &[Vec<DVec3>]) -> Result<(), TrackError> {
     let image = draw_trajectories(trajectories);
     write_atomically(path, |w| image.write_to(w, image::ImageFormat::Png).map_err(std::io::Error::other))
-        .map_err(|source| TrackError::Io { path: path.to_owned(), source })
+        .map_err(|error| TrackError::Io { path: path.to_owned(), error })
 }
 
 /// The two axes with the largest coordinate range over all points, in axis order.

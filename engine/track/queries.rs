@@ -20,7 +20,7 @@ pub fn read_pixels(path: &Path) -> Result<Vec<(String, [f64; 2])>, TrackError> {
 }
 
 fn read_text(path: &Path) -> Result<String, TrackError> {
-    std::fs::read_to_string(path).map_err(|source| TrackError::Io { path: path.to_owned(), source })
+    std::fs::read_to_string(path).map_err(|error| TrackError::Io { path: path.to_owned(), error })
 }
 
 /// Parses a table with an `id` column and the numeric `columns`; `path` names the source in
