@@ -330,3 +330,45 @@ fn ply_round_trip_renders_identically() {
     let settings = RenderSettings::default();
     assert_eq!(render(gpu.ctx(), &back, &camera, &settings).rgba, render(gpu.ctx(), &scene, &camera, &settings).rgba);
 }
+
+/// `tagsplat render` writes the PNG, alpha and depth it is asked for, and bad inputs get an
+/// error naming the file instead of a panic.
+#[test]
+fn render_cli_outputs_and_bad_inputs() {
+    let dir = std::env::temp_dir().join(format!("tagsplat-render-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (splats, camera, out) = (dir.join("scene.ply"), dir.join("cam.json"), dir.join("out.png"));
+    random_scene(200, 3, 21).write_ply(&splats).unwrap();
+    front_camera(61, 45).save_json(&camera).unwrap();
+    let run = |args: &[&std::path::Path]| {
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"));
+        command.arg("render").env("TAGSPLAT_VALIDATION", "1");
+        let names = ["--splats", "--camera", "--out", "--depth", "--alpha"];
+        for (name, path) in names.iter().zip(args) {
+            command.arg(name).arg(path);
+        }
+        command.output().unwrap()
+    };
+    let (depth, alpha) = (dir.join("depth.exr"), dir.join("alpha.png"));
+    let output = run(&[&splats, &camera, &out, &depth, &alpha]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let rgb = image::open(&out).unwrap().to_rgb8();
+    assert_eq!(rgb.dimensions(), (61, 45));
+    assert!(rgb.pixels().any(|p| p.0 != [0, 0, 0]), "nothing drawn");
+    assert_eq!(image::open(&alpha).unwrap().to_luma8().dimensions(), (61, 45));
+    assert!(std::fs::metadata(&depth).unwrap().len() > 0);
+
+    let truncated = dir.join("truncated.ply");
+    let bytes = std::fs::read(&splats).unwrap();
+    std::fs::write(&truncated, &bytes[..bytes.len() - 100]).unwrap();
+    let bent = dir.join("bent.json");
+    std::fs::write(&bent, r#"{"width": 8, "height": 8, "fx": 8, "fy": 8, "cx": 4, "cy": 4, "world_to_camera": [1,0,0,0, 0.5,1,0,0, 0,0,1,4, 0,0,0,1]}"#).unwrap();
+    for (args, named) in [([&truncated, &camera], &truncated), ([&splats, &bent], &bent)] {
+        let output = run(&[args[0], args[1], &dir.join("never.png")]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains(&named.display().to_string()) && !stderr.contains("panicked"), "{stderr}");
+        assert!(!dir.join("never.png").exists());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -3,6 +3,8 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+
+mod render;
 use std::sync::Arc;
 use tagsplat::bench::{bench_sort, bench_splat, SortBenchReport, SplatBenchConfig, SplatBenchReport};
 use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
@@ -25,6 +27,8 @@ struct Cli {
 enum Command {
     /// List the Vulkan devices, their missing features, and which one would be chosen.
     Devices,
+    /// Render one view of a 3DGS PLY scene to PNG (and depth EXR, alpha PNG).
+    Render(render::RenderArgs),
     /// Measure engine kernels against bounds measured in the same run.
     #[command(subcommand)]
     Bench(Bench),
@@ -82,6 +86,7 @@ fn run(cli: Cli) -> Result<()> {
     let options = ContextOptions { device: cli.device.clone(), validation: cli.validation.then_some(true) };
     match cli.command {
         Command::Devices => devices(options.device.as_deref()),
+        Command::Render(args) => render::render(&context(&options)?, &args),
         Command::Bench(Bench::Sort { n, bits, repetitions, json }) => {
             let ctx = context(&options)?;
             let report = bench_sort(&ctx, n, bits, repetitions as usize).with_context(|| format!("bench sort --n {n} --bits {bits}"))?;
