@@ -151,7 +151,9 @@ fn gradient(g: &Gradients, (kind, i, a): (Kind, usize, usize)) -> f64 {
 /// order with their cap state, and per Gaussian whether it projects and which colour channels
 /// sit on the clamp at 0. Equal structures on both sides of a finite-difference step mean the
 /// step crossed no discontinuity or kink.
-fn structure(scene: &GaussianScene, camera: &Camera, settings: &RenderSettings) -> (Vec<Vec<(usize, bool)>>, Vec<Option<[bool; 3]>>) {
+type Structure = (Vec<Vec<(usize, bool)>>, Vec<Option<[bool; 3]>>);
+
+fn structure(scene: &GaussianScene, camera: &Camera, settings: &RenderSettings) -> Structure {
     let pixels = contributions(scene, camera, settings).into_iter().map(|c| c.into_iter().map(|c| (c.gaussian, c.capped)).collect()).collect();
     let gaussians = (0..scene.len()).map(|i| project(scene, camera, settings, i).map(|p| p.color.map(|c| c == 0.0))).collect();
     (pixels, gaussians)
@@ -384,10 +386,8 @@ fn sub_pixel_gaussian_matches_the_analytic_footprint() {
         let alpha = o * (-0.5 * distance2 / variance).exp();
         let pixel = y * 20 + x;
         assert!((image.alpha[pixel] - alpha).abs() < 1e-12, "pixel ({x}, {y}): {} vs {alpha}", image.alpha[pixel]);
-        for ch in 0..3 {
-            let expected = c[ch] * alpha + (1.0 - alpha) * f64::from(settings.background[ch]);
-            assert!((image.color[pixel][ch] - expected).abs() < 1e-12);
-        }
+        let expected: [f64; 3] = std::array::from_fn(|ch| c[ch] * alpha + (1.0 - alpha) * f64::from(settings.background[ch]));
+        assert!((0..3).all(|ch| (image.color[pixel][ch] - expected[ch]).abs() < 1e-12), "{:?} vs {expected:?}", image.color[pixel]);
         assert!((image.depth[pixel] - 2.0).abs() < 1e-12);
     }
     assert_eq!(image.alpha[0], 0.0, "a pixel 10 away is beyond the footprint");
@@ -554,18 +554,16 @@ fn binned_render_equals_brute_force_on_a_partial_tile_image() {
                         stopped += 1;
                         break;
                     }
-                    for ch in 0..3 {
-                        color[ch] += p.color[ch] * alpha * t;
+                    for (sum, c) in color.iter_mut().zip(p.color) {
+                        *sum += c * alpha * t;
                     }
                     depth += p.depth * alpha * t;
                     t *= 1.0 - alpha;
                 }
                 let pixel = y * 67 + x;
                 assert!((image.alpha[pixel] - (1.0 - t)).abs() < 1e-12, "({x}, {y})");
-                for ch in 0..3 {
-                    let expected = color[ch] + t * f64::from(settings.background[ch]);
-                    assert!((image.color[pixel][ch] - expected).abs() < 1e-12, "({x}, {y})");
-                }
+                let expected: [f64; 3] = std::array::from_fn(|ch| color[ch] + t * f64::from(settings.background[ch]));
+                assert!((0..3).all(|ch| (image.color[pixel][ch] - expected[ch]).abs() < 1e-12), "({x}, {y})");
                 let expected_depth = if 1.0 - t < 1e-6 { 0.0 } else { depth / (1.0 - t) };
                 assert!((image.depth[pixel] - expected_depth).abs() < 1e-9, "({x}, {y})");
             }
