@@ -419,6 +419,28 @@ fn one_gaussian_covering_the_image_matches_the_analytic_image() {
     }
 }
 
+/// Equal depths composite in index order: at the shared centre pixel (G = 1) the colour is
+/// `c0 o0 + c1 o1 (1 − o0) + bg (1 − o0)(1 − o1)`, and swapping the rows swaps the layers.
+#[test]
+fn equal_depths_composite_in_index_order() {
+    let camera = origin_camera(20, 13, 10.5, 5.5);
+    let settings = settings(false, 0);
+    let (red, blue) = ([0.9f32, 0.1, 0.1], [0.1f32, 0.1, 0.9]);
+    let layer = |color: [f32; 3], logit: f32| one_gaussian([0.0, 0.0, 2.0], [0.1f32.ln(); 3], [1.0, 0.0, 0.0, 0.0], logit, color);
+    let o = |logit: f64| 1.0 / (1.0 + (-logit).exp());
+    let decoded = |c: [f32; 3]| c.map(|c| f64::from((c - 0.5) / 0.282_094_8) * 0.28209479177387814 + 0.5);
+    for (front, back) in [((red, 0.5f32), (blue, 1.0f32)), ((blue, 1.0), (red, 0.5))] {
+        let scene = concat(&layer(front.0, front.1), &layer(back.0, back.1));
+        let pixel = render(&scene, &camera, &settings).color[5 * 20 + 10];
+        let (o0, o1) = (o(f64::from(front.1)), o(f64::from(back.1)));
+        let (c0, c1) = (decoded(front.0), decoded(back.0));
+        for ch in [0, 2] {
+            let expected = c0[ch] * o0 + c1[ch] * o1 * (1.0 - o0) + f64::from(settings.background[ch]) * (1.0 - o0) * (1.0 - o1);
+            assert!((pixel[ch] - expected).abs() < 1e-12, "channel {ch}: {} vs {expected}", pixel[ch]);
+        }
+    }
+}
+
 #[test]
 fn zero_and_denormal_quaternions_are_culled_tiny_normal_ones_are_not() {
     let camera = origin_camera(20, 13, 10.5, 5.5);
