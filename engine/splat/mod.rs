@@ -35,10 +35,31 @@
 //! Backward: the exact derivative of the above (a clamp or a `min` that is active passes no
 //! gradient), from dL/dcolour, dL/dalpha and dL/ddepth to every stored parameter.
 
+mod buffers;
+mod frame;
 pub mod reference;
 mod scene;
+mod splatter;
+mod stages;
 
+pub use buffers::GaussianBuffers;
+pub use frame::{FrameParams, Splat, GRAD2D_STRIDE};
 pub use scene::{GaussianScene, SceneError};
+pub use splatter::Splatter;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SplatError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Gpu(crate::gpu::GpuError),
+    #[error("invalid render settings: {0}")]
+    Settings(String),
+    #[error("mismatched buffers: {0}")]
+    Shape(String),
+    #[error("backward or readback before any forward pass")]
+    NoForward,
+}
 
 /// Tiles are 16×16 pixels.
 pub const TILE_SIZE: u32 = 16;
@@ -68,6 +89,18 @@ pub struct RenderSettings {
     pub sh_degree: u32,
     /// Every Gaussian white with opacity 1: the silhouette I_m of the paper.
     pub mask_mode: bool,
+}
+
+impl RenderSettings {
+    /// Finite background, `0 < near < far`, degree at most [`MAX_SH_DEGREE`].
+    pub fn check(&self) -> Result<(), SplatError> {
+        let fine = self.background.iter().all(|c| c.is_finite()) && self.near > 0.0 && self.far > self.near && self.sh_degree <= MAX_SH_DEGREE;
+        if fine {
+            Ok(())
+        } else {
+            Err(SplatError::Settings(format!("{self:?} (need a finite background, 0 < near < far, SH degree <= {MAX_SH_DEGREE})")))
+        }
+    }
 }
 
 impl Default for RenderSettings {
