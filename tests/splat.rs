@@ -268,7 +268,8 @@ fn non_finite_gaussian_never_poisons_neighbours() {
     let loss = random_loss_gradients(&mut rng, 40 * 32);
     let clean_image = render(gpu.ctx(), &clean, &camera, &settings);
     let (clean_grads, _) = gpu_gradients(gpu.ctx(), &clean, &camera, &settings, &loss);
-    let poisons: [(&str, fn(&mut GaussianScene, usize)); 5] = [
+    type Poison = fn(&mut GaussianScene, usize);
+    let poisons: [(&str, Poison); 5] = [
         ("NaN position", |s, i| s.positions[i][1] = f32::NAN),
         ("infinite log-scale", |s, i| s.log_scales[i][0] = f32::INFINITY),
         ("NaN rotation", |s, i| s.rotations[i][3] = f32::NAN),

@@ -167,7 +167,7 @@ impl Splatter {
         let mut rec = Recorder::new(&self.ctx)?;
         rec.begin_pass("rasterize backward");
         rec.fill_buffer(&self.grad2d, 0);
-        self.kernels.rasterize_backward(&mut rec, &frame, &self.raster_inputs(), &self.raster_outputs(), grad_rgba, grad_depth, &self.grad2d);
+        self.kernels.rasterize_backward(&mut rec, &frame, (&self.raster_inputs(), &self.raster_outputs()), (grad_rgba, grad_depth), &self.grad2d);
         rec.end_pass();
         rec.begin_pass("project backward");
         self.kernels.project_backward(&mut rec, &frame, scene, &self.grad2d, grads, densify_stats)?;
