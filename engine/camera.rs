@@ -81,6 +81,18 @@ impl Camera {
         Self::new(width, height, fx, fy, cx, cy, world_to_camera)
     }
 
+    /// A camera at `eye` looking at `target`, with `up` pointing up in the image (the image y
+    /// axis points down, along −up). `eye − target` must not be parallel to `up`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn look_at(width: u32, height: u32, fx: f64, fy: f64, cx: f64, cy: f64, eye: DVec3, target: DVec3, up: DVec3) -> Result<Self, CameraError> {
+        let forward = (target - eye).normalize();
+        let right = forward.cross(up).normalize();
+        let down = forward.cross(right);
+        let rotation = DMat3::from_cols(right, down, forward).transpose();
+        let world_to_camera = DMat4::from_mat3(rotation) * DMat4::from_translation(-eye);
+        Self::new(width, height, fx, fy, cx, cy, world_to_camera)
+    }
+
     pub fn load_json(path: &Path) -> Result<Self, CameraError> {
         let file_error = |problem: String| CameraError::File { path: path.to_path_buf(), problem };
         let text = std::fs::read_to_string(path).map_err(|e| file_error(format!("cannot read: {e}")))?;
@@ -164,6 +176,17 @@ mod tests {
         let (origin, direction) = cam.pixel_ray(pixel.x, pixel.y);
         let along = (point - origin).dot(direction);
         assert!((origin + along * direction - point).length() < 1e-9);
+    }
+
+    #[test]
+    fn look_at_centres_the_target() {
+        let eye = DVec3::new(3.0, 1.0, -2.0);
+        let cam = Camera::look_at(64, 48, 50.0, 50.0, 32.0, 24.0, eye, DVec3::new(0.5, 0.2, 0.1), DVec3::Y).unwrap();
+        assert!((cam.project(DVec3::new(0.5, 0.2, 0.1)).unwrap() - DVec2::new(32.0, 24.0)).length() < 1e-9);
+        assert!((cam.center() - eye).length() < 1e-12);
+        // Up in the world is up in the image (smaller v).
+        assert!(cam.project(DVec3::new(0.5, 1.2, 0.1)).unwrap().y < 24.0);
+        assert!(Camera::look_at(8, 8, 1.0, 1.0, 4.0, 4.0, DVec3::Y, DVec3::ZERO, DVec3::Y).is_err());
     }
 
     #[test]

@@ -3,11 +3,12 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
-use std::sync::Arc;
-use tagsplat::bench::{bench_sort, SortBenchReport};
-use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
 
+mod render;
 mod track;
+use std::sync::Arc;
+use tagsplat::bench::{bench_sort, bench_splat, SortBenchReport, SplatBenchConfig, SplatBenchReport};
+use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
 
 #[derive(Parser)]
 #[command(name = "tagsplat", version, about = "Topology-consistent mesh sequences from multi-view video, on Vulkan compute")]
@@ -27,6 +28,8 @@ struct Cli {
 enum Command {
     /// List the Vulkan devices, their missing features, and which one would be chosen.
     Devices,
+    /// Render one view of a 3DGS PLY scene to PNG (and depth EXR, alpha PNG).
+    Render(render::RenderArgs),
     /// Measure engine kernels against bounds measured in the same run.
     #[command(subcommand)]
     Bench(Bench),
@@ -55,6 +58,24 @@ enum Bench {
         #[arg(long)]
         json: bool,
     },
+    /// Gaussian splatting forward + backward per view on a deterministic scene (default: 8 ring
+    /// cameras, 256x256, 20 000 Gaussians in a unit ball, SH degree 3).
+    Splat {
+        #[arg(long, default_value_t = 20_000)]
+        gaussians: usize,
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..=1000))]
+        views: u64,
+        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=16384))]
+        resolution: u32,
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=3))]
+        sh_degree: u32,
+        /// Rounds over all views; the first is a warm-up.
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(2..=1000))]
+        rounds: u64,
+        /// Print one JSON object instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -75,6 +96,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Track(args) => track::track(args),
         Command::Convert(args) => track::convert(args),
         Command::Bench(Bench::Track(args)) => track::bench(args),
+        Command::Render(args) => render::render(&context(&options)?, &args),
         Command::Bench(Bench::Sort { n, bits, repetitions, json }) => {
             let ctx = context(&options)?;
             let report = bench_sort(&ctx, n, bits, repetitions as usize).with_context(|| format!("bench sort --n {n} --bits {bits}"))?;
@@ -82,6 +104,17 @@ fn run(cli: Cli) -> Result<()> {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
                 print_sort_report(&report);
+            }
+            Ok(())
+        }
+        Command::Bench(Bench::Splat { gaussians, views, resolution, sh_degree, rounds, json }) => {
+            let ctx = context(&options)?;
+            let config = SplatBenchConfig { gaussians, views: views as usize, resolution, sh_degree, rounds: rounds as usize };
+            let report = bench_splat(&ctx, &config).context("bench splat")?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print_splat_report(&report);
             }
             Ok(())
         }
@@ -132,4 +165,18 @@ fn print_sort_report(r: &SortBenchReport) {
     println!("bandwidth fraction {:.3}", r.bandwidth_fraction);
     println!("CPU sort_unstable {:.3} ms  = {:.1} M pairs/s (one thread)", r.cpu_sort_ms, r.cpu_sort_keys_per_s * 1e-6);
     println!("result verified   {}", if r.verified { "sorted" } else { "NOT SORTED" });
+}
+
+fn print_splat_report(r: &SplatBenchReport) {
+    let c = &r.config;
+    println!("device              {}", r.device);
+    println!("scene               {} Gaussians, SH degree {}, {} views of {}x{}", c.gaussians, c.sh_degree, c.views, c.resolution, c.resolution);
+    println!("forward             {:.2} ms per view (median wall time)", r.fwd_s * 1e3);
+    println!("backward            {:.2} ms per view", r.bwd_s * 1e3);
+    println!("forward + backward  {:.2} ms per view = {:.2} views/s", r.fwd_bwd_s * 1e3, r.fwd_bwd_per_s);
+    println!("intersections       {:.0} per view", r.intersections_per_view);
+    println!("GPU passes (median ms per view):");
+    for (name, ms) in &r.passes_ms {
+        println!("  {name:<20}{ms:.2}");
+    }
 }

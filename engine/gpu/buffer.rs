@@ -136,19 +136,24 @@ impl<T: Pod> GpuBuffer<T> {
 
     /// Reads the first `len` elements.
     pub fn read_prefix(&self, len: usize) -> GpuResult<Vec<T>> {
-        self.check_len("read", len)?;
+        self.read_range(0, len)
+    }
+
+    /// Reads elements `start..start + len`.
+    pub fn read_range(&self, start: usize, len: usize) -> GpuResult<Vec<T>> {
+        self.check_len("read", start.saturating_add(len))?;
         let mut out = vec![T::zeroed(); len];
         if len == 0 {
             return Ok(out);
         }
         if let Some(mapped) = self.coherent_mapping() {
             let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
-            unsafe { std::ptr::copy_nonoverlapping(mapped, bytes.as_mut_ptr(), bytes.len()) };
+            unsafe { std::ptr::copy_nonoverlapping(mapped.add(start * size_of::<T>()), bytes.as_mut_ptr(), bytes.len()) };
             return Ok(out);
         }
         let staging = Self::with_location(&self.ctx, "staging readback", len, MemoryLocation::GpuToCpu)?;
         let mut recorder = Recorder::new(&self.ctx)?;
-        recorder.copy_buffer(self, &staging, len);
+        recorder.copy_buffer_range(self, start, &staging, len);
         recorder.submit_and_wait()?;
         staging.read_prefix(len)
     }

@@ -121,12 +121,18 @@ impl<'a> Recorder<'a> {
 
     /// Copies the first `len` elements of `src` to `dst`.
     pub fn copy_buffer<T: Pod>(&mut self, src: &'a GpuBuffer<T>, dst: &'a GpuBuffer<T>, len: usize) {
-        assert!(len <= src.len() && len <= dst.len(), "copy of {len} elements out of bounds");
+        self.copy_buffer_range(src, 0, dst, len);
+    }
+
+    /// Copies elements `src_start..src_start + len` of `src` to the start of `dst`.
+    pub fn copy_buffer_range<T: Pod>(&mut self, src: &'a GpuBuffer<T>, src_start: usize, dst: &'a GpuBuffer<T>, len: usize) {
+        assert!(src_start + len <= src.len() && len <= dst.len(), "copy of {len} elements out of bounds");
         if len == 0 {
             return;
         }
         self.barrier_if_needed();
-        let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: (len * size_of::<T>()) as u64 };
+        let element = size_of::<T>() as u64;
+        let region = vk::BufferCopy { src_offset: src_start as u64 * element, dst_offset: 0, size: len as u64 * element };
         unsafe { self.ctx.device().cmd_copy_buffer(self.cmd, src.raw(), dst.raw(), &[region]) };
         self.pending_writes = true;
     }

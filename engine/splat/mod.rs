@@ -1,7 +1,7 @@
 //! Differentiable Gaussian splatting: scene, projection, tile binning, rasterization and their
 //! backward passes on Vulkan compute, with an f64 CPU reference of the very same maths.
 //!
-//! # The maths (every kernel and [`reference`] follow this, term for term)
+//! # The maths (every kernel and [`mod@reference`] follow this, term for term)
 //! Camera: OpenCV pinhole ([`crate::camera::Camera`]), `W` = rotation and `t` = translation of
 //! `world_to_camera`, camera centre `o`.
 //!
@@ -11,7 +11,7 @@
 //! - `R` = rotation of `q / |q|` (culled if |q|² is not positive and finite), `S = diag(exp s)`,
 //!   `Σ = R S Sᵀ Rᵀ`.
 //! - Mean in pixels `m = (fx v.x / v.z + cx, fy v.y / v.z + cy)`.
-//! - Jacobian with the view ray clamped to a guard band (as gsplat does):
+//! - Jacobian with the view ray clamped to a guard band reaching 30% of the image width (height) past each edge:
 //!   `tx = v.z · clamp(v.x / v.z, −(cx / fx + 0.3 w / fx), (w − cx) / fx + 0.3 w / fx)`, same for
 //!   y; `J = [[fx / v.z, 0, −fx tx / v.z²], [0, fy / v.z, −fy ty / v.z²]]`; the clamp passes no
 //!   gradient to the clamped coordinate.
@@ -35,9 +35,31 @@
 //! Backward: the exact derivative of the above (a clamp or a `min` that is active passes no
 //! gradient), from dL/dcolour, dL/dalpha and dL/ddepth to every stored parameter.
 
+mod buffers;
+mod frame;
+pub mod reference;
 mod scene;
+mod splatter;
+mod stages;
 
+pub use buffers::GaussianBuffers;
+pub use frame::{FrameParams, Splat, GRAD2D_STRIDE};
 pub use scene::{GaussianScene, SceneError};
+pub use splatter::Splatter;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SplatError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Gpu(crate::gpu::GpuError),
+    #[error("invalid render settings: {0}")]
+    Settings(String),
+    #[error("mismatched buffers: {0}")]
+    Shape(String),
+    #[error("backward or readback before any forward pass")]
+    NoForward,
+}
 
 /// Tiles are 16×16 pixels.
 pub const TILE_SIZE: u32 = 16;
@@ -67,6 +89,18 @@ pub struct RenderSettings {
     pub sh_degree: u32,
     /// Every Gaussian white with opacity 1: the silhouette I_m of the paper.
     pub mask_mode: bool,
+}
+
+impl RenderSettings {
+    /// Finite background, `0 < near < far`, degree at most [`MAX_SH_DEGREE`].
+    pub fn check(&self) -> Result<(), SplatError> {
+        let fine = self.background.iter().all(|c| c.is_finite()) && self.near > 0.0 && self.far > self.near && self.sh_degree <= MAX_SH_DEGREE;
+        if fine {
+            Ok(())
+        } else {
+            Err(SplatError::Settings(format!("{self:?} (need a finite background, 0 < near < far, SH degree <= {MAX_SH_DEGREE})")))
+        }
+    }
 }
 
 impl Default for RenderSettings {

@@ -1,0 +1,147 @@
+//! `tagsplat bench splat`: forward and backward of the splatting renderer on a deterministic
+//! scene (the issue's: 8 cameras on a ring, 256², 20 000 Gaussians in a unit ball, SH degree 3),
+//! wall time per view and the GPU time of every pass.
+
+use crate::camera::Camera;
+use crate::gpu::{GpuBuffer, GpuContext, PassTimes, Recorder};
+use crate::rng::SplitMix64;
+use crate::splat::{sh_coefficients, GaussianBuffers, GaussianScene, RenderSettings, SplatError, Splatter};
+use glam::DVec3;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// What the benchmark renders.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct SplatBenchConfig {
+    pub gaussians: usize,
+    pub views: usize,
+    pub resolution: u32,
+    pub sh_degree: u32,
+    /// Passes over all views; the first is a warm-up and not timed.
+    pub rounds: usize,
+}
+
+impl Default for SplatBenchConfig {
+    fn default() -> Self {
+        Self { gaussians: 20_000, views: 8, resolution: 256, sh_degree: 3, rounds: 3 }
+    }
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SplatBenchReport {
+    pub device: String,
+    pub config: SplatBenchConfig,
+    /// Median wall seconds per view: forward, backward, and both.
+    pub fwd_s: f64,
+    pub bwd_s: f64,
+    pub fwd_bwd_s: f64,
+    /// Forward + backward views per second (1 / fwd_bwd_s).
+    pub fwd_bwd_per_s: f64,
+    /// Median GPU ms per view of each top-level pass (project, bin, sort, rasterize,
+    /// rasterize backward, project backward).
+    pub passes_ms: BTreeMap<String, f64>,
+    /// Mean (tile, Gaussian) intersections per view.
+    pub intersections_per_view: f64,
+}
+
+/// `n` Gaussians uniformly in the unit ball: scales around the mean spacing, random rotations,
+/// opacities and SH (DC broad, higher bands small). Deterministic for a seed.
+pub fn random_scene(n: usize, sh_degree: u32, seed: u64) -> GaussianScene {
+    let mut rng = SplitMix64::new(seed);
+    let mut uniform = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
+    let spacing = (4.19 / n.max(1) as f64).cbrt();
+    let coefficients = sh_coefficients(sh_degree);
+    let mut scene = GaussianScene { sh_degree, ..Default::default() };
+    while scene.len() < n {
+        let p = DVec3::new(uniform(-1.0, 1.0), uniform(-1.0, 1.0), uniform(-1.0, 1.0));
+        if p.length_squared() > 1.0 {
+            continue;
+        }
+        scene.positions.push(p.as_vec3().to_array());
+        let scale = |u: f64| (spacing * (0.3 + 0.7 * u)).ln() as f32;
+        scene.log_scales.push([scale(uniform(0.0, 1.0)), scale(uniform(0.0, 1.0)), scale(uniform(0.0, 1.0))]);
+        scene.rotations.push([uniform(-1.0, 1.0) as f32, uniform(-1.0, 1.0) as f32, uniform(-1.0, 1.0) as f32, uniform(-1.0, 1.0) as f32]);
+        scene.opacity_logits.push(uniform(-1.0, 3.0) as f32);
+        for k in 0..coefficients * 3 {
+            let spread = if k < 3 { 1.0 } else { 0.2 };
+            scene.sh.push(uniform(-spread, spread) as f32);
+        }
+    }
+    scene
+}
+
+/// `views` cameras on a horizontal ring of radius 3.5 around the origin, all looking at it, with
+/// a 40° field of view (the unit ball fills about 80% of the frame).
+pub fn ring_cameras(views: usize, resolution: u32) -> Vec<Camera> {
+    let f = resolution as f64 / 2.0 / 20f64.to_radians().tan();
+    let c = resolution as f64 / 2.0;
+    (0..views)
+        .map(|v| {
+            let angle = std::f64::consts::TAU * v as f64 / views as f64;
+            let eye = DVec3::new(3.5 * angle.cos(), 0.3, 3.5 * angle.sin());
+            Camera::look_at(resolution, resolution, f, f, c, c, eye, DVec3::ZERO, DVec3::Y).expect("ring cameras are valid")
+        })
+        .collect()
+}
+
+pub fn bench_splat(ctx: &Arc<GpuContext>, config: &SplatBenchConfig) -> Result<SplatBenchReport, SplatError> {
+    let scene = random_scene(config.gaussians, config.sh_degree, 0x5EED);
+    let cameras = ring_cameras(config.views, config.resolution);
+    let buffers = GaussianBuffers::from_scene(ctx, &scene)?;
+    let grads = GaussianBuffers::shaped_like(ctx, &buffers)?;
+    let pixels = (config.resolution * config.resolution) as usize;
+    let densify_stats = GpuBuffer::from_slice(ctx, "bench densify stats", &vec![[0.0f32; 2]; scene.len()])?;
+    // A loss gradient on every pixel's colour and alpha, as a training loss would give.
+    let grad_rgba = GpuBuffer::from_slice(ctx, "bench colour gradients", &vec![[1.0 / pixels as f32; 4]; pixels])?;
+    let grad_depth = GpuBuffer::from_slice(ctx, "bench depth gradients", &vec![0.0f32; pixels])?;
+    let mut zero = Recorder::new(ctx)?;
+    grads.record_zero(&mut zero);
+    zero.submit_and_wait()?;
+
+    let mut splatter = Splatter::new(ctx)?;
+    let settings = RenderSettings { sh_degree: config.sh_degree, ..Default::default() };
+    let (mut fwd, mut bwd, mut passes, mut intersections) = (Vec::new(), Vec::new(), Vec::new(), 0usize);
+    for round in 0..config.rounds.max(2) {
+        for camera in &cameras {
+            let start = Instant::now();
+            let forward_times = splatter.forward(&buffers, camera, &settings)?;
+            let middle = Instant::now();
+            let backward_times = splatter.backward(&buffers, &grad_rgba, &grad_depth, &grads, &densify_stats)?;
+            if round > 0 {
+                fwd.push((middle - start).as_secs_f64());
+                bwd.push(middle.elapsed().as_secs_f64());
+                passes.push(top_level_ms(&[forward_times, backward_times]));
+                intersections += splatter.intersections()?;
+            }
+        }
+    }
+    let timed_views = fwd.len();
+    let fwd_s = super::median(fwd.clone());
+    let bwd_s = super::median(bwd.clone());
+    let fwd_bwd_s = super::median(fwd.iter().zip(&bwd).map(|(f, b)| f + b).collect());
+    let names: Vec<String> = passes.first().map(|p: &BTreeMap<String, f64>| p.keys().cloned().collect()).unwrap_or_default();
+    let passes_ms = names.into_iter().map(|name| {
+        let samples = passes.iter().map(|p| p.get(&name).copied().unwrap_or(0.0)).collect();
+        (name, super::median(samples))
+    });
+    Ok(SplatBenchReport {
+        device: ctx.info().name.clone(),
+        config: *config,
+        fwd_s,
+        bwd_s,
+        fwd_bwd_s,
+        fwd_bwd_per_s: if fwd_bwd_s > 0.0 { 1.0 / fwd_bwd_s } else { 0.0 },
+        passes_ms: passes_ms.collect(),
+        intersections_per_view: intersections as f64 / timed_views.max(1) as f64,
+    })
+}
+
+/// GPU ms per top-level pass name, summed over the submissions of one view.
+fn top_level_ms(submissions: &[PassTimes]) -> BTreeMap<String, f64> {
+    let mut by_name = BTreeMap::new();
+    for pass in submissions.iter().flat_map(|t| &t.passes).filter(|p| p.depth == 0) {
+        *by_name.entry(pass.name.clone()).or_insert(0.0) += pass.ms;
+    }
+    by_name
+}

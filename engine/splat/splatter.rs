@@ -1,0 +1,216 @@
+//! The splatting renderer: forward (project → bin → sort → rasterize) and backward
+//! (rasterize backward → project backward) over one camera at a time. It owns every buffer the
+//! passes exchange and sizes them to the work: they grow when a scene, image or intersection
+//! count needs more, and are reused otherwise.
+
+use super::buffers::GaussianBuffers;
+use super::frame::{tile_grid, FrameParams, Splat, GRAD2D_STRIDE};
+use super::stages::{Kernels, RasterInputs, RasterOutputs};
+use super::{RenderSettings, SplatError};
+use crate::camera::Camera;
+use crate::gpu::{GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes, Recorder};
+use crate::sort::{PrefixScan, RadixSort};
+use bytemuck::Pod;
+use std::sync::Arc;
+
+pub struct Splatter {
+    ctx: Arc<GpuContext>,
+    kernels: Kernels,
+    /// Per Gaussian.
+    splats: GpuBuffer<Splat>,
+    /// Per Gaussian plus one: tile counts, scanned in place into offsets (the last is the total).
+    tile_offsets: GpuBuffer<u32>,
+    scan: PrefixScan,
+    grad2d: GpuBuffer<f32>,
+    /// Per intersection.
+    keys: GpuBuffer<u64>,
+    ids: GpuBuffer<u32>,
+    sort: RadixSort<u64>,
+    /// Per tile.
+    tile_ranges: GpuBuffer<[u32; 2]>,
+    /// Per pixel.
+    rgba: GpuBuffer<[f32; 4]>,
+    depth: GpuBuffer<f32>,
+    pixel_state: GpuBuffer<[u32; 2]>,
+    /// The last forward's camera and settings, which its backward must reuse.
+    last_frame: Option<FrameParams>,
+}
+
+/// Replaces `buffer` with a larger one when it holds fewer than `len` elements (with 50% head
+/// room, so slowly growing counts do not reallocate every time).
+fn ensure<T: Pod>(ctx: &Arc<GpuContext>, buffer: &mut GpuBuffer<T>, len: usize) -> GpuResult<()> {
+    if buffer.len() < len {
+        let name = buffer.name().to_string();
+        *buffer = GpuBuffer::new(ctx, &name, len.saturating_add(len / 2))?;
+    }
+    Ok(())
+}
+
+impl Splatter {
+    pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
+        Ok(Self {
+            ctx: ctx.clone(),
+            kernels: Kernels::new(ctx)?,
+            splats: GpuBuffer::new(ctx, "splats", 0)?,
+            tile_offsets: GpuBuffer::new(ctx, "splat tile offsets", 1)?,
+            scan: PrefixScan::new(ctx, 1)?,
+            grad2d: GpuBuffer::new(ctx, "splat 2D gradients", 0)?,
+            keys: GpuBuffer::new(ctx, "splat intersection keys", 0)?,
+            ids: GpuBuffer::new(ctx, "splat intersection ids", 0)?,
+            sort: RadixSort::new(ctx, 0)?,
+            tile_ranges: GpuBuffer::new(ctx, "splat tile ranges", 0)?,
+            rgba: GpuBuffer::new(ctx, "splat colour and alpha", 0)?,
+            depth: GpuBuffer::new(ctx, "splat depth", 0)?,
+            pixel_state: GpuBuffer::new(ctx, "splat pixel state", 0)?,
+            last_frame: None,
+        })
+    }
+
+    fn ensure_scene(&mut self, gaussians: usize) -> GpuResult<()> {
+        ensure(&self.ctx, &mut self.splats, gaussians)?;
+        ensure(&self.ctx, &mut self.grad2d, gaussians * GRAD2D_STRIDE)?;
+        if self.tile_offsets.len() < gaussians + 1 {
+            ensure(&self.ctx, &mut self.tile_offsets, gaussians + 1)?;
+            self.scan = PrefixScan::new(&self.ctx, self.tile_offsets.len())?;
+        }
+        Ok(())
+    }
+
+    fn ensure_image(&mut self, frame: &FrameParams) -> GpuResult<()> {
+        let (tiles_x, tiles_y) = frame.tiles();
+        ensure(&self.ctx, &mut self.tile_ranges, tiles_x as usize * tiles_y as usize)?;
+        ensure(&self.ctx, &mut self.rgba, frame.pixels())?;
+        ensure(&self.ctx, &mut self.depth, frame.pixels())?;
+        ensure(&self.ctx, &mut self.pixel_state, frame.pixels())
+    }
+
+    fn ensure_intersections(&mut self, intersections: usize) -> GpuResult<()> {
+        ensure(&self.ctx, &mut self.keys, intersections)?;
+        ensure(&self.ctx, &mut self.ids, intersections)?;
+        if self.sort.capacity() < intersections {
+            self.sort = RadixSort::new(&self.ctx, self.keys.len())?;
+        }
+        Ok(())
+    }
+
+    /// Renders `scene` from `camera`. The outputs stay on the GPU ([`Self::rgba`],
+    /// [`Self::depth`]) until the next forward; the returned times name every pass.
+    pub fn forward(&mut self, scene: &GaussianBuffers, camera: &Camera, settings: &RenderSettings) -> Result<PassTimes, SplatError> {
+        settings.check()?;
+        let frame = FrameParams::new(camera, settings, scene.len(), scene.sh_degree());
+        let n = scene.len();
+        self.ensure_scene(n)?;
+        self.ensure_image(&frame)?;
+        self.last_frame = None;
+
+        // Submission 1: project and count tiles, scan the counts; the total sizes the rest.
+        let mut rec = Recorder::new(&self.ctx)?;
+        rec.begin_pass("project");
+        rec.fill_buffer(&self.tile_offsets, 0);
+        self.kernels.project(&mut rec, &frame, scene, &self.splats, &self.tile_offsets)?;
+        rec.end_pass();
+        rec.begin_pass("bin");
+        self.scan.record(&mut rec, &self.tile_offsets, n + 1)?;
+        rec.end_pass();
+        let mut times = rec.submit_and_wait()?;
+        let intersections = self.tile_offsets.read_range(n, 1)?[0] as usize;
+        self.ensure_intersections(intersections)?;
+
+        // Submission 2: emit and sort the intersections, find tile runs, rasterize.
+        let (tiles_x, tiles_y) = tile_grid(frame.width(), frame.height());
+        let tile_bits = u32::BITS - (tiles_x * tiles_y).saturating_sub(1).leading_zeros();
+        let mut rec = Recorder::new(&self.ctx)?;
+        rec.begin_pass("bin");
+        self.kernels.emit_intersections(&mut rec, &frame, &self.splats, &self.tile_offsets, &self.keys, &self.ids)?;
+        rec.end_pass();
+        rec.begin_pass("sort");
+        self.sort.record(&mut rec, &self.keys, &self.ids, intersections, 32 + tile_bits)?;
+        rec.end_pass();
+        rec.begin_pass("bin");
+        rec.fill_buffer(&self.tile_ranges, 0);
+        self.kernels.tile_ranges(&mut rec, &self.keys, intersections, &self.tile_ranges)?;
+        rec.end_pass();
+        rec.begin_pass("rasterize");
+        self.kernels.rasterize(&mut rec, &frame, &self.raster_inputs(), &self.raster_outputs());
+        rec.end_pass();
+        times.passes.extend(rec.submit_and_wait()?.passes);
+        self.last_frame = Some(frame);
+        Ok(times)
+    }
+
+    /// Adds the gradients of the last forward's outputs to `grads` (shaped like `scene`; zero it
+    /// first with [`GaussianBuffers::record_zero`] unless accumulating over views) and the
+    /// densification statistics to `densify_stats` (per Gaussian: sum of 2D mean gradient
+    /// norms in pixels, renders on screen). `grad_rgba` and `grad_depth` are per pixel,
+    /// row-major: dL/dcolour with dL/dalpha in the fourth lane, and dL/ddepth.
+    pub fn backward(
+        &mut self,
+        scene: &GaussianBuffers,
+        grad_rgba: &GpuBuffer<[f32; 4]>,
+        grad_depth: &GpuBuffer<f32>,
+        grads: &GaussianBuffers,
+        densify_stats: &GpuBuffer<[f32; 2]>,
+    ) -> Result<PassTimes, SplatError> {
+        let frame = self.last_frame.ok_or(SplatError::NoForward)?;
+        let n = scene.len();
+        let shapes = [
+            ("scene Gaussians", n, frame.gaussians()),
+            ("gradient Gaussians", grads.len(), n),
+            ("gradient SH values", grads.sh.len(), scene.sh.len()),
+            ("densify statistics", densify_stats.len().min(n), n),
+            ("colour gradients", grad_rgba.len().min(frame.pixels()), frame.pixels()),
+            ("depth gradients", grad_depth.len().min(frame.pixels()), frame.pixels()),
+        ];
+        if let Some((what, len, expected)) = shapes.into_iter().find(|(_, len, expected)| len != expected) {
+            return Err(SplatError::Shape(format!("{what}: {len} where the last forward needs {expected}")));
+        }
+        let mut rec = Recorder::new(&self.ctx)?;
+        rec.begin_pass("rasterize backward");
+        rec.fill_buffer(&self.grad2d, 0);
+        self.kernels.rasterize_backward(&mut rec, &frame, (&self.raster_inputs(), &self.raster_outputs()), (grad_rgba, grad_depth), &self.grad2d);
+        rec.end_pass();
+        rec.begin_pass("project backward");
+        self.kernels.project_backward(&mut rec, &frame, scene, &self.grad2d, grads, densify_stats)?;
+        rec.end_pass();
+        Ok(rec.submit_and_wait()?)
+    }
+
+    fn raster_inputs(&self) -> RasterInputs<'_> {
+        RasterInputs { splats: &self.splats, ranges: &self.tile_ranges, ids: &self.ids }
+    }
+
+    fn raster_outputs(&self) -> RasterOutputs<'_> {
+        RasterOutputs { rgba: &self.rgba, depth: &self.depth, pixel_state: &self.pixel_state }
+    }
+
+    fn frame(&self) -> Result<FrameParams, SplatError> {
+        self.last_frame.ok_or(SplatError::NoForward)
+    }
+
+    /// The last forward's colour (with the background) and alpha per pixel, row-major.
+    pub fn read_rgba(&self) -> Result<Vec<[f32; 4]>, SplatError> {
+        Ok(self.rgba.read_prefix(self.frame()?.pixels())?)
+    }
+
+    /// The last forward's expected depth per pixel (0 where alpha < 1e-6).
+    pub fn read_depth(&self) -> Result<Vec<f32>, SplatError> {
+        Ok(self.depth.read_prefix(self.frame()?.pixels())?)
+    }
+
+    /// The last forward's projected Gaussians.
+    pub fn read_splats(&self) -> Result<Vec<Splat>, SplatError> {
+        Ok(self.splats.read_prefix(self.frame()?.gaussians())?)
+    }
+
+    /// The last forward's number of (tile, Gaussian) intersections.
+    pub fn intersections(&self) -> Result<usize, SplatError> {
+        let frame = self.frame()?;
+        Ok(self.tile_offsets.read_range(frame.gaussians(), 1)?[0] as usize)
+    }
+}
+
+impl From<GpuError> for SplatError {
+    fn from(e: GpuError) -> Self {
+        SplatError::Gpu(e)
+    }
+}

@@ -1,0 +1,130 @@
+//! The splatting kernels, one pipeline per shader, recorded with the buffers the caller owns.
+//! Forward and backward of each stage side by side: project ↔ project_backward,
+//! rasterize ↔ rasterize_backward; binning (emit, tile ranges) has no backward.
+
+use super::buffers::GaussianBuffers;
+use super::frame::{FrameParams, Splat};
+use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder};
+use crate::shaders;
+use bytemuck::{Pod, Zeroable};
+use std::sync::Arc;
+
+/// Invocations per workgroup of the per-Gaussian and per-intersection kernels.
+const LINEAR_WORKGROUP: u32 = 128;
+/// One workgroup per 16×16 tile.
+const TILE_WORKGROUP: u32 = super::TILE_SIZE * super::TILE_SIZE;
+
+/// Push constants of tile_ranges.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct RangeParams {
+    intersections: u32,
+}
+
+pub(crate) struct Kernels {
+    project: ComputePipeline,
+    project_backward: ComputePipeline,
+    emit_intersections: ComputePipeline,
+    tile_ranges: ComputePipeline,
+    rasterize: ComputePipeline,
+    rasterize_backward: ComputePipeline,
+}
+
+fn groups(items: usize) -> u64 {
+    items.div_ceil(LINEAR_WORKGROUP as usize) as u64
+}
+
+impl Kernels {
+    pub(crate) fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
+        let frame_bytes = size_of::<FrameParams>() as u32;
+        let pipeline = |name, spirv, bindings, push_constant_bytes, workgroup: u32| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes, specialization: &[workgroup] })
+        };
+        Ok(Self {
+            project: pipeline("splat project", shaders::SPLAT_PROJECT, 7, frame_bytes, LINEAR_WORKGROUP)?,
+            project_backward: pipeline("splat project backward", shaders::SPLAT_PROJECT_BACKWARD, 12, frame_bytes, LINEAR_WORKGROUP)?,
+            emit_intersections: pipeline("splat emit intersections", shaders::SPLAT_EMIT_INTERSECTIONS, 4, frame_bytes, LINEAR_WORKGROUP)?,
+            tile_ranges: pipeline("splat tile ranges", shaders::SPLAT_TILE_RANGES, 2, size_of::<RangeParams>() as u32, LINEAR_WORKGROUP)?,
+            rasterize: pipeline("splat rasterize", shaders::SPLAT_RASTERIZE, 6, frame_bytes, TILE_WORKGROUP)?,
+            rasterize_backward: pipeline("splat rasterize backward", shaders::SPLAT_RASTERIZE_BACKWARD, 9, frame_bytes, TILE_WORKGROUP)?,
+        })
+    }
+
+    /// Splats and per-Gaussian tile counts.
+    pub(crate) fn project<'a>(&'a self, rec: &mut Recorder<'a>, frame: &FrameParams, scene: &'a GaussianBuffers, splats: &'a GpuBuffer<Splat>, tile_counts: &'a GpuBuffer<u32>) -> GpuResult<()> {
+        let bindings: Vec<_> = scene.bindings().into_iter().chain([splats.binding(), tile_counts.binding()]).collect();
+        rec.dispatch_1d(&self.project, &bindings, frame, groups(frame.gaussians()))
+    }
+
+    /// Adds parameter gradients and densification statistics from the 2D gradients.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn project_backward<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        frame: &FrameParams,
+        scene: &'a GaussianBuffers,
+        grad2d: &'a GpuBuffer<f32>,
+        grads: &'a GaussianBuffers,
+        densify_stats: &'a GpuBuffer<[f32; 2]>,
+    ) -> GpuResult<()> {
+        let bindings: Vec<_> = scene.bindings().into_iter().chain([grad2d.binding()]).chain(grads.bindings()).chain([densify_stats.binding()]).collect();
+        rec.dispatch_1d(&self.project_backward, &bindings, frame, groups(frame.gaussians()))
+    }
+
+    /// (key, Gaussian) pairs from the scanned tile counts.
+    pub(crate) fn emit_intersections<'a>(&'a self, rec: &mut Recorder<'a>, frame: &FrameParams, splats: &'a GpuBuffer<Splat>, offsets: &'a GpuBuffer<u32>, keys: &'a GpuBuffer<u64>, ids: &'a GpuBuffer<u32>) -> GpuResult<()> {
+        let bindings = [splats.binding(), offsets.binding(), keys.binding(), ids.binding()];
+        rec.dispatch_1d(&self.emit_intersections, &bindings, frame, groups(frame.gaussians()))
+    }
+
+    /// Each tile's run in the sorted keys; `ranges` must be zeroed first.
+    pub(crate) fn tile_ranges<'a>(&'a self, rec: &mut Recorder<'a>, keys: &'a GpuBuffer<u64>, intersections: usize, ranges: &'a GpuBuffer<[u32; 2]>) -> GpuResult<()> {
+        let params = RangeParams { intersections: intersections as u32 };
+        rec.dispatch_1d(&self.tile_ranges, &[keys.binding(), ranges.binding()], &params, groups(intersections))
+    }
+
+    pub(crate) fn rasterize<'a>(&'a self, rec: &mut Recorder<'a>, frame: &FrameParams, inputs: &RasterInputs<'a>, outputs: &RasterOutputs<'a>) {
+        let bindings = [inputs.splats.binding(), inputs.ranges.binding(), inputs.ids.binding(), outputs.rgba.binding(), outputs.depth.binding(), outputs.pixel_state.binding()];
+        let (tiles_x, tiles_y) = frame.tiles();
+        rec.dispatch(&self.rasterize, &bindings, frame, [tiles_x, tiles_y, 1]);
+    }
+
+    /// Adds 2D gradients per Gaussian (`grad2d` must be zeroed first) from the per-pixel loss
+    /// gradients `(dL/d(colour, alpha), dL/ddepth)`.
+    pub(crate) fn rasterize_backward<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        frame: &FrameParams,
+        (inputs, outputs): (&RasterInputs<'a>, &RasterOutputs<'a>),
+        (grad_rgba, grad_depth): (&'a GpuBuffer<[f32; 4]>, &'a GpuBuffer<f32>),
+        grad2d: &'a GpuBuffer<f32>,
+    ) {
+        let bindings = [
+            inputs.splats.binding(),
+            inputs.ranges.binding(),
+            inputs.ids.binding(),
+            outputs.rgba.binding(),
+            outputs.depth.binding(),
+            outputs.pixel_state.binding(),
+            grad_rgba.binding(),
+            grad_depth.binding(),
+            grad2d.binding(),
+        ];
+        let (tiles_x, tiles_y) = frame.tiles();
+        rec.dispatch(&self.rasterize_backward, &bindings, frame, [tiles_x, tiles_y, 1]);
+    }
+}
+
+/// What the rasterizer reads: splats, per-tile runs and the depth-sorted Gaussian ids.
+pub(crate) struct RasterInputs<'a> {
+    pub splats: &'a GpuBuffer<Splat>,
+    pub ranges: &'a GpuBuffer<[u32; 2]>,
+    pub ids: &'a GpuBuffer<u32>,
+}
+
+/// What the forward rasterizer writes, and the backward reads again.
+pub(crate) struct RasterOutputs<'a> {
+    pub rgba: &'a GpuBuffer<[f32; 4]>,
+    pub depth: &'a GpuBuffer<f32>,
+    pub pixel_state: &'a GpuBuffer<[u32; 2]>,
+}

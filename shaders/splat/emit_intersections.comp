@@ -1,0 +1,32 @@
+#version 460
+// Binning: one invocation per Gaussian writes a (key, Gaussian) pair for every tile it touches,
+// from its scanned offset. Key = tile << 32 | depth bits: depths are positive floats, whose bits
+// order like the numbers, so sorting the keys sorts by tile, then front to back.
+#include "footprint.glsl"
+#include "../common/grid.glsl"
+
+layout(local_size_x_id = 0) in;
+
+layout(std430, binding = 0) readonly buffer Splats { Splat splats[]; };
+layout(std430, binding = 1) readonly buffer TileOffsets { uint tile_offsets[]; };
+layout(std430, binding = 2) writeonly buffer Keys { uvec2 keys[]; };   // (depth bits, tile)
+layout(std430, binding = 3) writeonly buffer Ids { uint gaussian_ids[]; };
+
+void main() {
+    uint i = flat_workgroup_id() * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
+    if (i >= gaussian_count()) {
+        return;
+    }
+    Splat s = splats[i];
+    uint at = tile_offsets[i];
+    uint depth_bits = floatBitsToUint(s.depth);
+    for (uint ty = s.tile_rect.z; ty < s.tile_rect.w; ty++) {
+        for (uint tx = s.tile_rect.x; tx < s.tile_rect.y; tx++) {
+            if (touches_tile(s, uvec2(tx, ty))) {
+                keys[at] = uvec2(depth_bits, ty * frame.size.z + tx);
+                gaussian_ids[at] = i;
+                at++;
+            }
+        }
+    }
+}

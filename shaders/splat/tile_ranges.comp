@@ -1,0 +1,27 @@
+#version 460
+// Binning: one invocation per sorted intersection marks where its tile's run starts and ends.
+// Tiles without intersections keep the (0, 0) the host filled in.
+#include "../common/grid.glsl"
+
+layout(local_size_x_id = 0) in;
+
+layout(push_constant) uniform RangeParams {
+    uint intersections;
+} params;
+
+layout(std430, binding = 0) readonly buffer Keys { uvec2 keys[]; };   // (depth bits, tile)
+layout(std430, binding = 1) buffer TileRanges { uvec2 tile_ranges[]; };
+
+void main() {
+    uint i = flat_workgroup_id() * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
+    if (i >= params.intersections) {
+        return;
+    }
+    uint tile = keys[i].y;
+    if (i == 0u || keys[i - 1u].y != tile) {
+        tile_ranges[tile].x = i;
+    }
+    if (i + 1u == params.intersections || keys[i + 1u].y != tile) {
+        tile_ranges[tile].y = i + 1u;
+    }
+}
