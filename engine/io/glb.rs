@@ -30,7 +30,7 @@ const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const TRIANGLES: u32 = 4;
 /// Largest accessor (in components) the reader expands, a guard against absurd counts.
-const MAX_COMPONENTS: usize = 1 << 28;
+const MAX_COMPONENTS: usize = 1 << 26;
 
 /// An error that names the GLB file and what is wrong with it.
 #[derive(Debug, thiserror::Error)]
@@ -557,6 +557,9 @@ impl Reader<'_> {
             None => vec![0.0; total],
         };
         if let Some(sparse) = &a.sparse {
+            if sparse.count > a.count {
+                return Err(self.error(format!("accessor {index}: {} sparse values for {} elements", sparse.count, a.count)));
+            }
             let targets = self.components(sparse.indices.buffer_view, sparse.indices.byte_offset, sparse.indices.component_type, sparse.count, 1, index)?;
             let replacements = self.components(sparse.values.buffer_view, sparse.values.byte_offset, a.component_type, sparse.count, components, index)?;
             for (k, &element) in targets.iter().enumerate() {
@@ -585,6 +588,9 @@ impl Reader<'_> {
         }
         let data = self.bin.get(v.byte_offset..v.byte_offset.saturating_add(v.byte_length)).ok_or_else(|| err(format!("buffer view {view} runs past the binary chunk")))?;
         let stride = v.byte_stride.unwrap_or(size * components);
+        if stride < size * components {
+            return Err(err(format!("buffer view {view} has a byte stride of {stride}, smaller than one element")));
+        }
         let needed = if count == 0 { 0 } else { offset + (count - 1) * stride + size * components };
         if needed > data.len() {
             return Err(err(format!("needs {needed} bytes of buffer view {view}, which has {}", data.len())));
