@@ -11,6 +11,7 @@
 //! - [`io`]: file formats (PLY) and atomic writes.
 //! - [`splat`]: differentiable Gaussian splatting (forward, backward, CPU reference).
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
+//! - [`track`]: surface points bound on frame 0 and followed through a mesh sequence.
 //! - [`eval`]: image, surface and tracking metrics.
 //! - [`synth`]: synthetic dynamic scenes with ground truth (procedural body, glTF skinning).
 
@@ -23,6 +24,7 @@ pub mod mesh;
 pub mod rng;
 pub mod sort;
 pub mod splat;
+pub mod track;
 pub mod synth;
 
 /// SPIR-V of every compute shader, compiled from `shaders/` by `build.rs`.

@@ -182,3 +182,33 @@ fn folders_compare_meshes_trajectories_and_images() {
     assert!(r.images.is_none());
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+#[test]
+fn tracker_output_on_generated_ground_truth_scores_near_zero() {
+    // End to end: synth writes points.csv; the tracker follows them through the GT meshes and
+    // writes its CSV; eval compares it with the GT trajectories.
+    use tagsplat::eval::{evaluate_folders, FolderOptions};
+    use tagsplat::mesh::TriMesh;
+    use tagsplat::synth::{generate, SubjectSource, SynthOptions};
+    use tagsplat::track::output::write_tracks_csv;
+    use tagsplat::track::queries::read_points;
+    use tagsplat::track::{track, Queries};
+    let root = std::env::temp_dir().join(format!("tagsplat-eval-e2e-{}", std::process::id()));
+    let (gt, pred) = (root.join("gt"), root.join("pred"));
+    std::fs::create_dir_all(&pred).unwrap();
+    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 1, frames: 4, resolution: 16, seed: 5, samples: 1, track_vertices: 20, track_surface: 40 };
+    let report = generate(&o, &gt).unwrap();
+    let meshes: Vec<TriMesh> = (0..4).map(|t| TriMesh::read_ply(&gt.join(format!("meshes/{t:06}.ply"))).unwrap()).collect();
+    let frames: Vec<Vec<[f32; 3]>> = meshes.iter().map(|m| m.positions.clone()).collect();
+    let queries = Queries::Points(read_points(&gt.join("points.csv")).unwrap());
+    let tracked = track(&meshes[0].faces, &frames, &queries, 1e-4).unwrap();
+    assert!(tracked.unbound.is_empty());
+    write_tracks_csv(&pred.join("trajectories.csv"), &tracked.points).unwrap();
+    let r = evaluate_folders(&pred, &gt, &FolderOptions { chamfer_samples: 10, emd_samples: 10, seed: 0 }).unwrap();
+    let t = r.tracking.unwrap();
+    assert_eq!((t.points, t.frames, t.ignored), (60, 4, 0));
+    // Both sides place the same barycentric point (f32 mesh, f64 arithmetic): far below the
+    // subject's size.
+    assert!(t.max < 1e-5 * report.radius, "max error {} (radius {})", t.max, report.radius);
+    std::fs::remove_dir_all(&root).unwrap();
+}

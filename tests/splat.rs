@@ -1,52 +1,375 @@
-//! GPU splatting against the f64 CPU reference (tagsplat::splat::reference), on lavapipe with
-//! validation on.
+//! GPU splatting against the f64 CPU reference (`tagsplat::splat::reference`), on lavapipe with
+//! validation on: projection and binning, forward images, gradients of every parameter, and
+//! the hard cases.
 
 mod common;
 
-use glam::{DMat4, DVec3};
+use glam::DVec3;
+use std::sync::Arc;
+use tagsplat::bench::random_scene;
 use tagsplat::camera::Camera;
-use tagsplat::gpu::GpuBuffer;
-use tagsplat::splat::{GaussianBuffers, GaussianScene, RenderSettings, Splatter};
+use tagsplat::gpu::{GpuBuffer, GpuContext, Recorder};
+use tagsplat::rng::SplitMix64;
+use tagsplat::splat::{reference, GaussianBuffers, GaussianScene, RenderSettings, Splatter};
 
-fn camera(width: u32, height: u32) -> Camera {
-    Camera::new(width, height, 50.0, 50.0, width as f64 / 2.0, height as f64 / 2.0, DMat4::from_translation(DVec3::new(0.0, 0.0, 4.0))).unwrap()
+/// A camera at a random direction, 3–4.5 from the origin, looking at it.
+fn random_camera(rng: &mut SplitMix64, width: u32, height: u32) -> Camera {
+    let mut u = || rng.next_f64();
+    let direction = DVec3::new(u() - 0.5, 0.6 * (u() - 0.5), u() - 0.5).normalize();
+    let eye = direction * (3.0 + 1.5 * u());
+    let f = width.max(height) as f64 * (0.9 + 0.6 * u());
+    let (cx, cy) = (width as f64 * (0.4 + 0.2 * u()), height as f64 * (0.4 + 0.2 * u()));
+    Camera::look_at(width, height, f, f * (0.95 + 0.1 * u()), cx, cy, eye, DVec3::ZERO, DVec3::Y).unwrap()
+}
+
+struct GpuRender {
+    rgba: Vec<[f32; 4]>,
+    depth: Vec<f32>,
+}
+
+fn render(ctx: &Arc<GpuContext>, scene: &GaussianScene, camera: &Camera, settings: &RenderSettings) -> GpuRender {
+    let buffers = GaussianBuffers::from_scene(ctx, scene).unwrap();
+    let mut splatter = Splatter::new(ctx).unwrap();
+    splatter.forward(&buffers, camera, settings).unwrap();
+    GpuRender { rgba: splatter.read_rgba().unwrap(), depth: splatter.read_depth().unwrap() }
+}
+
+/// Largest |GPU − reference| over colour and alpha; depth compared relative to its value.
+fn assert_matches_reference(gpu: &GpuRender, reference: &reference::Image, what: &str) {
+    let mut worst = 0.0f64;
+    for (p, rgba) in gpu.rgba.iter().enumerate() {
+        let expected = [reference.color[p][0], reference.color[p][1], reference.color[p][2], reference.alpha[p]];
+        for c in 0..4 {
+            worst = worst.max((rgba[c] as f64 - expected[c]).abs());
+        }
+        let depth_error = (gpu.depth[p] as f64 - reference.depth[p]).abs();
+        assert!(depth_error <= 1e-4 * reference.depth[p].abs().max(1.0), "{what}: depth at pixel {p}: {} vs {}", gpu.depth[p], reference.depth[p]);
+    }
+    assert!(worst <= 1e-4, "{what}: max colour/alpha error {worst:.2e}");
 }
 
 #[test]
-fn one_gaussian_smoke() {
+fn forward_matches_reference() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(1);
+    let sizes = [(67, 33), (16, 16), (40, 57)];
+    for (case, &(width, height)) in sizes.iter().enumerate() {
+        for degree in 0..=3 {
+            let scene = random_scene(60 + 40 * case, degree, rng.next_u64());
+            let camera = random_camera(&mut rng, width, height);
+            let settings = RenderSettings { background: [0.1, 0.5, 0.9], sh_degree: degree, ..Default::default() };
+            let what = format!("{width}x{height}, SH degree {degree}");
+            assert_matches_reference(&render(gpu.ctx(), &scene, &camera, &settings), &reference::render(&scene, &camera, &settings), &what);
+        }
+    }
+}
+
+#[test]
+fn mask_mode_and_lower_active_degree_match_reference() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(2);
+    let scene = random_scene(80, 3, 7);
+    let camera = random_camera(&mut rng, 50, 37);
+    for settings in [RenderSettings { mask_mode: true, ..Default::default() }, RenderSettings { sh_degree: 1, background: [1.0; 3], ..Default::default() }] {
+        let what = format!("{settings:?}");
+        assert_matches_reference(&render(gpu.ctx(), &scene, &camera, &settings), &reference::render(&scene, &camera, &settings), &what);
+    }
+}
+
+#[test]
+fn projection_and_binning_match_reference() {
     let gpu = common::gpu();
     let ctx = gpu.ctx();
-    let scene = GaussianScene {
-        positions: vec![[0.0, 0.0, 0.0]],
-        log_scales: vec![[-2.0; 3]],
-        rotations: vec![[1.0, 0.0, 0.0, 0.0]],
-        opacity_logits: vec![2.0],
-        sh: vec![1.0, 0.0, -1.0],
-        sh_degree: 0,
-    };
+    let mut rng = common::rng(3);
+    let scene = random_scene(300, 2, 11);
+    let camera = random_camera(&mut rng, 93, 71);
+    let settings = RenderSettings::default();
     let buffers = GaussianBuffers::from_scene(ctx, &scene).unwrap();
     let mut splatter = Splatter::new(ctx).unwrap();
-    let cam = camera(40, 30);
-    let settings = RenderSettings { background: [0.2, 0.2, 0.2], ..Default::default() };
-    let times = splatter.forward(&buffers, &cam, &settings).unwrap();
-    let rgba = splatter.read_rgba().unwrap();
-    let o = 1.0 / (1.0 + (-2.0f32).exp());
-    // Pixel (20, 15) has its centre 0.5 px off the mean on each axis.
-    let sigma2d = (0.135335f32 * 50.0 / 4.0).powi(2) + 0.3;
-    let alpha = o * (-0.25 / sigma2d).exp();
-    let c0 = 0.5 + 0.28209479 * 1.0;
-    let px = rgba[15 * 40 + 20];
-    eprintln!("{px:?} alpha {alpha} times {:?}", times.passes);
-    assert!((px[3] - alpha).abs() < 1e-4, "{px:?} vs {alpha}");
-    assert!((px[0] - (c0 * alpha + 0.2 * (1.0 - alpha))).abs() < 1e-4);
-    let grad_rgba = GpuBuffer::from_slice(ctx, "grad", &vec![[1.0f32, 0.0, 0.0, 0.0]; 40 * 30]).unwrap();
-    let grad_depth = GpuBuffer::from_slice(ctx, "grad depth", &vec![0.0f32; 40 * 30]).unwrap();
+    splatter.forward(&buffers, &camera, &settings).unwrap();
+    let splats = splatter.read_splats().unwrap();
+    let mut expected_intersections = 0;
+    for (i, splat) in splats.iter().enumerate() {
+        let Some(p) = reference::project(&scene, &camera, &settings, i) else {
+            assert!(splat.touches_no_tile(), "Gaussian {i} is culled by the reference but not on the GPU");
+            continue;
+        };
+        let close = |a: f32, b: f64, scale: f64| (a as f64 - b).abs() <= 1e-4 * scale.max(b.abs());
+        assert!(close(splat.mean[0], p.mean[0], 100.0) && close(splat.mean[1], p.mean[1], 100.0), "mean of {i}");
+        assert!(close(splat.depth, p.depth, 1.0) && close(splat.opacity, p.opacity, 1.0), "depth/opacity of {i}");
+        let conic_scale = p.conic.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+        for c in 0..3 {
+            assert!(close(splat.conic[c], p.conic[c], conic_scale), "conic of {i}: {:?} vs {:?}", splat.conic, p.conic);
+            assert!(close(splat.color[c], p.color[c], 1.0), "colour of {i}");
+        }
+        expected_intersections += reference::tiles_touched(&p, camera.width, camera.height).len();
+    }
+    assert_eq!(splatter.intersections().unwrap(), expected_intersections);
+}
+
+/// Random per-pixel loss gradients, the same on both sides.
+struct LossGradients {
+    color: Vec<[f64; 3]>,
+    alpha: Vec<f64>,
+    depth: Vec<f64>,
+}
+
+fn random_loss_gradients(rng: &mut SplitMix64, pixels: usize) -> LossGradients {
+    let mut u = || rng.next_f64() - 0.5;
+    LossGradients { color: (0..pixels).map(|_| [u(), u(), u()]).collect(), alpha: (0..pixels).map(|_| u()).collect(), depth: (0..pixels).map(|_| 0.1 * u()).collect() }
+}
+
+/// GPU gradients as a host scene (every parameter kind in its usual array).
+fn gpu_gradients(ctx: &Arc<GpuContext>, scene: &GaussianScene, camera: &Camera, settings: &RenderSettings, loss: &LossGradients) -> (GaussianScene, Vec<[f32; 2]>) {
+    let buffers = GaussianBuffers::from_scene(ctx, scene).unwrap();
     let grads = GaussianBuffers::shaped_like(ctx, &buffers).unwrap();
-    let stats = GpuBuffer::from_slice(ctx, "stats", &[[0.0f32; 2]]).unwrap();
-    let mut rec = tagsplat::gpu::Recorder::new(ctx).unwrap();
+    let stats = GpuBuffer::from_slice(ctx, "densify stats", &vec![[0.0f32; 2]; scene.len()]).unwrap();
+    let rgba: Vec<[f32; 4]> = loss.color.iter().zip(&loss.alpha).map(|(c, &a)| [c[0] as f32, c[1] as f32, c[2] as f32, a as f32]).collect();
+    let depth: Vec<f32> = loss.depth.iter().map(|&d| d as f32).collect();
+    let grad_rgba = GpuBuffer::from_slice(ctx, "colour gradients", &rgba).unwrap();
+    let grad_depth = GpuBuffer::from_slice(ctx, "depth gradients", &depth).unwrap();
+    let mut rec = Recorder::new(ctx).unwrap();
     grads.record_zero(&mut rec);
     rec.submit_and_wait().unwrap();
+    let mut splatter = Splatter::new(ctx).unwrap();
+    splatter.forward(&buffers, camera, settings).unwrap();
     splatter.backward(&buffers, &grad_rgba, &grad_depth, &grads, &stats).unwrap();
-    let g = grads.to_scene().unwrap();
-    eprintln!("{g:?} {:?}", stats.read().unwrap());
+    (grads.to_scene().unwrap(), stats.read().unwrap())
+}
+
+/// Compares one parameter kind: |GPU − reference| ≤ 1e-3·|reference| where the reference is not
+/// tiny (above 1e-2 of the largest of its kind); the tiny ones, sums of larger terms that
+/// cancel in f32, within 5e-5 of that largest.
+fn assert_gradients_close(kind: &str, gpu: &[f32], expected: &[f64]) {
+    assert_eq!(gpu.len(), expected.len(), "{kind}: lengths");
+    let largest = expected.iter().fold(0.0f64, |m, g| m.max(g.abs()));
+    assert!(largest > 0.0, "{kind}: the reference gradient is zero everywhere, the test would prove nothing");
+    for (i, (&g, &e)) in gpu.iter().zip(expected).enumerate() {
+        let error = (g as f64 - e).abs();
+        let allowed = if e.abs() > 1e-2 * largest { 1e-3 * e.abs() } else { 5e-5 * largest };
+        assert!(error <= allowed, "{kind}[{i}]: GPU {g:e} vs reference {e:e} (largest {largest:e})");
+    }
+}
+
+fn check_gradients(ctx: &Arc<GpuContext>, scene: &GaussianScene, camera: &Camera, settings: &RenderSettings, rng: &mut SplitMix64) {
+    let pixels = (camera.width * camera.height) as usize;
+    let loss = random_loss_gradients(rng, pixels);
+    let (gpu, stats) = gpu_gradients(ctx, scene, camera, settings, &loss);
+    let expected = reference::backward(scene, camera, settings, &loss.color, &loss.alpha, &loss.depth);
+    let flat3 = |rows: &[[f64; 3]]| rows.iter().flatten().copied().collect::<Vec<f64>>();
+    assert_gradients_close("positions", &gpu.positions.concat(), &flat3(&expected.positions));
+    assert_gradients_close("log_scales", &gpu.log_scales.concat(), &flat3(&expected.log_scales));
+    assert_gradients_close("rotations", &gpu.rotations.concat(), &expected.rotations.concat());
+    if !settings.mask_mode {
+        assert_gradients_close("opacity_logits", &gpu.opacity_logits, &expected.opacity_logits);
+        let active = tagsplat::splat::sh_coefficients(settings.sh_degree.min(scene.sh_degree)) * 3;
+        let per = scene.coefficients() * 3;
+        let pick = |all: Vec<f64>| all.chunks(per).flat_map(|c| c[..active].to_vec()).collect::<Vec<f64>>();
+        let gpu_sh: Vec<f64> = gpu.sh.iter().map(|&g| g as f64).collect();
+        let gpu_sh: Vec<f32> = pick(gpu_sh).into_iter().map(|g| g as f32).collect();
+        assert_gradients_close("sh", &gpu_sh, &pick(expected.sh.clone()));
+    }
+    // Every Gaussian with any positional gradient was on screen at least once.
+    for (i, s) in stats.iter().enumerate() {
+        assert!(s[1] <= 1.0 && s[0].is_finite(), "stats of {i}: {s:?}");
+    }
+}
+
+#[test]
+fn gradients_match_reference() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(4);
+    for degree in [0, 1, 3] {
+        let scene = random_scene(40, degree, rng.next_u64());
+        let camera = random_camera(&mut rng, 47, 35);
+        let settings = RenderSettings { background: [0.3, 0.2, 0.7], sh_degree: degree, ..Default::default() };
+        check_gradients(gpu.ctx(), &scene, &camera, &settings, &mut rng);
+    }
+    let scene = random_scene(40, 2, 99);
+    let camera = random_camera(&mut rng, 33, 40);
+    check_gradients(gpu.ctx(), &scene, &camera, &RenderSettings { mask_mode: true, ..Default::default() }, &mut rng);
+}
+
+/// A single Gaussian scene with default parameters, to be edited by each hard case.
+fn one_gaussian(position: [f32; 3], log_scale: [f32; 3]) -> GaussianScene {
+    GaussianScene {
+        positions: vec![position],
+        log_scales: vec![log_scale],
+        rotations: vec![[1.0, 0.0, 0.0, 0.0]],
+        opacity_logits: vec![3.0],
+        sh: vec![0.5, -0.2, 0.1],
+        sh_degree: 0,
+    }
+}
+
+fn front_camera(width: u32, height: u32) -> Camera {
+    let f = 1.2 * width as f64;
+    Camera::look_at(width, height, f, f, width as f64 / 2.0, height as f64 / 2.0, DVec3::new(0.0, 0.0, -4.0), DVec3::ZERO, DVec3::Y).unwrap()
+}
+
+#[test]
+fn empty_and_single_gaussian_scenes() {
+    let gpu = common::gpu();
+    let camera = front_camera(67, 33);
+    let settings = RenderSettings { background: [0.25, 0.5, 0.75], ..Default::default() };
+    let empty = GaussianScene::default();
+    let image = render(gpu.ctx(), &empty, &camera, &settings);
+    assert!(image.rgba.iter().all(|p| *p == [0.25, 0.5, 0.75, 0.0]) && image.depth.iter().all(|&d| d == 0.0));
+    let single = one_gaussian([0.1, -0.05, 0.2], [-1.5; 3]);
+    assert_matches_reference(&render(gpu.ctx(), &single, &camera, &settings), &reference::render(&single, &camera, &settings), "one Gaussian");
+}
+
+/// Hard cases: each scene renders finite pixels that match the reference, and gradients stay
+/// finite.
+#[test]
+fn hard_cases_stay_finite_and_match_reference() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(5);
+    let camera = front_camera(48, 40);
+    let settings = RenderSettings::default();
+    let near = settings.near;
+    // The camera sits at z = -4, so view depth is z + 4.
+    let cases: Vec<(&str, GaussianScene)> = vec![
+        ("behind the camera", one_gaussian([0.0, 0.0, -5.0], [-1.0; 3])),
+        ("exactly on the near plane", one_gaussian([0.0, 0.0, -4.0 + near], [-1.0; 3])),
+        ("just past the near plane", one_gaussian([0.0, 0.0, -4.0 + near * 1.001], [-3.0; 3])),
+        ("far off screen", one_gaussian([1e4, -3e4, 5.0], [-1.0; 3])),
+        ("needle 1e6", one_gaussian([0.0, 0.0, 0.0], [0.0, -13.8, -13.8])),
+        ("sheet 1e6", one_gaussian([0.2, 0.1, 0.0], [0.0, 0.0, -13.8])),
+        ("sub-pixel", one_gaussian([0.01, 0.02, 0.0], [-9.0; 3])),
+        ("covers the whole image", one_gaussian([0.0, 0.0, 0.0], [3.0; 3])),
+        ("zero quaternion", GaussianScene { rotations: vec![[0.0; 4]], ..one_gaussian([0.0; 3], [-1.0; 3]) }),
+        ("denormal quaternion", GaussianScene { rotations: vec![[1e-40, 0.0, 1e-41, 0.0]], ..one_gaussian([0.0; 3], [-1.0; 3]) }),
+        ("tiny normal quaternion", GaussianScene { rotations: vec![[3e-30, 1e-30, 0.0, 2e-30]], ..one_gaussian([0.0; 3], [-1.0; 3]) }),
+        ("opacity logit +50", GaussianScene { opacity_logits: vec![50.0], ..one_gaussian([0.0; 3], [-1.0; 3]) }),
+        ("opacity logit -50", GaussianScene { opacity_logits: vec![-50.0], ..one_gaussian([0.0; 3], [-1.0; 3]) }),
+    ];
+    for (what, scene) in cases {
+        let image = render(gpu.ctx(), &scene, &camera, &settings);
+        assert!(image.rgba.iter().flatten().chain(&image.depth).all(|v| v.is_finite()), "{what}: non-finite output");
+        assert_matches_reference(&image, &reference::render(&scene, &camera, &settings), what);
+        let pixels = (camera.width * camera.height) as usize;
+        let loss = random_loss_gradients(&mut rng, pixels);
+        let (grads, _) = gpu_gradients(gpu.ctx(), &scene, &camera, &settings, &loss);
+        let all = grads.positions.concat().into_iter().chain(grads.log_scales.concat()).chain(grads.rotations.concat()).chain(grads.opacity_logits).chain(grads.sh);
+        assert!(all.into_iter().all(f32::is_finite), "{what}: non-finite gradient");
+    }
+}
+
+/// A Gaussian with a NaN or an infinity is skipped: its neighbours' pixels and gradients are
+/// exactly those of the scene without it.
+#[test]
+fn non_finite_gaussian_never_poisons_neighbours() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(6);
+    let camera = front_camera(40, 32);
+    let settings = RenderSettings::default();
+    let clean = random_scene(30, 1, 5);
+    let loss = random_loss_gradients(&mut rng, 40 * 32);
+    let clean_image = render(gpu.ctx(), &clean, &camera, &settings);
+    let (clean_grads, _) = gpu_gradients(gpu.ctx(), &clean, &camera, &settings, &loss);
+    type Poison = fn(&mut GaussianScene, usize);
+    let poisons: [(&str, Poison); 5] = [
+        ("NaN position", |s, i| s.positions[i][1] = f32::NAN),
+        ("infinite log-scale", |s, i| s.log_scales[i][0] = f32::INFINITY),
+        ("NaN rotation", |s, i| s.rotations[i][3] = f32::NAN),
+        ("NaN opacity", |s, i| s.opacity_logits[i] = f32::NAN),
+        ("infinite SH", |s, i| s.sh[i * 12 + 2] = f32::NEG_INFINITY),
+    ];
+    for (what, poison) in poisons {
+        // A copy of Gaussian 3, appended (so the clean ones keep their indices), then poisoned.
+        let mut scene = clean.clone();
+        scene.positions.push(clean.positions[3]);
+        scene.log_scales.push(clean.log_scales[3]);
+        scene.rotations.push(clean.rotations[3]);
+        scene.opacity_logits.push(4.0);
+        scene.sh.extend_from_slice(&clean.sh[3 * 12..4 * 12]);
+        let last = clean.len();
+        poison(&mut scene, last);
+        let image = render(gpu.ctx(), &scene, &camera, &settings);
+        assert_eq!(image.rgba, clean_image.rgba, "{what}: pixels changed");
+        let (grads, _) = gpu_gradients(gpu.ctx(), &scene, &camera, &settings, &loss);
+        // Float atomics add in any order, so equal up to rounding.
+        let same = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-5 * (1.0 + y.abs()));
+        assert!(same(&grads.positions[..last].concat(), &clean_grads.positions.concat()), "{what}: gradients changed");
+        assert!(same(&grads.sh[..clean.sh.len()], &clean_grads.sh), "{what}: SH gradients changed");
+        assert!(grads.positions[last].iter().all(|&g| g == 0.0), "{what}: the skipped Gaussian got a gradient");
+    }
+}
+
+#[test]
+fn tens_of_thousands_stacked_in_one_tile() {
+    let gpu = common::gpu();
+    let camera = front_camera(32, 32);
+    let n = 30_000;
+    let mut rng = common::rng(7);
+    let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
+    for i in 0..n {
+        let jitter = (rng.next_f64() as f32 - 0.5) * 0.01;
+        scene.positions.push([-0.3 + jitter, -0.3 - jitter, 1.0 - i as f32 * 1e-5]);
+        scene.log_scales.push([-4.5; 3]);
+        scene.rotations.push([1.0, 0.0, 0.0, 0.0]);
+        scene.opacity_logits.push(-4.0); // o ≈ 0.018: thousands are needed before T runs out
+        scene.sh.extend_from_slice(&[0.3, (i % 7) as f32 * 0.1, -0.1]);
+    }
+    let settings = RenderSettings::default();
+    let image = render(gpu.ctx(), &scene, &camera, &settings);
+    assert_matches_reference(&image, &reference::render(&scene, &camera, &settings), "30 000 stacked Gaussians");
+}
+
+#[test]
+fn ply_round_trip_renders_identically() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(8);
+    let scene = random_scene(50, 3, 3);
+    let path = std::env::temp_dir().join(format!("tagsplat-splat-{}.ply", std::process::id()));
+    scene.write_ply(&path).unwrap();
+    let back = GaussianScene::read_ply(&path).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    assert_eq!(back, scene);
+    let camera = random_camera(&mut rng, 40, 30);
+    let settings = RenderSettings::default();
+    assert_eq!(render(gpu.ctx(), &back, &camera, &settings).rgba, render(gpu.ctx(), &scene, &camera, &settings).rgba);
+}
+
+/// `tagsplat render` writes the PNG, alpha and depth it is asked for, and bad inputs get an
+/// error naming the file instead of a panic.
+#[test]
+fn render_cli_outputs_and_bad_inputs() {
+    let dir = std::env::temp_dir().join(format!("tagsplat-render-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (splats, camera, out) = (dir.join("scene.ply"), dir.join("cam.json"), dir.join("out.png"));
+    random_scene(200, 3, 21).write_ply(&splats).unwrap();
+    front_camera(61, 45).save_json(&camera).unwrap();
+    let run = |args: &[&std::path::Path]| {
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"));
+        command.arg("render").env("TAGSPLAT_VALIDATION", "1");
+        let names = ["--splats", "--camera", "--out", "--depth", "--alpha"];
+        for (name, path) in names.iter().zip(args) {
+            command.arg(name).arg(path);
+        }
+        command.output().unwrap()
+    };
+    let (depth, alpha) = (dir.join("depth.exr"), dir.join("alpha.png"));
+    let output = run(&[&splats, &camera, &out, &depth, &alpha]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let rgb = image::open(&out).unwrap().to_rgb8();
+    assert_eq!(rgb.dimensions(), (61, 45));
+    assert!(rgb.pixels().any(|p| p.0 != [0, 0, 0]), "nothing drawn");
+    assert_eq!(image::open(&alpha).unwrap().to_luma8().dimensions(), (61, 45));
+    assert!(std::fs::metadata(&depth).unwrap().len() > 0);
+
+    let truncated = dir.join("truncated.ply");
+    let bytes = std::fs::read(&splats).unwrap();
+    std::fs::write(&truncated, &bytes[..bytes.len() - 100]).unwrap();
+    let bent = dir.join("bent.json");
+    std::fs::write(&bent, r#"{"width": 8, "height": 8, "fx": 8, "fy": 8, "cx": 4, "cy": 4, "world_to_camera": [1,0,0,0, 0.5,1,0,0, 0,0,1,4, 0,0,0,1]}"#).unwrap();
+    for (args, named) in [([&truncated, &camera], &truncated), ([&splats, &bent], &bent)] {
+        let output = run(&[args[0], args[1], &dir.join("never.png")]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains(&named.display().to_string()) && !stderr.contains("panicked"), "{stderr}");
+        assert!(!dir.join("never.png").exists());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -102,7 +102,7 @@ fn meshes_masks_and_trajectories_agree() {
     assert_eq!(rows.len(), 150);
     for r in rows {
         let m = mesh(&dir, r.frame as usize);
-        let (face, b) = bindings[r.id as usize];
+        let (face, b) = bindings[r.id.parse::<usize>().unwrap()];
         let f = m.faces[face as usize];
         for d in 0..3 {
             let expect: f64 = (0..3).map(|k| b[k] * m.positions[f[k] as usize][d] as f64).sum();

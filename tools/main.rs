@@ -3,6 +3,9 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+
+mod render;
+mod track;
 use std::sync::Arc;
 
 mod dataset;
@@ -29,6 +32,8 @@ struct Cli {
 enum Command {
     /// List the Vulkan devices, their missing features, and which one would be chosen.
     Devices,
+    /// Render one view of a 3DGS PLY scene to PNG (and depth EXR, alpha PNG).
+    Render(render::RenderArgs),
     /// Inspect a multi-view video dataset.
     #[command(subcommand)]
     Dataset(dataset::DatasetCommand),
@@ -39,10 +44,16 @@ enum Command {
     /// Measure engine kernels against bounds measured in the same run.
     #[command(subcommand)]
     Bench(Bench),
+    /// Track surface points through a topology-consistent mesh sequence.
+    Track(track::TrackArgs),
+    /// Convert a mesh sequence between a folder of frames, OBJ + PC2 and GLB.
+    Convert(track::ConvertArgs),
 }
 
 #[derive(Subcommand)]
 enum Bench {
+    /// BVH build time and closest-point / ray-cast throughput against brute force.
+    Track(track::BenchTrackArgs),
     /// GPU radix sort of random (key, u32) pairs: pairs/s, copy bandwidth, CPU sort_unstable.
     Sort {
         /// Number of pairs.
@@ -93,6 +104,10 @@ fn run(cli: Cli) -> Result<()> {
     let options = ContextOptions { device: cli.device.clone(), validation: cli.validation.then_some(true) };
     match cli.command {
         Command::Devices => devices(options.device.as_deref()),
+        Command::Track(args) => track::track(args),
+        Command::Convert(args) => track::convert(args),
+        Command::Bench(Bench::Track(args)) => track::bench(args),
+        Command::Render(args) => render::render(&context(&options)?, &args),
         Command::Dataset(command) => dataset::run(command),
         Command::Synth(args) => synth::run(args),
         Command::Eval(args) => eval::run(args),

@@ -2,8 +2,9 @@
 //!
 //! Layout (both folders; the generator writes the ground-truth side, the tracker and the
 //! trainer the prediction side):
-//! - `meshes/<t>.ply`: one mesh per frame (six-digit frame index). Every ground-truth frame
-//!   needs a prediction; Chamfer and EMD per frame, then their means over frames.
+//! - `meshes/<t>.ply`: one mesh per frame (six-digit frame index). When the prediction has a
+//!   `meshes/` folder, every ground-truth frame needs a prediction; Chamfer and EMD per frame,
+//!   then their means over frames.
 //! - `trajectories.csv` (`id,frame,x,y,z`): tracking error, when both folders have one.
 //! - `images/<camera>/<t>.png`: PSNR and SSIM for every predicted image that has a
 //!   ground-truth image of the same name (RGB; an alpha channel is ignored).
@@ -84,7 +85,10 @@ fn list(dir: &Path, ext: &str) -> Result<Vec<PathBuf>, FolderError> {
 
 pub fn evaluate_folders(pred: &Path, gt: &Path, o: &FolderOptions) -> Result<FolderReport, FolderError> {
     let mut meshes = Vec::new();
-    for gt_path in list(&gt.join("meshes"), "ply")? {
+    // Mesh metrics when the prediction has a meshes/ folder at all (a tracking-only result
+    // has none); then every ground-truth frame needs its prediction.
+    let gt_meshes = if pred.join("meshes").is_dir() { list(&gt.join("meshes"), "ply")? } else { Vec::new() };
+    for gt_path in gt_meshes {
         let name = gt_path.file_name().expect("listed files have names");
         let pred_path = pred.join("meshes").join(name);
         if !pred_path.is_file() {

@@ -55,6 +55,6 @@ pub enum EvalError {
     Csv { path: PathBuf, line: usize, problem: String },
     #[error("{path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
-    #[error("ground-truth point {id} at frame {frame} has no prediction")]
-    MissingPrediction { id: u64, frame: u32 },
+    #[error("ground-truth point `{id}` at frame {frame} has no prediction")]
+    MissingPrediction { id: String, frame: u32 },
 }

@@ -33,12 +33,12 @@ pub fn tracking_error(pred: &[TrackPoint], gt: &[TrackPoint]) -> Result<Tracking
     if gt.is_empty() {
         return Err(EvalError::Empty("ground-truth trajectories"));
     }
-    let lookup: HashMap<(u64, u32), [f64; 3]> = pred.iter().map(|p| ((p.id, p.frame), p.position)).collect();
+    let lookup: HashMap<(&str, u32), [f64; 3]> = pred.iter().map(|p| ((p.id.as_str(), p.frame), p.position)).collect();
     let mut per_frame: BTreeMap<u32, (f64, usize)> = BTreeMap::new();
     let mut ids = BTreeSet::new();
     let (mut sum, mut max) = (0.0f64, 0.0f64);
     for g in gt {
-        let p = lookup.get(&(g.id, g.frame)).ok_or(EvalError::MissingPrediction { id: g.id, frame: g.frame })?;
+        let p = lookup.get(&(g.id.as_str(), g.frame)).ok_or_else(|| EvalError::MissingPrediction { id: g.id.clone(), frame: g.frame })?;
         let e2: f64 = (0..3).map(|k| (p[k] - g.position[k]).powi(2)).sum();
         if !e2.is_finite() {
             return Err(EvalError::NonFinite("trajectories"));
@@ -48,10 +48,10 @@ pub fn tracking_error(pred: &[TrackPoint], gt: &[TrackPoint]) -> Result<Tracking
         let f = per_frame.entry(g.frame).or_default();
         f.0 += e2;
         f.1 += 1;
-        ids.insert(g.id);
+        ids.insert(g.id.as_str());
     }
     let mse = sum / gt.len() as f64;
-    let gt_keys: HashSet<(u64, u32)> = gt.iter().map(|g| (g.id, g.frame)).collect();
+    let gt_keys: HashSet<(&str, u32)> = gt.iter().map(|g| (g.id.as_str(), g.frame)).collect();
     Ok(TrackingReport {
         points: ids.len(),
         frames: per_frame.len(),
@@ -60,7 +60,7 @@ pub fn tracking_error(pred: &[TrackPoint], gt: &[TrackPoint]) -> Result<Tracking
         rmse: mse.sqrt(),
         max,
         rmse_per_frame: per_frame.into_iter().map(|(f, (s, n))| (f, (s / n as f64).sqrt())).collect(),
-        ignored: pred.iter().filter(|p| !gt_keys.contains(&(p.id, p.frame))).count(),
+        ignored: pred.iter().filter(|p| !gt_keys.contains(&(p.id.as_str(), p.frame))).count(),
     })
 }
 
@@ -69,7 +69,7 @@ mod tests {
     use super::*;
 
     fn pt(id: u64, frame: u32, position: [f64; 3]) -> TrackPoint {
-        TrackPoint { id, frame, position }
+        TrackPoint { id: id.to_string(), frame, position }
     }
 
     #[test]
@@ -89,7 +89,7 @@ mod tests {
     #[test]
     fn missing_prediction_names_the_point() {
         let gt = [pt(4, 2, [0.0; 3])];
-        assert!(matches!(tracking_error(&[], &gt), Err(EvalError::MissingPrediction { id: 4, frame: 2 })));
+        assert!(matches!(tracking_error(&[], &gt), Err(EvalError::MissingPrediction { ref id, frame: 2 }) if id == "4"));
         assert!(matches!(tracking_error(&gt, &[]), Err(EvalError::Empty(_))));
     }
 }

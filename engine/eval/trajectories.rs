@@ -1,6 +1,6 @@
 //! The trajectory CSV shared by the tracker, the generator and `eval`: a header line
-//! `id,frame,x,y,z`, then one row per point and frame (id and frame unsigned integers,
-//! positions in scene units). Rows may come in any order; an (id, frame) pair appears once.
+//! `id,frame,x,y,z`, then one row per point and frame (id a non-empty name without commas or
+//! quotes, as the tracker writes it; frame an unsigned integer; positions in scene units). Rows may come in any order; an (id, frame) pair appears once.
 
 use super::EvalError;
 use std::collections::HashSet;
@@ -8,9 +8,9 @@ use std::io::Write;
 use std::path::Path;
 
 /// One point of a trajectory: point `id` at `frame`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct TrackPoint {
-    pub id: u64,
+    pub id: String,
     pub frame: u32,
     pub position: [f64; 3],
 }
@@ -48,16 +48,19 @@ pub fn parse_trajectories_csv(text: &str) -> Result<Vec<TrackPoint>, (usize, Str
         if fields.len() != 5 {
             return Err((i + 1, format!("expected 5 fields, found {}", fields.len())));
         }
-        let id: u64 = fields[0].parse().map_err(|_| (i + 1, format!("id `{}` is not an unsigned integer", fields[0])))?;
+        let id = fields[0];
+        if id.is_empty() || id.contains('"') {
+            return Err((i + 1, format!("invalid id `{id}` (empty or quoted)")));
+        }
         let frame: u32 = fields[1].parse().map_err(|_| (i + 1, format!("frame `{}` is not an unsigned integer", fields[1])))?;
         let mut position = [0.0; 3];
         for (k, p) in position.iter_mut().enumerate() {
             *p = fields[2 + k].parse::<f64>().ok().filter(|v| v.is_finite()).ok_or((i + 1, format!("coordinate `{}` is not a finite number", fields[2 + k])))?;
         }
-        if !seen.insert((id, frame)) {
+        if !seen.insert((id.to_owned(), frame)) {
             return Err((i + 1, format!("point {id} at frame {frame} appears twice")));
         }
-        points.push(TrackPoint { id, frame, position });
+        points.push(TrackPoint { id: id.to_owned(), frame, position });
     }
     Ok(points)
 }
@@ -69,8 +72,8 @@ mod tests {
     #[test]
     fn round_trip_and_errors() {
         let pts = vec![
-            TrackPoint { id: 3, frame: 0, position: [0.1, -2.5e-7, 1.0 / 3.0] },
-            TrackPoint { id: 3, frame: 1, position: [1e10, 0.0, -0.0] },
+            TrackPoint { id: "3".into(), frame: 0, position: [0.1, -2.5e-7, 1.0 / 3.0] },
+            TrackPoint { id: "nose".into(), frame: 1, position: [1e10, 0.0, -0.0] },
         ];
         let mut buf = Vec::new();
         write_trajectories_csv(&mut buf, &pts).unwrap();
@@ -79,7 +82,8 @@ mod tests {
         assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n1,0,1,2\n").unwrap_err().0, 2);
         assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n1,0,1,2,nan\n").unwrap_err().0, 2);
         assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n1,0,1,2,3\n\n1,0,1,2,3\n").unwrap_err().0, 4);
-        assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n-1,0,1,2,3\n").unwrap_err().0, 2);
+        assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n,0,1,2,3\n").unwrap_err().0, 2);
+        assert_eq!(parse_trajectories_csv("id,frame,x,y,z\na,-1,1,2,3\n").unwrap_err().0, 2);
         assert!(parse_trajectories_csv("").is_err());
     }
 }

@@ -7,8 +7,11 @@
 //!   crash never leaves a half-written file behind.
 
 pub mod dataset;
+pub mod glb;
 pub mod image;
+pub mod pc2;
 pub mod ply;
+pub mod sequence;
 
 use std::fs::File;
 use std::io::{BufWriter, Write};

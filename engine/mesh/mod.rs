@@ -1,6 +1,8 @@
 //! Triangle meshes as plain arrays: positions, counter-clockwise faces (seen from outside),
 //! optional vertex colours. File formats live beside the type (`read_ply`, `write_ply`).
 
+pub mod obj;
+
 use crate::io::ply::{write_ply, ColumnOut, ElementOut, Ply, PlyError};
 use std::path::{Path, PathBuf};
 

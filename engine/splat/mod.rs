@@ -1,7 +1,7 @@
 //! Differentiable Gaussian splatting: scene, projection, tile binning, rasterization and their
 //! backward passes on Vulkan compute, with an f64 CPU reference of the very same maths.
 //!
-//! # The maths (every kernel and [`reference`] follow this, term for term)
+//! # The maths (every kernel and [`mod@reference`] follow this, term for term)
 //! Camera: OpenCV pinhole ([`crate::camera::Camera`]), `W` = rotation and `t` = translation of
 //! `world_to_camera`, camera centre `o`.
 //!
@@ -11,7 +11,7 @@
 //! - `R` = rotation of `q / |q|` (culled if |q|² is not positive and finite), `S = diag(exp s)`,
 //!   `Σ = R S Sᵀ Rᵀ`.
 //! - Mean in pixels `m = (fx v.x / v.z + cx, fy v.y / v.z + cy)`.
-//! - Jacobian with the view ray clamped to a guard band (as gsplat does):
+//! - Jacobian with the view ray clamped to a guard band reaching 30% of the image width (height) past each edge:
 //!   `tx = v.z · clamp(v.x / v.z, −(cx / fx + 0.3 w / fx), (w − cx) / fx + 0.3 w / fx)`, same for
 //!   y; `J = [[fx / v.z, 0, −fx tx / v.z²], [0, fy / v.z, −fy ty / v.z²]]`; the clamp passes no
 //!   gradient to the clamped coordinate.

@@ -238,9 +238,9 @@ impl<'a> Frame<'a> {
             let one_minus = 1.0 - c.alpha;
             // T_final and every later contribution carry a factor (1 − α).
             let mut d_alpha = -d_final_t * final_t / one_minus + d_depth_sum * (p.depth * c.transmittance - behind_depth / one_minus);
-            for ch in 0..3 {
-                d_alpha += g.color[ch] * (p.color[ch] * c.transmittance - behind_color[ch] / one_minus);
-                behind_color[ch] += p.color[ch] * weight;
+            for ((behind, color), d_color) in behind_color.iter_mut().zip(p.color).zip(g.color) {
+                d_alpha += d_color * (color * c.transmittance - *behind / one_minus);
+                *behind += color * weight;
             }
             behind_depth += p.depth * weight;
             let d = &mut out[c.gaussian];

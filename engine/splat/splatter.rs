@@ -153,22 +153,21 @@ impl Splatter {
     ) -> Result<PassTimes, SplatError> {
         let frame = self.last_frame.ok_or(SplatError::NoForward)?;
         let n = scene.len();
-        let checks = [
-            ("scene", n, frame.gaussians()),
-            ("gradient buffers", grads.len(), n),
-            ("densify statistics", densify_stats.len(), n),
-            ("colour gradients", grad_rgba.len(), frame.pixels()),
-            ("depth gradients", grad_depth.len(), frame.pixels()),
+        let shapes = [
+            ("scene Gaussians", n, frame.gaussians()),
+            ("gradient Gaussians", grads.len(), n),
+            ("gradient SH values", grads.sh.len(), scene.sh.len()),
+            ("densify statistics", densify_stats.len().min(n), n),
+            ("colour gradients", grad_rgba.len().min(frame.pixels()), frame.pixels()),
+            ("depth gradients", grad_depth.len().min(frame.pixels()), frame.pixels()),
         ];
-        for (what, len, expected) in checks {
-            if len < expected || (what == "scene" && len != expected) || (what == "gradient buffers" && grads.sh.len() != scene.sh.len()) {
-                return Err(SplatError::Shape(format!("{what}: {len} rows where the last forward needs {expected}")));
-            }
+        if let Some((what, len, expected)) = shapes.into_iter().find(|(_, len, expected)| len != expected) {
+            return Err(SplatError::Shape(format!("{what}: {len} where the last forward needs {expected}")));
         }
         let mut rec = Recorder::new(&self.ctx)?;
         rec.begin_pass("rasterize backward");
         rec.fill_buffer(&self.grad2d, 0);
-        self.kernels.rasterize_backward(&mut rec, &frame, &self.raster_inputs(), &self.raster_outputs(), grad_rgba, grad_depth, &self.grad2d);
+        self.kernels.rasterize_backward(&mut rec, &frame, (&self.raster_inputs(), &self.raster_outputs()), (grad_rgba, grad_depth), &self.grad2d);
         rec.end_pass();
         rec.begin_pass("project backward");
         self.kernels.project_backward(&mut rec, &frame, scene, &self.grad2d, grads, densify_stats)?;

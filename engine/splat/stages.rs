@@ -89,15 +89,14 @@ impl Kernels {
         rec.dispatch(&self.rasterize, &bindings, frame, [tiles_x, tiles_y, 1]);
     }
 
-    /// Adds 2D gradients per Gaussian (`grad2d` must be zeroed first).
+    /// Adds 2D gradients per Gaussian (`grad2d` must be zeroed first) from the per-pixel loss
+    /// gradients `(dL/d(colour, alpha), dL/ddepth)`.
     pub(crate) fn rasterize_backward<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
         frame: &FrameParams,
-        inputs: &RasterInputs<'a>,
-        outputs: &RasterOutputs<'a>,
-        grad_rgba: &'a GpuBuffer<[f32; 4]>,
-        grad_depth: &'a GpuBuffer<f32>,
+        (inputs, outputs): (&RasterInputs<'a>, &RasterOutputs<'a>),
+        (grad_rgba, grad_depth): (&'a GpuBuffer<[f32; 4]>, &'a GpuBuffer<f32>),
         grad2d: &'a GpuBuffer<f32>,
     ) {
         let bindings = [

@@ -5,6 +5,7 @@
 //! DIR/meshes/<t>.ply       ground-truth mesh of frame t: same faces every frame, vertex colours
 //! DIR/bindings.csv         id,face,b0,b1,b2: each tracked point on the frame-0 mesh
 //! DIR/trajectories.csv     id,frame,x,y,z: each tracked point at every frame
+//! DIR/points.csv           id,x,y,z: the tracked points at frame 0 (the tracker's query file)
 //! ```
 //!
 //! Cameras sit on a sphere around the subject's bounding sphere (over all frames) at 3 radii,
@@ -248,11 +249,23 @@ fn write_tracks(out: &Path, subject: &Subject, frames: &[Vec<[f32; 3]>], tracks:
         for (id, (f, b)) in tracks.iter().enumerate() {
             let face = subject.faces[*f as usize];
             let position = std::array::from_fn(|d| (0..3).map(|k| b[k] * positions[face[k] as usize][d] as f64).sum());
-            rows.push(TrackPoint { id: id as u64, frame: t as u32, position });
+            rows.push(TrackPoint { id: id.to_string(), frame: t as u32, position });
         }
     }
     let path = out.join("trajectories.csv");
-    crate::io::write_atomically(&path, |w| write_trajectories_csv(w, &rows)).map_err(io(path))
+    crate::io::write_atomically(&path, |w| write_trajectories_csv(w, &rows)).map_err(io(path))?;
+    // The frame-0 positions as the tracker's query file, so `tagsplat track --points` follows
+    // the very same points.
+    let path = out.join("points.csv");
+    crate::io::write_atomically(&path, |w| {
+        use std::io::Write;
+        writeln!(w, "id,x,y,z")?;
+        for p in rows.iter().take(tracks.len()) {
+            writeln!(w, "{},{},{},{}", p.id, p.position[0], p.position[1], p.position[2])?;
+        }
+        Ok(())
+    })
+    .map_err(io(path))
 }
 
 /// Renders and writes every (frame, camera) image and mask, cameras split across threads.

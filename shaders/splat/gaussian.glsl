@@ -128,7 +128,8 @@ bool project(uint i, out Projection p, out Splat s) {
     }
     p.sh_sum = float[3](color.r, color.g, color.b);
     s.color = vec4(mask_mode() ? vec3(1.0) : max(color, vec3(0.0)), 0.0);
-    return all_finite(s.color) && p.view_dist > 0.0;
+    // Checked before the clamp: max(NaN, 0) may well be 0.
+    return all_finite(vec4(color, p.view_dist));
 }
 
 #endif

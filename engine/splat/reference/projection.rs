@@ -128,13 +128,13 @@ pub(super) fn forward(scene: &GaussianScene, view: &View, settings: &RenderSetti
     let m = mul(&mul(&jacobian, &cov_view), &transpose(&jacobian));
     let cov2d = [m[0][0] + DILATION, m[0][1], m[1][1] + DILATION];
     let det = cov2d[0] * cov2d[2] - cov2d[1] * cov2d[1];
-    if !(det > 0.0) {
+    if !(det > 0.0 && det.is_finite()) {
         return None;
     }
     let conic = [cov2d[2] / det, -cov2d[1] / det, cov2d[0] / det];
     let mean = [fx * v[0] / z + view.principal[0], fy * v[1] / z + view.principal[1]];
     let opacity = if settings.mask_mode { 1.0 } else { 1.0 / (1.0 + (-logit).exp()) };
-    if !(opacity >= ALPHA_MIN) {
+    if opacity < ALPHA_MIN {
         return None;
     }
     let colour = if settings.mask_mode { Colour::mask() } else { Colour::of(scene, settings, view, i, p) };
@@ -161,7 +161,8 @@ pub(super) fn forward(scene: &GaussianScene, view: &View, settings: &RenderSetti
 /// `q / |q|` and `|q|`, or `None` when every component is zero or subnormal as an f32.
 fn normalize_quaternion(q: [f64; 4]) -> Option<([f64; 4], f64)> {
     let largest = q.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    if !(largest >= f64::from(f32::MIN_POSITIVE)) {
+    // q is finite here, so largest is not NaN.
+    if largest < f64::from(f32::MIN_POSITIVE) {
         return None;
     }
     let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();

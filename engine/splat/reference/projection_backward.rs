@@ -106,13 +106,13 @@ fn color_backward(f: &Forward, g: &ProjectedGradient, scene: &GaussianScene, set
     let used = sh_coefficients(settings.sh_degree.min(scene.sh_degree));
     let basis_gradient = sh::basis_gradient(f.direction);
     let mut d_direction = [0.0; 3];
-    for k in 0..used {
-        for ch in 0..3 {
+    for (k, basis_gradient) in basis_gradient.iter().enumerate().take(used) {
+        for (ch, d_sum) in d_sum.iter().enumerate() {
             let at = (i * stride + k) * 3 + ch;
-            out.sh[at] = d_sum[ch] * f.basis[k];
-            let weight = d_sum[ch] * f64::from(scene.sh[at]);
-            for a in 0..3 {
-                d_direction[a] += weight * basis_gradient[k][a];
+            out.sh[at] = d_sum * f.basis[k];
+            let weight = d_sum * f64::from(scene.sh[at]);
+            for (d, b) in d_direction.iter_mut().zip(basis_gradient) {
+                *d += weight * b;
             }
         }
     }

@@ -1,0 +1,207 @@
+//! Topology-consistent mesh sequences: one face list, vertex positions per frame, and the
+//! file layouts animation tools open.
+//!
+//! - A folder of per-frame PLY (binary, vertex colours) or OBJ files, natural order
+//!   ([`folder`]).
+//! - A base OBJ plus a PC2 point cache beside it (`anim.obj` + `anim.pc2`).
+//! - glTF 2.0 binary: base mesh, one morph target per frame, a stepping animation
+//!   ([`crate::io::glb`]).
+//!
+//! Reading any of them checks that every frame has frame 0's vertex count and face list, and
+//! names the first frame that differs. Colours: a folder keeps them per frame; the OBJ + PC2
+//! and GLB layouts store the frame-0 colours only, and read them back for every frame.
+
+pub mod folder;
+
+use crate::io::glb::{self, GlbError};
+use crate::io::pc2::{self, Pc2Error, PointCache};
+use crate::mesh::{MeshError, TriMesh};
+use std::path::{Path, PathBuf};
+
+/// What can go wrong reading or writing a sequence; every message names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum SequenceError {
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    #[error(transparent)]
+    Pc2(#[from] Pc2Error),
+    #[error(transparent)]
+    Glb(#[from] GlbError),
+    #[error("{}: {problem}", path.display())]
+    Invalid { path: PathBuf, problem: String },
+}
+
+fn invalid(path: &Path, problem: impl Into<String>) -> SequenceError {
+    SequenceError::Invalid { path: path.to_path_buf(), problem: problem.into() }
+}
+
+/// A mesh sequence: the same faces in every frame, vertex positions per frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshSequence {
+    pub faces: Vec<[u32; 3]>,
+    /// Vertex positions of each frame, all of one length.
+    pub frames: Vec<Vec<[f32; 3]>>,
+    /// Vertex colours of each frame, when the source has them.
+    pub colors: Option<Vec<Vec<[u8; 3]>>>,
+}
+
+/// The file kind of a frame in a folder.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameFormat {
+    Ply,
+    Obj,
+}
+
+impl MeshSequence {
+    /// Reads a folder, a `.pc2` (with the `.obj` of the same name beside it) or a `.glb`.
+    pub fn read(path: &Path) -> Result<Self, SequenceError> {
+        if path.is_dir() {
+            return Self::read_folder(path);
+        }
+        match extension(path).as_deref() {
+            Some("pc2") => Self::read_pc2(path),
+            Some("glb") => Ok(glb::read_glb(path)?),
+            _ if !path.exists() => Err(invalid(path, "no such file or folder")),
+            _ => Err(invalid(path, "not a sequence: expected a folder of .ply/.obj frames, a .pc2 or a .glb")),
+        }
+    }
+
+    /// Writes to a `.pc2` (and its base `.obj`), a `.glb` (`fps` frames per second), or
+    /// otherwise a folder of `frame_NNNNNN` files in `format`.
+    pub fn write(&self, path: &Path, format: FrameFormat, fps: f64) -> Result<(), SequenceError> {
+        match extension(path).as_deref() {
+            Some("pc2") => self.write_pc2(path),
+            Some("glb") => Ok(glb::write_glb(path, self, fps)?),
+            _ => self.write_folder(path, format),
+        }
+    }
+
+    /// Frame `t` as a mesh (its colours when the sequence has them). None past the end.
+    pub fn frame_mesh(&self, t: usize) -> Option<TriMesh> {
+        Some(TriMesh {
+            positions: self.frames.get(t)?.clone(),
+            faces: self.faces.clone(),
+            colors: self.colors.as_ref().and_then(|c| c.get(t).cloned()),
+        })
+    }
+
+    /// The first reason this is not a usable sequence: no frames, frames of different vertex
+    /// counts, colours that do not match, a face index out of range, a non-finite position.
+    pub fn problem(&self) -> Option<String> {
+        let n = self.frames.first().map(Vec::len)?;
+        if let Some(t) = self.frames.iter().position(|f| f.len() != n) {
+            return Some(format!("frame {t} has {} vertices, frame 0 has {n}", self.frames[t].len()));
+        }
+        if let Some(colors) = &self.colors {
+            if colors.len() != self.frames.len() || colors.iter().any(|c| c.len() != n) {
+                return Some("the colours do not match the frames and vertices".into());
+            }
+        }
+        (0..self.frames.len()).find_map(|t| self.frame_mesh(t)?.problem().map(|p| format!("frame {t}: {p}")))
+    }
+
+    /// Reads the frames of a folder (see [`folder`]), checking them against frame 0.
+    pub fn read_folder(dir: &Path) -> Result<Self, SequenceError> {
+        let files = folder::frame_files(dir)?;
+        let mut sequence = MeshSequence::default();
+        let mut colors = Some(Vec::new());
+        for (t, file) in files.iter().enumerate() {
+            let mesh = match folder::frame_extension(&file.to_string_lossy()) {
+                Some("obj") => TriMesh::read_obj(file)?,
+                _ => TriMesh::read_ply(file)?,
+            };
+            if t == 0 {
+                sequence.faces = mesh.faces;
+            } else {
+                check_same_topology(&sequence, &mesh, t, file, &files[0])?;
+            }
+            sequence.frames.push(mesh.positions);
+            colors = colors.zip(mesh.colors).map(|(mut all, c)| {
+                all.push(c);
+                all
+            });
+        }
+        sequence.colors = colors;
+        Ok(sequence)
+    }
+
+    /// Writes `frame_000000.ply` (or `.obj`), … into `dir`, creating it. Refuses a folder that
+    /// already holds frame files, so old frames never mix with new ones.
+    pub fn write_folder(&self, dir: &Path, format: FrameFormat) -> Result<(), SequenceError> {
+        self.check(dir)?;
+        std::fs::create_dir_all(dir).map_err(|e| invalid(dir, format!("cannot create the folder: {e}")))?;
+        if let Some(existing) = folder::frame_names(dir)?.first() {
+            return Err(invalid(dir, format!("already holds frame files ({existing}, ...): choose an empty folder")));
+        }
+        let ext = match format {
+            FrameFormat::Ply => "ply",
+            FrameFormat::Obj => "obj",
+        };
+        for t in 0..self.frames.len() {
+            let mesh = self.frame_mesh(t).ok_or_else(|| invalid(dir, "frame out of range"))?;
+            let path = dir.join(format!("frame_{t:06}.{ext}"));
+            match format {
+                FrameFormat::Ply => mesh.write_ply(&path)?,
+                FrameFormat::Obj => mesh.write_obj(&path)?,
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads `anim.pc2` and its base mesh `anim.obj`: faces (and colours) from the OBJ,
+    /// positions of every frame from the PC2 samples.
+    pub fn read_pc2(path: &Path) -> Result<Self, SequenceError> {
+        let base_path = path.with_extension("obj");
+        if !base_path.is_file() {
+            return Err(invalid(path, format!("the base mesh {} is missing", base_path.display())));
+        }
+        let base = TriMesh::read_obj(&base_path)?;
+        let cache = pc2::read_pc2(path)?;
+        if cache.samples.is_empty() {
+            return Err(invalid(path, "no samples"));
+        }
+        if cache.samples[0].len() != base.positions.len() {
+            return Err(invalid(path, format!("{} points per sample, the base mesh {} has {} vertices", cache.samples[0].len(), base_path.display(), base.positions.len())));
+        }
+        let frames = cache.samples.len();
+        Ok(MeshSequence { faces: base.faces, colors: base.colors.map(|c| vec![c; frames]), frames: cache.samples })
+    }
+
+    /// Writes `anim.pc2` (one sample per frame, starting at frame 0) and the base mesh
+    /// `anim.obj` (frame 0, with frame-0 colours).
+    pub fn write_pc2(&self, path: &Path) -> Result<(), SequenceError> {
+        self.check(path)?;
+        let base = self.frame_mesh(0).ok_or_else(|| invalid(path, "no frames"))?;
+        base.write_obj(&path.with_extension("obj"))?;
+        let cache = PointCache { start_frame: 0.0, sample_rate: 1.0, samples: self.frames.clone() };
+        Ok(pc2::write_pc2(path, &cache)?)
+    }
+
+    /// [`MeshSequence::problem`] as an error naming `path`.
+    pub fn check(&self, path: &Path) -> Result<(), SequenceError> {
+        if self.frames.is_empty() {
+            return Err(invalid(path, "the sequence has no frames"));
+        }
+        self.problem().map_or(Ok(()), |p| Err(invalid(path, p)))
+    }
+}
+
+/// Frame `t` (read from `file`) must have frame 0's vertex count and faces.
+fn check_same_topology(sequence: &MeshSequence, mesh: &TriMesh, t: usize, file: &Path, first: &Path) -> Result<(), SequenceError> {
+    let first_name = first.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let n = sequence.frames[0].len();
+    if mesh.positions.len() != n {
+        return Err(invalid(file, format!("frame {t} has {} vertices, frame 0 ({first_name}) has {n}", mesh.positions.len())));
+    }
+    if mesh.faces.len() != sequence.faces.len() {
+        return Err(invalid(file, format!("frame {t} has {} faces, frame 0 ({first_name}) has {}", mesh.faces.len(), sequence.faces.len())));
+    }
+    if let Some(f) = (0..mesh.faces.len()).find(|&f| mesh.faces[f] != sequence.faces[f]) {
+        return Err(invalid(file, format!("frame {t} differs from frame 0 ({first_name}) at face {f}: {:?} instead of {:?}", mesh.faces[f], sequence.faces[f])));
+    }
+    Ok(())
+}
+
+fn extension(path: &Path) -> Option<String> {
+    Some(path.extension()?.to_str()?.to_ascii_lowercase())
+}

@@ -1,0 +1,64 @@
+//! The results of a tracking run and their files: `tracks.csv` (`id,frame,x,y,z`) and a JSON
+//! report that adds each point's binding and the points that could not be bound.
+
+use super::bind::Binding;
+use super::TrackError;
+use crate::io::write_atomically;
+use serde::Serialize;
+use std::io::Write;
+use std::path::Path;
+
+/// Everything a tracking run found.
+#[derive(Clone, Debug, Serialize)]
+pub struct TrackReport {
+    pub frames: usize,
+    pub vertices: usize,
+    pub faces: usize,
+    /// Largest accepted distance from a 3D query point to the frame-0 surface (scene units).
+    pub max_distance: f64,
+    pub points: Vec<TrackedPoint>,
+    pub unbound: Vec<UnboundPoint>,
+}
+
+/// A bound point and its position in every frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct TrackedPoint {
+    pub id: String,
+    #[serde(flatten)]
+    pub binding: Binding,
+    /// Position per frame (scene units).
+    pub trajectory: Vec<[f64; 3]>,
+}
+
+/// A query that was not bound, and why.
+#[derive(Clone, Debug, Serialize)]
+pub struct UnboundPoint {
+    pub id: String,
+    pub reason: String,
+    /// Distance to the surface when that was the reason.
+    pub distance: Option<f64>,
+}
+
+/// Writes `id,frame,x,y,z`, one row per point per frame, atomically. Numbers are written in
+/// the shortest form that reads back to the same f64.
+pub fn write_tracks_csv(path: &Path, points: &[TrackedPoint]) -> Result<(), TrackError> {
+    write_atomically(path, |w| {
+        writeln!(w, "id,frame,x,y,z")?;
+        for p in points {
+            for (frame, [x, y, z]) in p.trajectory.iter().enumerate() {
+                writeln!(w, "{},{frame},{x},{y},{z}", p.id)?;
+            }
+        }
+        Ok(())
+    })
+    .map_err(|error| TrackError::Io { path: path.to_owned(), error })
+}
+
+/// Writes the report as pretty JSON, atomically.
+pub fn write_report_json(path: &Path, report: &TrackReport) -> Result<(), TrackError> {
+    write_atomically(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, report)?;
+        writeln!(w)
+    })
+    .map_err(|error| TrackError::Io { path: path.to_owned(), error })
+}

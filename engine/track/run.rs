@@ -1,0 +1,63 @@
+//! One tracking run: bind the queries on frame 0, follow them through every frame.
+
+use super::bind::{bind_point, bind_ray, extent, Binding, Unbound};
+use super::bvh::SurfaceBvh;
+use super::output::{TrackReport, TrackedPoint, UnboundPoint};
+use super::trajectory::trajectories;
+use super::TrackError;
+use crate::camera::Camera;
+use glam::DVec3;
+
+/// What to track: frame-0 points, or pixels of a camera (ray-cast onto the frame-0 surface).
+pub enum Queries {
+    Points(Vec<(String, [f64; 3])>),
+    Pixels { camera: Camera, pixels: Vec<(String, [f64; 2])> },
+}
+
+/// Binds `queries` on frame 0 of the sequence (`faces`, vertex positions per frame) and
+/// returns every bound point's trajectory. A 3D point farther from the surface than
+/// `max_distance_relative` × the frame-0 bounding-box diagonal, a pixel whose ray misses, or a
+/// non-finite query is listed in `unbound`, never snapped.
+///
+/// Errors: no frames, an unusable frame-0 mesh, frames of different vertex counts.
+pub fn track(faces: &[[u32; 3]], frames: &[Vec<[f32; 3]>], queries: &Queries, max_distance_relative: f64) -> Result<TrackReport, TrackError> {
+    let frame0 = frames.first().ok_or(TrackError::EmptyMesh)?;
+    let bvh = SurfaceBvh::build(frame0, faces)?;
+    let max_distance = max_distance_relative * extent(frame0);
+    let results: Vec<(&str, Result<Binding, Unbound>)> = match queries {
+        Queries::Points(points) => points
+            .iter()
+            .map(|(id, p)| (id.as_str(), bind_point(&bvh, DVec3::from(*p), max_distance)))
+            .collect(),
+        Queries::Pixels { camera, pixels } => pixels
+            .iter()
+            .map(|(id, [u, v])| {
+                let (origin, dir) = camera.pixel_ray(*u, *v);
+                (id.as_str(), bind_ray(&bvh, origin, dir))
+            })
+            .collect(),
+    };
+    let mut bound = Vec::new();
+    let mut unbound = Vec::new();
+    for (id, result) in results {
+        match result {
+            Ok(binding) => bound.push((id, binding)),
+            Err(why) => unbound.push(UnboundPoint {
+                id: id.to_owned(),
+                reason: why.to_string(),
+                distance: match why {
+                    Unbound::TooFar { distance } => Some(distance),
+                    _ => None,
+                },
+            }),
+        }
+    }
+    let bindings: Vec<Binding> = bound.iter().map(|(_, b)| *b).collect();
+    let paths = trajectories(&bindings, faces, frames)?;
+    let points = bound
+        .into_iter()
+        .zip(paths)
+        .map(|((id, binding), path)| TrackedPoint { id: id.to_owned(), binding, trajectory: path.iter().map(|p| p.to_array()).collect() })
+        .collect();
+    Ok(TrackReport { frames: frames.len(), vertices: frame0.len(), faces: faces.len(), max_distance, points, unbound })
+}

@@ -1,0 +1,153 @@
+//! `tagsplat track`, `tagsplat convert` and `tagsplat bench track`: parse, call the library, print.
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+use tagsplat::camera::Camera;
+use tagsplat::io::sequence::{FrameFormat, MeshSequence};
+use tagsplat::track::bench::{bench_track, TrackBenchReport};
+use tagsplat::track::output::{write_report_json, write_tracks_csv};
+use tagsplat::track::plot::write_plot;
+use tagsplat::track::queries::{read_pixels, read_points};
+use tagsplat::track::{track as track_sequence, Queries};
+
+#[derive(Args)]
+pub struct TrackArgs {
+    /// The sequence: a folder of .ply/.obj frames, a .pc2 (with its .obj beside it) or a .glb.
+    #[arg(long)]
+    sequence: PathBuf,
+    /// Frame-0 points to track: CSV with header `id,x,y,z`.
+    #[arg(long, required_unless_present = "pixels", conflicts_with = "pixels")]
+    points: Option<PathBuf>,
+    /// Pixels to track: CSV with header `id,u,v` (pixel (i, j) is centred at (i+0.5, j+0.5)),
+    /// ray-cast onto frame 0 through --camera.
+    #[arg(long, requires = "camera")]
+    pixels: Option<PathBuf>,
+    /// Camera of --pixels (cam.json: width, height, fx, fy, cx, cy, world_to_camera).
+    #[arg(long)]
+    camera: Option<PathBuf>,
+    /// Trajectories out: CSV `id,frame,x,y,z`.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write a JSON report: bindings (face, barycentric, distance) and trajectories.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Also draw the trajectories into a PNG (left: projected on the two axes of largest
+    /// spread; right: distance from the frame-0 position against the frame).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Largest distance from a point to the frame-0 surface, as a fraction of the frame-0
+    /// bounding-box diagonal. Farther points are not bound.
+    #[arg(long, default_value_t = 0.01)]
+    max_distance: f64,
+    /// Leave out points that cannot be bound (listed on stderr and in the JSON) instead of
+    /// failing.
+    #[arg(long)]
+    skip_unbound: bool,
+}
+
+pub fn track(args: TrackArgs) -> Result<()> {
+    if !(args.max_distance >= 0.0 && args.max_distance.is_finite()) {
+        bail!("--max-distance {} must be a finite non-negative fraction", args.max_distance);
+    }
+    let sequence = MeshSequence::read(&args.sequence).context("cannot read the sequence")?;
+    let queries = match (&args.points, &args.pixels, &args.camera) {
+        (Some(points), _, _) => Queries::Points(read_points(points)?),
+        (None, Some(pixels), Some(camera)) => Queries::Pixels { camera: Camera::load_json(camera)?, pixels: read_pixels(pixels)? },
+        _ => bail!("give --points, or --pixels with --camera"),
+    };
+    let report = track_sequence(&sequence.faces, &sequence.frames, &queries, args.max_distance)
+        .with_context(|| format!("cannot track on {}", args.sequence.display()))?;
+    for u in &report.unbound {
+        eprintln!("{}: point {} not bound: {}", if args.skip_unbound { "warning" } else { "error" }, u.id, u.reason);
+    }
+    if !report.unbound.is_empty() && !args.skip_unbound {
+        let hint = match queries {
+            Queries::Points(_) => format!(" (farther than --max-distance {} x the frame-0 extent = {})", args.max_distance, report.max_distance),
+            Queries::Pixels { .. } => String::new(),
+        };
+        bail!("{} of {} points not bound{hint}; fix them, or pass --skip-unbound to track the rest", report.unbound.len(), report.unbound.len() + report.points.len());
+    }
+    write_tracks_csv(&args.out, &report.points)?;
+    if let Some(json) = &args.json {
+        write_report_json(json, &report)?;
+    }
+    if let Some(plot) = &args.plot {
+        let paths: Vec<Vec<glam::DVec3>> = report.points.iter().map(|p| p.trajectory.iter().map(|&x| glam::DVec3::from(x)).collect()).collect();
+        write_plot(plot, &paths)?;
+    }
+    println!("tracked {} points through {} frames ({} vertices, {} faces) -> {}", report.points.len(), report.frames, report.vertices, report.faces, args.out.display());
+    Ok(())
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum FrameFormatArg {
+    Ply,
+    Obj,
+}
+
+#[derive(Args)]
+pub struct ConvertArgs {
+    /// The sequence to read: a folder of .ply/.obj frames, a .pc2 (with its .obj) or a .glb.
+    #[arg(long)]
+    sequence: PathBuf,
+    /// Where to write: FILE.pc2 (plus FILE.obj), FILE.glb, or a folder (created; must hold no
+    /// frame files yet).
+    #[arg(long)]
+    to: PathBuf,
+    /// Frame file format when writing a folder.
+    #[arg(long, value_enum, default_value = "ply")]
+    frame_format: FrameFormatArg,
+    /// Frames per second of the .glb animation.
+    #[arg(long, default_value_t = 24.0)]
+    fps: f64,
+}
+
+pub fn convert(args: ConvertArgs) -> Result<()> {
+    let sequence = MeshSequence::read(&args.sequence).context("cannot read the sequence")?;
+    let format = match args.frame_format {
+        FrameFormatArg::Ply => FrameFormat::Ply,
+        FrameFormatArg::Obj => FrameFormat::Obj,
+    };
+    sequence.write(&args.to, format, args.fps).context("cannot write the sequence")?;
+    println!("{} frames, {} vertices, {} faces -> {}", sequence.frames.len(), sequence.frames[0].len(), sequence.faces.len(), args.to.display());
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct BenchTrackArgs {
+    /// Sphere subdivision level (7: 131 072 triangles).
+    #[arg(long, default_value_t = 7, value_parser = clap::value_parser!(u32).range(0..=9))]
+    level: u32,
+    /// Random queries per kind (closest point, ray); brute force answers 1 % of them (at most 200).
+    #[arg(long, default_value_t = 100_000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    queries: u64,
+    /// BVH builds; the fastest is reported.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
+    repetitions: u64,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn bench(args: BenchTrackArgs) -> Result<()> {
+    let r = bench_track(args.level, args.queries as usize, args.repetitions as usize)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&r)?);
+    } else {
+        print_bench(&r);
+    }
+    if !r.verified {
+        bail!("BVH answers differ from brute force");
+    }
+    Ok(())
+}
+
+fn print_bench(r: &TrackBenchReport) {
+    let speedup = |a: f64, b: f64| a / b;
+    println!("mesh              {} triangles, {} vertices (unit sphere)", r.triangles, r.vertices);
+    println!("BVH build         {:.2} ms (fastest of the builds, one thread)", r.build_ms);
+    println!("closest point     {:.0} queries/s BVH, {:.0} queries/s brute force ({:.0}x)", r.queries_per_s, r.brute_force_queries_per_s, speedup(r.queries_per_s, r.brute_force_queries_per_s));
+    println!("ray cast          {:.0} rays/s BVH, {:.0} rays/s brute force ({:.0}x)", r.rays_per_s, r.brute_force_rays_per_s, speedup(r.rays_per_s, r.brute_force_rays_per_s));
+    println!("checked           {} of {} queries of each kind against brute force: {}", r.brute_force_queries, r.queries, if r.verified { "equal" } else { "DIFFERENT" });
+}
