@@ -1,11 +1,12 @@
-//! `tagsplat render`: one view of a 3DGS PLY scene, as PNG (colour, optionally alpha) and EXR
-//! (expected depth).
+//! `tagsplat render`: one view of a 3DGS PLY scene, as PNG (colour, optionally alpha) and a
+//! single-channel EXR (expected depth; `io::image` writes only RGB(A) EXR).
 
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use tagsplat::camera::Camera;
 use tagsplat::gpu::GpuContext;
+use tagsplat::io::image::{write_png, Image};
 use tagsplat::io::write_atomically;
 use tagsplat::splat::{GaussianBuffers, GaussianScene, RenderSettings, Splatter};
 
@@ -52,26 +53,16 @@ pub fn render(ctx: &Arc<GpuContext>, args: &RenderArgs) -> Result<()> {
     splatter.forward(&buffers, &camera, &settings)?;
     let rgba = splatter.read_rgba()?;
     let (width, height) = (camera.width, camera.height);
-    let to_byte = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-    let rgb: Vec<u8> = rgba.iter().flat_map(|p| [to_byte(p[0]), to_byte(p[1]), to_byte(p[2])]).collect();
-    write_png(&args.out, width, height, image::ExtendedColorType::Rgb8, &rgb)?;
+    let rgb = rgba.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+    write_png(&args.out, &Image { width, height, channels: 3, data: rgb })?;
     if let Some(path) = &args.alpha {
-        let alpha: Vec<u8> = rgba.iter().map(|p| to_byte(p[3])).collect();
-        write_png(path, width, height, image::ExtendedColorType::L8, &alpha)?;
+        write_png(path, &Image { width, height, channels: 1, data: rgba.iter().map(|p| p[3]).collect() })?;
     }
     if let Some(path) = &args.depth {
         write_depth_exr(path, width, height, splatter.read_depth()?)?;
     }
     println!("rendered {} Gaussians to {} ({width}x{height})", scene.len(), args.out.display());
     Ok(())
-}
-
-fn write_png(path: &Path, width: u32, height: u32, color: image::ExtendedColorType, pixels: &[u8]) -> Result<()> {
-    write_atomically(path, |w| {
-        let encoder = image::codecs::png::PngEncoder::new(w);
-        image::ImageEncoder::write_image(encoder, pixels, width, height, color).map_err(std::io::Error::other)
-    })
-    .with_context(|| format!("{}: cannot write PNG", path.display()))
 }
 
 fn write_depth_exr(path: &Path, width: u32, height: u32, depth: Vec<f32>) -> Result<()> {

@@ -8,7 +8,7 @@ mod splat;
 
 pub use copy::{CopyBandwidth, CopyProbe};
 pub use sort::{bench_sort, SortBenchReport};
-pub use splat::{bench_splat, random_scene, ring_cameras, SplatBenchConfig, SplatBenchReport};
+pub use splat::{bench_splat, BenchWork, random_scene, ring_cameras, SplatBenchConfig, SplatBenchReport};
 
 /// Median of a sample; 0 for an empty one (nothing was timed).
 fn median(mut samples: Vec<f64>) -> f64 {

@@ -85,29 +85,52 @@ pub fn ring_cameras(views: usize, resolution: u32) -> Vec<Camera> {
         .collect()
 }
 
-pub fn bench_splat(ctx: &Arc<GpuContext>, config: &SplatBenchConfig) -> Result<SplatBenchReport, SplatError> {
-    let scene = random_scene(config.gaussians, config.sh_degree, 0x5EED);
-    let cameras = ring_cameras(config.views, config.resolution);
-    let buffers = GaussianBuffers::from_scene(ctx, &scene)?;
-    let grads = GaussianBuffers::shaped_like(ctx, &buffers)?;
-    let pixels = (config.resolution * config.resolution) as usize;
-    let densify_stats = GpuBuffer::from_slice(ctx, "bench densify stats", &vec![[0.0f32; 2]; scene.len()])?;
-    // A loss gradient on every pixel's colour and alpha, as a training loss would give.
-    let grad_rgba = GpuBuffer::from_slice(ctx, "bench colour gradients", &vec![[1.0 / pixels as f32; 4]; pixels])?;
-    let grad_depth = GpuBuffer::from_slice(ctx, "bench depth gradients", &vec![0.0f32; pixels])?;
-    let mut zero = Recorder::new(ctx)?;
-    grads.record_zero(&mut zero);
-    zero.submit_and_wait()?;
+/// The GPU side of one benchmark view: the scene, zeroed gradient buffers and densification
+/// statistics, and a loss gradient on every pixel's colour and alpha (as a training loss gives).
+pub struct BenchWork {
+    pub scene: GaussianBuffers,
+    pub grads: GaussianBuffers,
+    pub densify_stats: GpuBuffer<[f32; 2]>,
+    pub grad_rgba: GpuBuffer<[f32; 4]>,
+    pub grad_depth: GpuBuffer<f32>,
+}
 
+impl BenchWork {
+    pub fn new(ctx: &Arc<GpuContext>, scene: &GaussianScene, resolution: u32) -> Result<Self, SplatError> {
+        let buffers = GaussianBuffers::from_scene(ctx, scene)?;
+        let grads = GaussianBuffers::shaped_like(ctx, &buffers)?;
+        let pixels = (resolution * resolution) as usize;
+        let work = Self {
+            densify_stats: GpuBuffer::from_slice(ctx, "bench densify stats", &vec![[0.0f32; 2]; scene.len()])?,
+            grad_rgba: GpuBuffer::from_slice(ctx, "bench colour gradients", &vec![[1.0 / pixels as f32; 4]; pixels])?,
+            grad_depth: GpuBuffer::from_slice(ctx, "bench depth gradients", &vec![0.0f32; pixels])?,
+            scene: buffers,
+            grads,
+        };
+        let mut zero = Recorder::new(ctx)?;
+        work.grads.record_zero(&mut zero);
+        zero.submit_and_wait()?;
+        Ok(work)
+    }
+
+    /// One view's backward after a forward of `splatter`.
+    pub fn backward(&self, splatter: &mut Splatter) -> Result<PassTimes, SplatError> {
+        splatter.backward(&self.scene, &self.grad_rgba, &self.grad_depth, &self.grads, &self.densify_stats)
+    }
+}
+
+pub fn bench_splat(ctx: &Arc<GpuContext>, config: &SplatBenchConfig) -> Result<SplatBenchReport, SplatError> {
+    let cameras = ring_cameras(config.views, config.resolution);
+    let work = BenchWork::new(ctx, &random_scene(config.gaussians, config.sh_degree, 0x5EED), config.resolution)?;
     let mut splatter = Splatter::new(ctx)?;
     let settings = RenderSettings { sh_degree: config.sh_degree, ..Default::default() };
     let (mut fwd, mut bwd, mut passes, mut intersections) = (Vec::new(), Vec::new(), Vec::new(), 0usize);
     for round in 0..config.rounds.max(2) {
         for camera in &cameras {
             let start = Instant::now();
-            let forward_times = splatter.forward(&buffers, camera, &settings)?;
+            let forward_times = splatter.forward(&work.scene, camera, &settings)?;
             let middle = Instant::now();
-            let backward_times = splatter.backward(&buffers, &grad_rgba, &grad_depth, &grads, &densify_stats)?;
+            let backward_times = work.backward(&mut splatter)?;
             if round > 0 {
                 fwd.push((middle - start).as_secs_f64());
                 bwd.push(middle.elapsed().as_secs_f64());

@@ -3,6 +3,7 @@
 
 use super::bind::Binding;
 use super::TrackError;
+use crate::eval::{write_trajectories_csv, TrackPoint};
 use crate::io::write_atomically;
 use serde::Serialize;
 use std::io::Write;
@@ -39,19 +40,14 @@ pub struct UnboundPoint {
     pub distance: Option<f64>,
 }
 
-/// Writes `id,frame,x,y,z`, one row per point per frame, atomically. Numbers are written in
-/// the shortest form that reads back to the same f64.
+/// Writes `id,frame,x,y,z`, one row per point per frame, atomically, in the trajectory CSV
+/// format of [`crate::eval::write_trajectories_csv`] (shortest round-trip floats).
 pub fn write_tracks_csv(path: &Path, points: &[TrackedPoint]) -> Result<(), TrackError> {
-    write_atomically(path, |w| {
-        writeln!(w, "id,frame,x,y,z")?;
-        for p in points {
-            for (frame, [x, y, z]) in p.trajectory.iter().enumerate() {
-                writeln!(w, "{},{frame},{x},{y},{z}", p.id)?;
-            }
-        }
-        Ok(())
-    })
-    .map_err(|error| TrackError::Io { path: path.to_owned(), error })
+    let rows: Vec<TrackPoint> = points
+        .iter()
+        .flat_map(|p| p.trajectory.iter().enumerate().map(|(frame, &position)| TrackPoint { id: p.id.clone(), frame: frame as u32, position }))
+        .collect();
+    write_atomically(path, |w| write_trajectories_csv(w, &rows)).map_err(|error| TrackError::Io { path: path.to_owned(), error })
 }
 
 /// Writes the report as pretty JSON, atomically.
