@@ -12,6 +12,8 @@
 //! - [`splat`]: differentiable Gaussian splatting (forward, backward, CPU reference).
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
 //! - [`track`]: surface points bound on frame 0 and followed through a mesh sequence.
+//! - [`loss`]: the fused image loss (L1 + SSIM) with its gradient.
+//! - [`optim`]: fused Adam with moments that survive Gaussian-set changes, schedules.
 //! - [`eval`]: image, surface and tracking metrics.
 //! - [`synth`]: synthetic dynamic scenes with ground truth (procedural body, glTF skinning).
 
@@ -20,7 +22,9 @@ pub mod camera;
 pub mod eval;
 pub mod gpu;
 pub mod io;
+pub mod loss;
 pub mod mesh;
+pub mod optim;
 pub mod rng;
 pub mod sort;
 pub mod splat;
