@@ -11,6 +11,7 @@
 //! - [`io`]: file formats (PLY) and atomic writes.
 //! - [`splat`]: differentiable Gaussian splatting (forward, backward, CPU reference).
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
+//! - [`train`]: the training loops (single-frame fit with the 3DGS baseline densification).
 //! - [`track`]: surface points bound on frame 0 and followed through a mesh sequence.
 //! - [`loss`]: the fused image loss (L1 + SSIM) with its gradient.
 //! - [`optim`]: fused Adam with moments that survive Gaussian-set changes, schedules.
@@ -29,6 +30,7 @@ pub mod rng;
 pub mod sort;
 pub mod splat;
 pub mod track;
+pub mod train;
 pub mod synth;
 
 /// SPIR-V of every compute shader, compiled from `shaders/` by `build.rs`.

@@ -1,14 +1,17 @@
 //! Benchmarks that report speed against a bound measured in the same run: the GPU copy
 //! bandwidth (a compute copy kernel and the transfer engine) and the CPU's `sort_unstable`;
-//! and the splatting renderer's forward and backward per view, pass by pass.
+//! the splatting renderer's forward and backward per view, pass by pass; and full training
+//! iterations against splatting alone.
 
 mod copy;
 mod sort;
 mod splat;
+mod train;
 
 pub use copy::{CopyBandwidth, CopyProbe};
 pub use sort::{bench_sort, SortBenchReport};
 pub use splat::{bench_splat, BenchWork, random_scene, ring_cameras, SplatBenchConfig, SplatBenchReport};
+pub use train::{bench_train, TrainBenchConfig, TrainBenchReport};
 
 /// Median of a sample; 0 for an empty one (nothing was timed).
 fn median(mut samples: Vec<f64>) -> f64 {
