@@ -120,8 +120,9 @@ impl Adam {
             }
         }
         let bindings: Vec<_> = params.bindings().into_iter().chain(grads.bindings()).chain(self.moments.iter().map(|m| m.binding())).collect();
-        let floats: usize = row_widths(self.sh_degree).iter().sum::<usize>() * self.gaussians;
-        rec.dispatch_1d(&self.step, &bindings, adam, floats.div_ceil(WORKGROUP as usize) as u64)
+        // One invocation per four floats of each buffer (see adam_step.comp).
+        let chunks: usize = row_widths(self.sh_degree).iter().map(|w| (w * self.gaussians).div_ceil(4)).sum();
+        rec.dispatch_1d(&self.step, &bindings, adam, chunks.div_ceil(WORKGROUP as usize) as u64)
     }
 
     /// Carries the moments to a new Gaussian set: new row `i` takes the moments of old row
