@@ -50,6 +50,7 @@ fn spread_axes(trajectories: &[Vec<DVec3>]) -> (usize, usize) {
 mod tests {
     use super::*;
     use crate::io::plot::{palette, FRAME};
+    use image::Rgb;
 
     #[test]
     fn draws_each_curve_in_its_colour_and_survives_degenerate_input() {

@@ -9,6 +9,7 @@ pub mod init;
 mod job;
 pub mod report;
 mod step;
+pub mod temporal;
 mod views;
 
 pub use config::{ConfigError, FitConfig};
