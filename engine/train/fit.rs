@@ -64,7 +64,7 @@ pub fn fit(
     let mut order: Vec<usize> = Vec::new();
     let mut passes: BTreeMap<String, f64> = BTreeMap::new();
     let (mut train_s, mut loss_log, mut curve, mut densify_log) = (0.0, Vec::new(), Vec::new(), Vec::new());
-    let (mut last_loss, mut stopped, mut interval_start, mut done) = (None, None, 1, 0);
+    let (mut last_loss, mut stopped, mut interval_start, mut done, mut truncated_steps) = (None, None, 1, 0, 0);
     for it in 1..=config.iterations {
         let step_start = Instant::now();
         if order.is_empty() {
@@ -73,7 +73,9 @@ pub fn fit(
         let view = order.pop().unwrap_or(0);
         settings.sh_degree = config.sh_degree.min((it - 1) / config.sh_increase_every);
         let adam = AdamParams::new(&learning_rates(config, extent, it), it, trainer.gaussians(), trainer.sh_degree());
-        add_times(&mut passes, &trainer.step(view, &settings, lambda, &adam)?);
+        let (times, complete) = trainer.step(view, &settings, lambda, &adam)?;
+        add_times(&mut passes, &times);
+        truncated_steps += (!complete) as u32;
         train_s += step_start.elapsed().as_secs_f64();
         done = it;
 
@@ -123,6 +125,7 @@ pub fn fit(
         loss: loss_log,
         curve,
         densify: densify_log,
+        truncated_steps,
         stopped,
     };
     let names = eval.iter().map(|v| v.name.clone());
