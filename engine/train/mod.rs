@@ -7,6 +7,7 @@ pub mod densify;
 mod fit;
 pub mod init;
 mod job;
+pub mod output;
 pub mod report;
 mod step;
 pub mod temporal;
