@@ -14,11 +14,14 @@
 //! - [`track`]: surface points bound on frame 0 and followed through a mesh sequence.
 //! - [`eval`]: image, surface and tracking metrics.
 //! - [`synth`]: synthetic dynamic scenes with ground truth (procedural body, glTF skinning).
+//! - [`init`]: the first mesh of a frame from its masks (visual hull, marching tetrahedra,
+//!   vertex colours), when no mesh is given.
 
 pub mod bench;
 pub mod camera;
 pub mod eval;
 pub mod gpu;
+pub mod init;
 pub mod io;
 pub mod mesh;
 pub mod rng;

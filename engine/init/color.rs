@@ -1,0 +1,121 @@
+//! Vertex colours from the views that see each vertex. A view sees a vertex when the vertex
+//! faces it, projects inside its image onto a fully covered mask pixel, and the first surface
+//! hit along the camera's ray to it (BVH ray cast: a depth test) lies within `tolerance` of
+//! it. The colour is the mean of those views' pixels weighted by the cosine between the
+//! normal and the view direction; vertices no view sees take the mean of coloured neighbours.
+
+use super::normals::vertex_normals;
+use crate::camera::Camera;
+use crate::io::image::Image;
+use crate::track::{SurfaceBvh, TrackError};
+use glam::DVec3;
+
+/// A view to colour from: its camera, image, and mask (one value per pixel).
+#[derive(Clone, Copy, Debug)]
+pub struct ColorSource<'a> {
+    pub camera: &'a Camera,
+    pub image: &'a Image,
+    pub mask: &'a [f32],
+}
+
+/// 8-bit colours per vertex and how many vertices no view saw (coloured from neighbours).
+pub fn vertex_colors(positions: &[[f32; 3]], faces: &[[u32; 3]], views: &[ColorSource], tolerance: f64) -> Result<(Vec<[u8; 3]>, usize), TrackError> {
+    let bvh = SurfaceBvh::build(positions, faces)?;
+    let normals = vertex_normals(positions, faces);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let chunk = positions.len().div_ceil(threads).max(1);
+    let mut seen: Vec<Option<DVec3>> = vec![None; positions.len()];
+    std::thread::scope(|scope| {
+        for (t, out) in seen.chunks_mut(chunk).enumerate() {
+            let (bvh, normals) = (&bvh, &normals);
+            scope.spawn(move || {
+                for (i, o) in out.iter_mut().enumerate() {
+                    let v = t * chunk + i;
+                    *o = observed_color(bvh, DVec3::from(positions[v].map(f64::from)), normals[v], views, tolerance);
+                }
+            });
+        }
+    });
+    let unseen = seen.iter().filter(|c| c.is_none()).count();
+    let filled = fill_from_neighbours(seen, faces);
+    Ok((filled.iter().map(|c| c.to_array().map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)).collect(), unseen))
+}
+
+/// Weighted mean colour of `p` over the views that see it, `None` when none does.
+fn observed_color(bvh: &SurfaceBvh, p: DVec3, normal: DVec3, views: &[ColorSource], tolerance: f64) -> Option<DVec3> {
+    let (mut sum, mut weight) = (DVec3::ZERO, 0.0);
+    for view in views {
+        let origin = view.camera.center();
+        let to_camera = origin - p;
+        let cosine = normal.dot(to_camera.normalize_or_zero());
+        if !(cosine > 0.0) {
+            continue;
+        }
+        let Some(uv) = view.camera.project(p) else { continue };
+        let (w, h) = (view.image.width, view.image.height);
+        if !(uv.x >= 0.0 && uv.y >= 0.0 && uv.x < w as f64 && uv.y < h as f64) {
+            continue;
+        }
+        let (x, y) = (uv.x as u32, uv.y as u32);
+        if !(view.mask[(y * w + x) as usize] >= 0.99) {
+            continue;
+        }
+        // Depth test: the first hit from the camera towards p must be p itself.
+        let hit = bvh.ray_cast(origin, -to_camera);
+        if hit.is_some_and(|h| (1.0 - h.distance) * to_camera.length() > tolerance) {
+            continue;
+        }
+        let at = |c: u8| view.image.at(x, y, c) as f64;
+        let color = if view.image.channels >= 3 { DVec3::new(at(0), at(1), at(2)) } else { DVec3::splat(at(0)) };
+        sum += cosine * color;
+        weight += cosine;
+    }
+    (weight > 0.0).then(|| sum / weight)
+}
+
+/// Gives every `None` the mean of its coloured neighbours, ring by ring; what no coloured
+/// vertex reaches (a component nobody saw) becomes mid grey.
+fn fill_from_neighbours(mut colors: Vec<Option<DVec3>>, faces: &[[u32; 3]]) -> Vec<DVec3> {
+    loop {
+        let mut sums = vec![(DVec3::ZERO, 0u32); colors.len()];
+        for f in faces {
+            for k in 0..3 {
+                let (a, b) = (f[k] as usize, f[(k + 1) % 3] as usize);
+                for (to, from) in [(a, b), (b, a)] {
+                    if let (None, Some(c)) = (colors[to], colors[from]) {
+                        sums[to].0 += c;
+                        sums[to].1 += 1;
+                    }
+                }
+            }
+        }
+        let mut changed = false;
+        for (c, (sum, n)) in colors.iter_mut().zip(sums) {
+            if c.is_none() && n > 0 {
+                *c = Some(sum / n as f64);
+                changed = true;
+            }
+        }
+        if !changed {
+            return colors.into_iter().map(|c| c.unwrap_or(DVec3::splat(0.5))).collect();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn neighbours_fill_unseen_vertices() {
+        // A strip of triangles 0-1-2-3-4: vertex 0 red, the others unseen.
+        let faces = [[0, 1, 2], [1, 3, 2], [2, 3, 4]];
+        let mut colors = vec![None; 6];
+        colors[0] = Some(DVec3::X);
+        let filled = fill_from_neighbours(colors, &faces);
+        for c in &filled[..5] {
+            assert_eq!(*c, DVec3::X);
+        }
+        assert_eq!(filled[5], DVec3::splat(0.5), "vertex 5 is in no face");
+    }
+}
