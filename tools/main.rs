@@ -10,6 +10,7 @@ use std::sync::Arc;
 
 mod dataset;
 mod eval;
+mod init_mesh;
 mod synth;
 use tagsplat::bench::{bench_sort, bench_splat, SortBenchReport, SplatBenchConfig, SplatBenchReport};
 use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
@@ -48,6 +49,8 @@ enum Command {
     Track(track::TrackArgs),
     /// Convert a mesh sequence between a folder of frames, OBJ + PC2 and GLB.
     Convert(track::ConvertArgs),
+    /// Build a frame's first mesh from its masks (visual hull), coloured from its images.
+    InitMesh(init_mesh::InitMeshArgs),
 }
 
 #[derive(Subcommand)]
@@ -106,6 +109,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Devices => devices(options.device.as_deref()),
         Command::Track(args) => track::track(args),
         Command::Convert(args) => track::convert(args),
+        Command::InitMesh(args) => init_mesh::run(args),
         Command::Bench(Bench::Track(args)) => track::bench(args),
         Command::Render(args) => render::render(&context(&options)?, &args),
         Command::Dataset(command) => dataset::run(command),

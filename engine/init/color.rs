@@ -48,7 +48,7 @@ fn observed_color(bvh: &SurfaceBvh, p: DVec3, normal: DVec3, views: &[ColorSourc
         let origin = view.camera.center();
         let to_camera = origin - p;
         let cosine = normal.dot(to_camera.normalize_or_zero());
-        if !(cosine > 0.0) {
+        if cosine.is_nan() || cosine <= 0.0 {
             continue;
         }
         let Some(uv) = view.camera.project(p) else { continue };
@@ -57,7 +57,8 @@ fn observed_color(bvh: &SurfaceBvh, p: DVec3, normal: DVec3, views: &[ColorSourc
             continue;
         }
         let (x, y) = (uv.x as u32, uv.y as u32);
-        if !(view.mask[(y * w + x) as usize] >= 0.99) {
+        // Only fully covered pixels: outline pixels mix in the background.
+        if view.mask[(y * w + x) as usize] < 0.99 {
             continue;
         }
         // Depth test: the first hit from the camera towards p must be p itself.

@@ -162,9 +162,9 @@ mod tests {
             let feature: Vec<bool> = (0..w * h).map(|_| rng.next_f64() < density).collect();
             let nearest = nearest_feature(&feature, w, h);
             let dist = |p: usize, q: usize| ((q % w) as f64 - (p % w) as f64).hypot((q / w) as f64 - (p / w) as f64);
-            for p in 0..w * h {
+            for (p, found) in nearest.iter().enumerate() {
                 let brute = (0..w * h).filter(|&q| feature[q]).map(|q| dist(p, q)).fold(f64::INFINITY, f64::min);
-                match nearest[p] {
+                match *found {
                     Some((d, q)) => {
                         assert!(feature[q] && (d - brute).abs() < 1e-9 && (dist(p, q) - d).abs() < 1e-9, "pixel {p}: {d} vs {brute}");
                     }
@@ -193,7 +193,7 @@ mod tests {
     fn anti_aliased_coverage_refines_the_outline() {
         // A vertical edge at x = 10.3: pixel 10 is 30 % covered.
         let (w, h) = (20, 4);
-        let mask: Vec<f32> = (0..w * h).map(|p| ((10.3 - (p % w) as f32).clamp(0.0, 1.0))).collect();
+        let mask: Vec<f32> = (0..w * h).map(|p| (10.3 - (p % w) as f32).clamp(0.0, 1.0)).collect();
         let sd = SignedDistance::from_mask(&mask, w, h);
         // Zero crossing between the centres of pixels 9 (0.5) and 10 (−0.2): at 10.3.
         let (a, b) = (sd.sample(9.5, 2.0), sd.sample(10.5, 2.0));

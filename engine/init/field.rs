@@ -21,7 +21,7 @@ impl ViewField {
     #[inline]
     pub fn value(&self, p: DVec3, behind: f64) -> f64 {
         let c = self.camera.to_camera(p);
-        if !(c.z > 0.0) {
+        if c.z.is_nan() || c.z <= 0.0 {
             return behind;
         }
         let (u, v) = (self.camera.fx * c.x / c.z + self.camera.cx, self.camera.fy * c.y / c.z + self.camera.cy);

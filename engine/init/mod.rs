@@ -138,7 +138,7 @@ pub fn init_mesh(dataset: &Dataset, frame: usize, options: &InitOptions) -> Resu
     for (k, v) in f.views.iter().enumerate().filter(|(_, v)| dataset.train.contains(&v.camera)) {
         views.push(HullView {
             name: dataset.camera_names[v.camera].clone(),
-            camera: dataset.cameras[v.camera].clone(),
+            camera: dataset.cameras[v.camera],
             mask: dataset.mask(frame, k)?,
             image: if options.colors { Some(dataset.image(frame, k)?) } else { None },
         });
@@ -158,7 +158,7 @@ pub fn init_mesh_from_views(views: &[HullView], options: &InitOptions) -> Result
             let (w, h) = (v.camera.width as usize, v.camera.height as usize);
             let mut mask = v.mask.clone();
             mask_hole_pixels += holes::fill_small_holes(&mut mask, w, h, options.mask_hole_fraction);
-            ViewField { camera: v.camera.clone(), distance: distance::SignedDistance::from_mask(&mask, w, h) }
+            ViewField { camera: v.camera, distance: distance::SignedDistance::from_mask(&mask, w, h) }
         })
         .collect();
     let empty: Vec<&HullView> = views.iter().filter(|v| !v.mask.iter().any(|&m| m > 0.5)).collect();
