@@ -13,6 +13,7 @@
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
 //! - [`track`]: surface points bound on frame 0 and followed through a mesh sequence.
 //! - [`eval`]: image, surface and tracking metrics.
+//! - [`topology`]: the manifold mesh the Gaussians live on, its local operations and remap.
 //! - [`synth`]: synthetic dynamic scenes with ground truth (procedural body, glTF skinning).
 //! - [`init`]: the first mesh of a frame from its masks (visual hull, marching tetrahedra,
 //!   vertex colours), when no mesh is given.
@@ -27,6 +28,7 @@ pub mod mesh;
 pub mod rng;
 pub mod sort;
 pub mod splat;
+pub mod topology;
 pub mod track;
 pub mod synth;
 

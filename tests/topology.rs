@@ -1,0 +1,335 @@
+//! The manifold mesh under every operation: invariants after each one on a sphere (genus 0), a
+//! torus (genus 1) and an open disk; exact count changes; randomized sequences; refusals;
+//! construction errors; the remap keeping rows by stored ids.
+
+mod common;
+
+use tagsplat::mesh::TriMesh;
+use tagsplat::rng::SplitMix64;
+use tagsplat::synth::icosphere::icosphere;
+use tagsplat::topology::shapes::{grid, torus};
+use tagsplat::topology::{import, remap_rows, CollapseRefusal, FlipRefusal, ManifoldMesh, TopologyError, NEW_ROW, NONE};
+use std::path::Path;
+
+fn sphere() -> ManifoldMesh {
+    let (positions, faces) = icosphere(2);
+    ManifoldMesh::new(positions.iter().map(|p| p.map(|c| c as f32)).collect(), faces).unwrap()
+}
+
+fn shapes() -> Vec<(&'static str, ManifoldMesh, i64)> {
+    let (tp, tf) = torus(16, 9);
+    let (gp, gf) = grid(8, 7);
+    vec![("sphere", sphere(), 2), ("torus", ManifoldMesh::new(tp, tf).unwrap(), 0), ("disk", ManifoldMesh::new(gp, gf).unwrap(), 1)]
+}
+
+/// (vertices, edges, faces)
+fn counts(m: &ManifoldMesh) -> [i64; 3] {
+    [m.vertex_count() as i64, m.edge_count() as i64, m.face_count() as i64]
+}
+
+fn assert_sound(m: &ManifoldMesh, euler: i64, what: &str) {
+    if let Some(problem) = m.problem() {
+        panic!("{what}: {problem}");
+    }
+    assert_eq!(m.euler_characteristic(), euler, "{what}: Euler characteristic changed");
+}
+
+fn midpoint(m: &ManifoldMesh, h: u32) -> [f32; 3] {
+    let (a, b) = (m.positions[m.origin(h) as usize], m.positions[m.dest(h) as usize]);
+    [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])]
+}
+
+fn centroid(m: &ManifoldMesh, f: u32) -> [f32; 3] {
+    let c = m.face(f).map(|v| m.positions[v as usize]);
+    [0, 1, 2].map(|k| (c[0][k] + c[1][k] + c[2][k]) / 3.0)
+}
+
+fn interior_edge(m: &ManifoldMesh) -> u32 {
+    m.edges().find(|&h| !m.is_boundary_edge(h) && !m.is_boundary_vertex(m.origin(h)) && !m.is_boundary_vertex(m.dest(h))).unwrap()
+}
+
+#[test]
+fn reference_shapes_are_manifold_with_their_euler_characteristic() {
+    for (name, m, euler) in shapes() {
+        assert_sound(&m, euler, name);
+        let boundary = m.vertices().filter(|&v| m.is_boundary_vertex(v)).count();
+        assert_eq!(boundary, if name == "disk" { 2 * (8 + 7) } else { 0 }, "{name}");
+        // Every vertex's 1-ring is the set of its edge partners.
+        for v in m.vertices() {
+            let mut ring = m.ring(v);
+            let mut partners: Vec<u32> = m.edges().filter_map(|h| if m.origin(h) == v { Some(m.dest(h)) } else if m.dest(h) == v { Some(m.origin(h)) } else { None }).collect();
+            ring.sort_unstable();
+            partners.sort_unstable();
+            assert_eq!(ring, partners, "{name}: ring of {v}");
+        }
+    }
+}
+
+#[test]
+fn face_split_adds_one_vertex_three_edges_two_faces() {
+    for (name, mut m, euler) in shapes() {
+        let before = counts(&m);
+        let f = m.faces().nth(5).unwrap();
+        let old = m.face(f);
+        let v = m.split_face(f, centroid(&m, f)).unwrap();
+        assert_eq!(counts(&m), [before[0] + 1, before[1] + 3, before[2] + 2], "{name}");
+        let mut ring = m.ring(v);
+        ring.sort_unstable();
+        let mut corners = old.to_vec();
+        corners.sort_unstable();
+        assert_eq!(ring, corners, "{name}: the new vertex joins the old corners");
+        assert_sound(&m, euler, name);
+    }
+}
+
+#[test]
+fn edge_split_adds_one_vertex_three_edges_two_faces_or_two_one_on_the_boundary() {
+    for (name, mut m, euler) in shapes() {
+        let before = counts(&m);
+        let h = interior_edge(&m);
+        let (a, b) = (m.origin(h), m.dest(h));
+        let v = m.split_edge(h, midpoint(&m, h)).unwrap();
+        assert_eq!(counts(&m), [before[0] + 1, before[1] + 3, before[2] + 2], "{name}");
+        assert!(m.find_edge(a, b).is_none() && m.find_edge(a, v).is_some() && m.find_edge(v, b).is_some(), "{name}");
+        assert_eq!(m.valence(v), 4, "{name}");
+        assert_sound(&m, euler, name);
+        let boundary = m.edges().find(|&h| m.is_boundary_edge(h));
+        if let Some(h) = boundary {
+            let before = counts(&m);
+            let v = m.split_edge(h, midpoint(&m, h)).unwrap();
+            assert_eq!(counts(&m), [before[0] + 1, before[1] + 2, before[2] + 1], "{name} boundary");
+            assert!(m.is_boundary_vertex(v) && m.valence(v) == 3, "{name} boundary");
+            assert_sound(&m, euler, name);
+        }
+    }
+}
+
+#[test]
+fn edge_flip_keeps_counts_and_swaps_the_diagonal() {
+    for (name, mut m, euler) in shapes() {
+        let before = counts(&m);
+        let h = m.edges().find(|&h| m.can_flip(h).is_ok()).unwrap();
+        let (a, b) = (m.origin(h), m.dest(h));
+        let (c, d) = (m.origin(tagsplat::topology::prev(h)), m.origin(tagsplat::topology::prev(m.twin(h))));
+        m.flip_edge(h).unwrap();
+        assert_eq!(counts(&m), before, "{name}");
+        assert!(m.find_edge(a, b).is_none() && m.find_edge(c, d).is_some(), "{name}");
+        assert_sound(&m, euler, name);
+        let boundary = m.edges().find(|&h| m.is_boundary_edge(h));
+        if let Some(h) = boundary {
+            assert_eq!(m.flip_edge(h), Err(FlipRefusal::Boundary));
+        }
+    }
+}
+
+#[test]
+fn edge_collapse_removes_one_vertex_three_edges_two_faces_or_two_one_on_the_boundary() {
+    for (name, mut m, euler) in shapes() {
+        let before = counts(&m);
+        let h = interior_edge(&m);
+        let (a, b) = (m.origin(h), m.dest(h));
+        let mut expected_ring: Vec<u32> = m.ring(a).into_iter().chain(m.ring(b)).filter(|&v| v != a && v != b).collect();
+        expected_ring.sort_unstable();
+        expected_ring.dedup();
+        assert_eq!(m.collapse_edge(h, midpoint(&m, h)), Ok(b), "{name}");
+        assert_eq!(counts(&m), [before[0] - 1, before[1] - 3, before[2] - 2], "{name}");
+        assert!(!m.is_vertex_live(a), "{name}");
+        let mut ring = m.ring(b);
+        ring.sort_unstable();
+        assert_eq!(ring, expected_ring, "{name}: the kept vertex inherits both rings");
+        assert_sound(&m, euler, name);
+        let boundary = m.edges().find(|&h| m.is_boundary_edge(h) && m.can_collapse(h, midpoint(&m, h)).is_ok());
+        if let Some(h) = boundary {
+            let before = counts(&m);
+            m.collapse_edge(h, midpoint(&m, h)).unwrap();
+            assert_eq!(counts(&m), [before[0] - 1, before[1] - 2, before[2] - 1], "{name} boundary");
+            assert_sound(&m, euler, name);
+        }
+    }
+}
+
+#[test]
+fn tetrahedron_edges_are_refused() {
+    let positions = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let faces = vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
+    let m = ManifoldMesh::new(positions, faces).unwrap();
+    assert_sound(&m, 2, "tetrahedron");
+    for h in m.edges() {
+        assert_eq!(m.can_collapse(h, midpoint(&m, h)), Err(CollapseRefusal::TooFewVertices));
+    }
+}
+
+#[test]
+fn collapse_that_would_pinch_two_sheets_is_refused() {
+    // A degree-3 vertex inside a face of the sphere: collapsing an edge of that face would glue
+    // the two remaining faces of the new vertex back to back.
+    let mut m = sphere();
+    let f = m.faces().next().unwrap();
+    m.split_face(f, centroid(&m, f)).unwrap();
+    let [a, b, _] = m.face(f);
+    let h = m.find_edge(a, b).unwrap();
+    assert_eq!(m.can_collapse(h, midpoint(&m, h)), Err(CollapseRefusal::LinkCondition));
+    let t = m.twin(h);
+    assert_eq!(m.can_collapse(t, midpoint(&m, t)), Err(CollapseRefusal::LinkCondition));
+}
+
+#[test]
+fn boundary_collapses_that_would_pinch_or_dangle_are_refused() {
+    // A 3×1 strip: the interior diagonal of each cell joins two boundary vertices.
+    let (positions, faces) = grid(3, 1);
+    let m = ManifoldMesh::new(positions, faces).unwrap();
+    let diagonal = m.edges().find(|&h| !m.is_boundary_edge(h)).unwrap();
+    assert_eq!(m.can_collapse(diagonal, midpoint(&m, diagonal)), Err(CollapseRefusal::BoundaryPinch));
+    // An ear's opposite edge joins two boundary vertices too.
+    let (positions, faces) = grid(3, 3);
+    let m = ManifoldMesh::new(positions, faces).unwrap();
+    let corner = 3 * 4;
+    assert_eq!(m.outgoing(corner).count(), 1);
+    let opposite = tagsplat::topology::next(m.outgoing(corner).next().unwrap());
+    assert_eq!(m.can_collapse(opposite, midpoint(&m, opposite)), Err(CollapseRefusal::BoundaryPinch));
+    // A lone triangle beside a grid: collapsing any of its edges would strand its third vertex.
+    let (mut positions, mut faces) = grid(2, 2);
+    let base = positions.len() as u32;
+    positions.extend([[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]]);
+    faces.push([base, base + 1, base + 2]);
+    let m = ManifoldMesh::new(positions, faces).unwrap();
+    let lone = m.outgoing(base).next().unwrap();
+    assert_eq!(m.can_collapse(lone, midpoint(&m, lone)), Err(CollapseRefusal::DanglingVertex));
+}
+
+#[test]
+fn collapse_that_would_flip_a_face_is_refused() {
+    let (positions, faces) = grid(4, 4);
+    let m = ManifoldMesh::new(positions, faces).unwrap();
+    let h = interior_edge(&m);
+    // Moving the kept vertex far past the opposite side folds the fan over.
+    let (a, b) = (m.positions[m.origin(h) as usize], m.positions[m.dest(h) as usize]);
+    let far = [0, 1, 2].map(|k| b[k] + 10.0 * (b[k] - a[k]));
+    assert!(matches!(m.can_collapse(h, far), Err(CollapseRefusal::FlipsNormal { .. } | CollapseRefusal::Degenerate { .. })));
+    assert_eq!(m.can_collapse(h, midpoint(&m, h)), Ok(()));
+}
+
+/// Random splits, flips and collapses with a compaction every 97 steps, checking every
+/// invariant after every operation and the remap against ids carried per vertex row.
+#[test]
+fn random_operation_sequences_keep_every_invariant() {
+    for (seed, (name, mut m, euler)) in shapes().into_iter().enumerate() {
+        let mut rng = SplitMix64::new(0x7090 + seed as u64);
+        // ids[row] for every mesh row; `synced` holds the ids at the last compaction.
+        let mut ids: Vec<u32> = (0..m.vertex_rows() as u32).collect();
+        let mut synced = ids.clone();
+        let mut next_id = ids.len() as u32;
+        let mut done = [0usize; 4];
+        for step in 0..3000 {
+            let pick = |rng: &mut SplitMix64, n: usize| (rng.next_u64() % n as u64) as usize;
+            let before = counts(&m);
+            let op = pick(&mut rng, 4);
+            let faces: Vec<u32> = m.faces().collect();
+            let f = faces[pick(&mut rng, faces.len())];
+            let h = 3 * f + pick(&mut rng, 3) as u32;
+            let boundary = m.is_boundary_edge(h);
+            let applied = match op {
+                0 => m.split_face(f, centroid(&m, f)).is_ok_and(|_| {
+                    assert_eq!(counts(&m), [before[0] + 1, before[1] + 3, before[2] + 2]);
+                    true
+                }),
+                1 => m.split_edge(h, midpoint(&m, h)).is_ok_and(|_| {
+                    let d = if boundary { [1, 2, 1] } else { [1, 3, 2] };
+                    assert_eq!(counts(&m), [before[0] + d[0], before[1] + d[1], before[2] + d[2]]);
+                    true
+                }),
+                2 => m.flip_edge(h).is_ok() && counts(&m) == before,
+                _ => match m.collapse_edge(h, midpoint(&m, h)) {
+                    Ok(_) => {
+                        let d = if boundary { [1, 2, 1] } else { [1, 3, 2] };
+                        assert_eq!(counts(&m), [before[0] - d[0], before[1] - d[1], before[2] - d[2]]);
+                        true
+                    }
+                    Err(_) => false,
+                },
+            };
+            done[op] += applied as usize;
+            while ids.len() < m.vertex_rows() {
+                ids.push(next_id);
+                next_id += 1;
+            }
+            assert_sound(&m, euler, &format!("{name} step {step} op {op}"));
+            if step % 97 == 96 {
+                let live: Vec<u32> = m.vertices().map(|v| ids[v as usize]).collect();
+                let old_of_new = m.compact();
+                let remapped = remap_rows(&synced, &old_of_new, |_| NONE);
+                for (row, (&got, &want)) in remapped.iter().zip(&live).enumerate() {
+                    let new = old_of_new[row] == NEW_ROW;
+                    assert!(if new { got == NONE && want >= synced.len() as u32 } else { got == want }, "{name}: row {row}");
+                }
+                assert_sound(&m, euler, &format!("{name} compaction at step {step}"));
+                ids = live;
+                synced = ids.clone();
+            }
+        }
+        assert!(done.iter().all(|&n| n > 100), "{name}: too few operations applied: {done:?}");
+    }
+}
+
+#[test]
+fn construction_errors_name_the_first_problem() {
+    let quad = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.5, 0.5, 1.0]];
+    // Edge 0–1 with three faces.
+    let fin = vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]];
+    match ManifoldMesh::new(quad.clone(), fin) {
+        Err(TopologyError::NonManifoldEdge { a: 0, b: 1, .. }) => {}
+        other => panic!("expected edge 0–1, got {other:?}"),
+    }
+    // Two fans meeting at vertex 0 only (a bow tie).
+    let bow = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [-1.0, -1.0, 0.0]];
+    match ManifoldMesh::new(bow, vec![[0, 1, 2], [0, 3, 4]]) {
+        Err(TopologyError::PinchedVertex { vertex: 0 }) => {}
+        other => panic!("expected vertex 0, got {other:?}"),
+    }
+    assert!(matches!(ManifoldMesh::new(quad.clone(), vec![[0, 1, 2]]), Err(TopologyError::UnusedVertex { vertex: 3 })));
+    let mut nan = quad.clone();
+    nan[2][1] = f32::NAN;
+    assert!(matches!(ManifoldMesh::new(nan, vec![[0, 1, 2]]), Err(TopologyError::NonFinite { vertex: 2 })));
+    assert!(matches!(ManifoldMesh::new(quad.clone(), vec![[0, 1, 1]]), Err(TopologyError::DegenerateFace { face: 0, .. })));
+    assert!(matches!(ManifoldMesh::new(quad, vec![[0, 1, 9]]), Err(TopologyError::IndexOutOfRange { face: 0, .. })));
+}
+
+#[test]
+fn import_welds_seams_orients_and_names_the_file() {
+    // The icosphere as a triangle soup (every face with its own corners), half the faces
+    // reversed, plus an unused vertex.
+    let (positions, faces) = icosphere(1);
+    let mut soup = TriMesh::default();
+    for (f, face) in faces.iter().enumerate() {
+        let base = soup.positions.len() as u32;
+        soup.positions.extend(face.iter().map(|&v| positions[v as usize].map(|c| c as f32)));
+        soup.faces.push(if f % 2 == 0 { [base, base + 1, base + 2] } else { [base, base + 2, base + 1] });
+    }
+    soup.positions.push([5.0, 5.0, 5.0]);
+    let path = Path::new("soup.ply");
+    let imported = import(&soup, path, true).unwrap();
+    assert_eq!(imported.mesh.vertex_count(), positions.len());
+    assert_eq!(imported.report.welded_vertices, soup.positions.len() - positions.len() - 1);
+    assert_eq!(imported.report.unused_vertices, 1);
+    assert_eq!(imported.report.flipped_faces, faces.len() / 2);
+    assert_sound(&imported.mesh, 2, "imported soup");
+    // Outward: every face normal points away from the centre.
+    for f in imported.mesh.faces() {
+        let [a, b, c] = imported.mesh.face(f).map(|v| glam::Vec3::from(imported.mesh.positions[v as usize]));
+        assert!((b - a).cross(c - a).dot(a + b + c) > 0.0);
+    }
+    // Each mesh row comes from a file row at the same position.
+    for (row, &old) in imported.old_of_new.iter().enumerate() {
+        assert_eq!(imported.mesh.positions[row], soup.positions[old as usize]);
+    }
+    // An open mesh where a closed one is needed, and a NaN, name the file.
+    let (gp, gf) = grid(2, 2);
+    let open = TriMesh { positions: gp, faces: gf, colors: None };
+    let err = import(&open, path, true).unwrap_err().to_string();
+    assert!(err.contains("soup.ply") && err.contains("open"), "{err}");
+    assert!(import(&open, path, false).is_ok());
+    let mut nan = open.clone();
+    nan.positions[3][0] = f32::NAN;
+    let err = import(&nan, path, false).unwrap_err().to_string();
+    assert!(err.contains("soup.ply") && err.contains("vertex 3"), "{err}");
+}
