@@ -16,9 +16,15 @@ pub struct InitMeshArgs {
     /// Output PLY (positions, CCW faces, vertex colours).
     #[arg(long)]
     out: PathBuf,
-    /// Wanted vertex count (default: what a voxel of --voxel-pixels gives).
+    /// Wanted vertex count (overrides --edge-pixels).
     #[arg(long)]
     vertices: Option<usize>,
+    /// Target edge length of the remeshed surface, pixels of the typical view.
+    #[arg(long, default_value_t = InitOptions::default().edge_pixels)]
+    edge_pixels: f64,
+    /// Isotropic remeshing rounds (0: keep the marching-tetrahedra mesh).
+    #[arg(long, default_value_t = InitOptions::default().remesh_rounds)]
+    remesh_rounds: usize,
     /// Views allowed to disagree at a kept point (noisy masks).
     #[arg(long, default_value_t = 0)]
     tolerance: usize,
@@ -43,6 +49,8 @@ pub fn run(a: InitMeshArgs) -> Result<()> {
         voxel_pixels: a.voxel_pixels,
         max_grid_bytes: a.grid_mib.saturating_mul(1 << 20),
         vertices: a.vertices,
+        edge_pixels: a.edge_pixels,
+        remesh_rounds: a.remesh_rounds,
         colors: !a.no_colors,
         ..InitOptions::default()
     };
@@ -55,6 +63,7 @@ pub fn run(a: InitMeshArgs) -> Result<()> {
     }
     println!("wrote {}: {} vertices, {} faces (closed manifold, one component)", a.out.display(), r.vertices, r.faces);
     println!("views {}, pixel {:.4e} scene units, voxel {:.4e} scene units, grid {}×{}×{}", r.views, r.pixel, r.voxel, r.grid[0], r.grid[1], r.grid[2]);
+    println!("remeshed {} → {} vertices at edge length {:.4e} scene units ({} splits, {} collapses, {} flips)", r.extracted_vertices, r.vertices, r.edge_length, r.remesh.splits, r.remesh.collapses, r.remesh.flips);
     println!("mask hole pixels filled {}, cavity samples filled {}, components dropped {}, unseen vertices {}", r.mask_hole_pixels, r.cavity_samples, r.components_dropped, r.unseen_vertices);
     println!("{:.2} s", r.seconds);
     Ok(())

@@ -12,12 +12,11 @@
 //!    Enclosed cavities are filled and the outer layer forced outside ([`extract::close_grid`]),
 //!    then marching tetrahedra ([`extract`]) gives a closed, oriented 2-manifold (CCW from
 //!    outside), of which the largest piece is kept ([`components`]).
-//! 4. Vertex colours come from the views that see each vertex, with a depth test ([`color`]).
-//!
-//! The vertex count follows the grid: with a target count, a first extraction measures the
-//! count at the default voxel and a second one uses the voxel that scales it to the target
-//! (counts go as 1/voxel²). Isotropic remeshing (split, collapse, flip, smoothing) is not
-//! done yet: it waits for the topology module's operations.
+//! 4. Isotropic remeshing ([`remesh`], on the topology module's split / collapse / flip)
+//!    evens the triangles out at a target edge length: `edge_pixels` pixels of the typical
+//!    view, or the length that gives the wanted vertex count on the hull's area (then a
+//!    correction of the length and a few more rounds bring the count close).
+//! 5. Vertex colours come from the views that see each vertex, with a depth test ([`color`]).
 //!
 //! The library entry is [`init_mesh`] (a dataset frame); [`init_mesh_from_views`] takes
 //! cameras, masks and images as plain values.
@@ -30,6 +29,7 @@ pub mod extract;
 pub mod field;
 pub mod holes;
 pub mod normals;
+pub mod remesh;
 
 use crate::camera::Camera;
 use crate::io::dataset::{Dataset, DatasetError};
@@ -52,15 +52,19 @@ pub struct InitOptions {
     pub max_grid_bytes: usize,
     /// Enclosed mask holes up to this fraction of the silhouette's area are filled.
     pub mask_hole_fraction: f64,
-    /// Wanted vertex count; `None` keeps the count the default voxel gives.
+    /// Target edge length of the remeshed surface, pixels of the typical view.
+    pub edge_pixels: f64,
+    /// Wanted vertex count; overrides `edge_pixels`.
     pub vertices: Option<usize>,
+    /// Remeshing rounds; 0 keeps the marching-tetrahedra mesh as it is.
+    pub remesh_rounds: usize,
     /// Colour the vertices from the images.
     pub colors: bool,
 }
 
 impl Default for InitOptions {
     fn default() -> Self {
-        Self { tolerance: 0, voxel_pixels: 2.0, max_grid_bytes: 256 << 20, mask_hole_fraction: 0.005, vertices: None, colors: true }
+        Self { tolerance: 0, voxel_pixels: 2.0, max_grid_bytes: 256 << 20, mask_hole_fraction: 0.005, edge_pixels: 3.0, vertices: None, remesh_rounds: 6, colors: true }
     }
 }
 
@@ -95,8 +99,10 @@ pub enum InitError {
     Options(String),
     #[error("the hull has no surface inside its bounds (every grid sample is on one side)")]
     NoSurface,
-    #[error("colouring: {0}")]
-    Color(#[from] crate::track::TrackError),
+    #[error("colouring or remeshing: {0}")]
+    Surface(#[from] crate::track::TrackError),
+    #[error("the extracted hull is not a manifold (a bug): {0}")]
+    Topology(#[from] crate::topology::TopologyError),
 }
 
 /// What was built, with the figures that explain it.
@@ -114,6 +120,11 @@ pub struct InitReport {
     pub mask_hole_pixels: usize,
     pub cavity_samples: usize,
     pub components_dropped: usize,
+    /// Vertices of the marching-tetrahedra mesh before remeshing.
+    pub extracted_vertices: usize,
+    /// Target edge length of the remeshing, scene units, and what it did.
+    pub edge_length: f64,
+    pub remesh: remesh::RemeshStats,
     pub vertices: usize,
     pub faces: usize,
     /// Vertices no view saw (coloured from their neighbours); 0 without colours.
@@ -176,14 +187,10 @@ pub fn init_mesh_from_views(views: &[HullView], options: &InitOptions) -> Result
     let pixel = typical_pixel(&fields, aabb);
     let field = HullField { views: fields, tolerance: options.tolerance, far: 1e3 * aabb.size().length() };
 
-    let mut surface = extract_surface(&field, aabb, pixel * options.voxel_pixels, options.max_grid_bytes)?;
-    if let Some(target) = options.vertices {
-        // Marching-tetrahedra vertex counts scale as 1 / voxel².
-        let voxel = surface.voxel * (surface.mesh.positions.len() as f64 / target as f64).sqrt();
-        surface = extract_surface(&field, aabb, voxel, options.max_grid_bytes)?;
-    }
-    let Surface { mut mesh, voxel, grid, cavity_samples, components_dropped } = surface;
-
+    let Surface { mesh: hull, voxel, grid, cavity_samples, components_dropped } = extract_surface(&field, aabb, pixel * options.voxel_pixels, options.max_grid_bytes)?;
+    let area = surface_area(&hull);
+    let edge_length = options.vertices.map_or(options.edge_pixels * pixel, |n| remesh::edge_for_vertices(area, n));
+    let (mut mesh, stats) = remeshed(&hull, edge_length, options)?;
     let mut unseen_vertices = 0;
     if options.colors && views.iter().all(|v| v.image.is_some()) {
         let sources: Vec<color::ColorSource> = views.iter().filter_map(|v| Some(color::ColorSource { camera: &v.camera, image: v.image.as_deref()?, mask: &v.mask })).collect();
@@ -201,6 +208,9 @@ pub fn init_mesh_from_views(views: &[HullView], options: &InitOptions) -> Result
         mask_hole_pixels,
         cavity_samples,
         components_dropped,
+        extracted_vertices: hull.positions.len(),
+        edge_length,
+        remesh: stats,
         vertices: mesh.positions.len(),
         faces: mesh.faces.len(),
         unseen_vertices,
@@ -211,8 +221,10 @@ pub fn init_mesh_from_views(views: &[HullView], options: &InitOptions) -> Result
 
 fn check(views: &[HullView], o: &InitOptions) -> Result<(), InitError> {
     let bad = |m: String| Err(InitError::Options(m));
-    if !(o.voxel_pixels > 0.0 && o.voxel_pixels.is_finite()) {
-        return bad(format!("voxel width {} pixels must be positive", o.voxel_pixels));
+    for (value, name) in [(o.voxel_pixels, "voxel width"), (o.edge_pixels, "edge length")] {
+        if !(value > 0.0 && value.is_finite()) {
+            return bad(format!("{name} {value} pixels must be positive"));
+        }
     }
     if !(0.0..1.0).contains(&o.mask_hole_fraction) {
         return bad(format!("mask hole fraction {} must be in [0, 1)", o.mask_hole_fraction));
@@ -285,6 +297,29 @@ fn extract_surface(field: &HullField, aabb: Aabb, voxel: f64, max_bytes: usize) 
     }
     let (positions, faces, components_dropped) = components::largest_component(&positions, &faces);
     Ok(Surface { mesh: TriMesh { positions, faces, colors: None }, voxel: step, grid: grid.dims, cavity_samples, components_dropped })
+}
+
+/// The hull remeshed to `edge_length` (with a wanted count: corrected once by the count it
+/// reached, counts going as 1 / length²), compacted; the hull itself with no rounds.
+fn remeshed(hull: &TriMesh, edge_length: f64, options: &InitOptions) -> Result<(TriMesh, remesh::RemeshStats), InitError> {
+    if options.remesh_rounds == 0 {
+        return Ok((hull.clone(), remesh::RemeshStats::default()));
+    }
+    let reference = crate::track::SurfaceBvh::build(&hull.positions, &hull.faces)?;
+    let mut mesh = crate::topology::ManifoldMesh::new(hull.positions.clone(), hull.faces.clone())?;
+    let mut stats = remesh::remesh(&mut mesh, &reference, edge_length, options.remesh_rounds);
+    if let Some(n) = options.vertices {
+        let corrected = edge_length * (mesh.vertex_count() as f64 / n as f64).sqrt();
+        let more = remesh::remesh(&mut mesh, &reference, corrected, options.remesh_rounds.div_ceil(2));
+        stats = remesh::RemeshStats { splits: stats.splits + more.splits, collapses: stats.collapses + more.collapses, flips: stats.flips + more.flips };
+    }
+    mesh.compact();
+    Ok((TriMesh { faces: mesh.live_faces(), positions: mesh.positions, colors: None }, stats))
+}
+
+fn surface_area(mesh: &TriMesh) -> f64 {
+    let p = |i: u32| DVec3::from(mesh.positions[i as usize].map(f64::from));
+    mesh.faces.iter().map(|f| 0.5 * (p(f[1]) - p(f[0])).cross(p(f[2]) - p(f[0])).length()).sum()
 }
 
 /// Mean length of the faces' edges (each interior edge counted twice; fine for a mean).
