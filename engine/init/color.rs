@@ -58,7 +58,8 @@ fn observed_color(bvh: &SurfaceBvh, p: DVec3, normal: DVec3, views: &[ColorSourc
         }
         let (x, y) = (uv.x as u32, uv.y as u32);
         // Only fully covered pixels: outline pixels mix in the background.
-        if view.mask[(y * w + x) as usize] < 0.99 {
+        let m = view.mask[(y * w + x) as usize];
+        if m.is_nan() || m < 0.99 {
             continue;
         }
         // Depth test: the first hit from the camera towards p must be p itself.

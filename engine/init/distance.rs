@@ -13,8 +13,10 @@ pub struct SignedDistance {
 }
 
 impl SignedDistance {
-    /// From a mask in [0, 1] (> 0.5 is foreground), `width × height`, row-major.
+    /// From a mask in [0, 1] (> 0.5 is foreground), `width × height`, row-major. Non-finite
+    /// values count as background.
     pub fn from_mask(mask: &[f32], width: usize, height: usize) -> Self {
+        let mask: Vec<f32> = mask.iter().map(|&m| if m.is_finite() { m } else { 0.0 }).collect();
         let inside: Vec<bool> = mask.iter().map(|&m| m > 0.5).collect();
         let to_outside = nearest_feature(&inside.iter().map(|&i| !i).collect::<Vec<_>>(), width, height);
         let to_inside = nearest_feature(&inside, width, height);
@@ -202,5 +204,10 @@ mod tests {
         // Empty and full masks: no outline, every value one sign.
         assert!(SignedDistance::from_mask(&[0.0; 16], 4, 4).values.iter().all(|&v| v < 0.0));
         assert!(SignedDistance::from_mask(&[1.0; 16], 4, 4).values.iter().all(|&v| v > 0.0));
+        let mut nan = [1.0f32; 16];
+        nan[5] = f32::NAN;
+        nan[6] = f32::INFINITY;
+        let sd = SignedDistance::from_mask(&nan, 4, 4);
+        assert!(sd.values.iter().all(|v| v.is_finite()) && sd.values[5] < 0.0 && sd.values[6] < 0.0);
     }
 }
