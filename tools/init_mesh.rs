@@ -65,6 +65,7 @@ pub fn run(a: InitMeshArgs) -> Result<()> {
     println!("views {}, pixel {:.4e} scene units, voxel {:.4e} scene units, grid {}×{}×{}", r.views, r.pixel, r.voxel, r.grid[0], r.grid[1], r.grid[2]);
     println!("remeshed {} → {} vertices at edge length {:.4e} scene units ({} splits, {} collapses, {} flips)", r.extracted_vertices, r.vertices, r.edge_length, r.remesh.splits, r.remesh.collapses, r.remesh.flips);
     println!("mask hole pixels filled {}, cavity samples filled {}, components dropped {}, unseen vertices {}", r.mask_hole_pixels, r.cavity_samples, r.components_dropped, r.unseen_vertices);
-    println!("{:.2} s", r.seconds);
+    let t = &r.seconds;
+    println!("{:.2} s: silhouettes {:.2} s, field + extraction {:.2} s, remeshing {:.2} s, colours {:.2} s", t.total, t.silhouettes, t.extract, t.remesh, t.color);
     Ok(())
 }

@@ -108,6 +108,30 @@ fn fill_from_neighbours(mut colors: Vec<Option<DVec3>>, faces: &[[u32; 3]]) -> V
 mod tests {
     use super::*;
 
+    /// Two unit spheres on the z axis, A at 0 and B at −3; camera 1 at z = 6 sees only A (red
+    /// image), camera 2 at z = −9 sees only B (green image). Without the depth test B's cap
+    /// facing camera 1 would turn red.
+    #[test]
+    fn occluded_vertices_take_no_colour_from_the_occluding_view() {
+        let (p, f) = crate::synth::icosphere::icosphere(3);
+        let n = p.len() as u32;
+        let mut positions: Vec<[f32; 3]> = p.iter().map(|q| q.map(|c| c as f32)).collect();
+        positions.extend(p.iter().map(|q| [q[0] as f32, q[1] as f32, q[2] as f32 - 3.0]));
+        let mut faces = f.clone();
+        faces.extend(f.iter().map(|t| t.map(|v| v + n)));
+        let camera = |z: f64| Camera::look_at(64, 64, 80.0, 80.0, 32.0, 32.0, DVec3::new(0.0, 0.0, z), DVec3::new(0.0, 0.0, -1.5), DVec3::Y).unwrap();
+        let flat = |rgb: [f32; 3]| Image { width: 64, height: 64, channels: 3, data: rgb.repeat(64 * 64) };
+        let (red, green, full) = (flat([1.0, 0.0, 0.0]), flat([0.0, 1.0, 0.0]), vec![1.0f32; 64 * 64]);
+        let (c1, c2) = (camera(6.0), camera(-9.0));
+        let views = [ColorSource { camera: &c1, image: &red, mask: &full }, ColorSource { camera: &c2, image: &green, mask: &full }];
+        let (colors, unseen) = vertex_colors(&positions, &faces, &views, 0.05).unwrap();
+        assert!(unseen > 0);
+        for (v, c) in colors.iter().enumerate() {
+            let expected = if (v as u32) < n { [255, 0, 0] } else { [0, 255, 0] };
+            assert_eq!(*c, expected, "vertex {v} at {:?}", positions[v]);
+        }
+    }
+
     #[test]
     fn neighbours_fill_unseen_vertices() {
         // A strip of triangles 0-1-2-3-4: vertex 0 red, the others unseen.

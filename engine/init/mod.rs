@@ -129,7 +129,20 @@ pub struct InitReport {
     pub faces: usize,
     /// Vertices no view saw (coloured from their neighbours); 0 without colours.
     pub unseen_vertices: usize,
-    pub seconds: f64,
+    /// Wall-clock seconds of each stage and in all.
+    pub seconds: StageSeconds,
+}
+
+/// Wall-clock seconds per stage.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct StageSeconds {
+    /// Mask distances and the bounding box.
+    pub silhouettes: f64,
+    /// Field sampling, marching tetrahedra, largest component.
+    pub extract: f64,
+    pub remesh: f64,
+    pub color: f64,
+    pub total: f64,
 }
 
 /// The mesh and how it was made.
@@ -184,13 +197,16 @@ pub fn init_mesh_from_views(views: &[HullView], options: &InitOptions) -> Result
             empty: if empty.is_empty() { String::new() } else { format!("; empty masks in [{}]", names(&mut empty.iter().copied())) },
         },
     })?;
+    let mut seconds = StageSeconds { silhouettes: start.elapsed().as_secs_f64(), ..StageSeconds::default() };
     let pixel = typical_pixel(&fields, aabb);
     let field = HullField { views: fields, tolerance: options.tolerance, far: 1e3 * aabb.size().length() };
 
     let Surface { mesh: hull, voxel, grid, cavity_samples, components_dropped } = extract_surface(&field, aabb, pixel * options.voxel_pixels, options.max_grid_bytes)?;
+    seconds.extract = start.elapsed().as_secs_f64() - seconds.silhouettes;
     let area = surface_area(&hull);
     let edge_length = options.vertices.map_or(options.edge_pixels * pixel, |n| remesh::edge_for_vertices(area, n));
     let (mut mesh, stats) = remeshed(&hull, edge_length, options)?;
+    seconds.remesh = start.elapsed().as_secs_f64() - seconds.silhouettes - seconds.extract;
     let mut unseen_vertices = 0;
     if options.colors && views.iter().all(|v| v.image.is_some()) {
         let sources: Vec<color::ColorSource> = views.iter().filter_map(|v| Some(color::ColorSource { camera: &v.camera, image: v.image.as_deref()?, mask: &v.mask })).collect();
@@ -198,6 +214,8 @@ pub fn init_mesh_from_views(views: &[HullView], options: &InitOptions) -> Result
         mesh.colors = Some(colors);
         unseen_vertices = unseen;
     }
+    seconds.total = start.elapsed().as_secs_f64();
+    seconds.color = seconds.total - seconds.silhouettes - seconds.extract - seconds.remesh;
     let report = InitReport {
         views: views.len(),
         bounds_lo: aabb.lo.to_array(),
@@ -214,7 +232,7 @@ pub fn init_mesh_from_views(views: &[HullView], options: &InitOptions) -> Result
         vertices: mesh.positions.len(),
         faces: mesh.faces.len(),
         unseen_vertices,
-        seconds: start.elapsed().as_secs_f64(),
+        seconds,
     };
     Ok(InitMesh { mesh, report })
 }
