@@ -232,7 +232,7 @@ fn articulated_subject_is_closed_and_near_its_hull_bound() {
 fn noisy_masks_need_the_tolerance() {
     let (dir, truth, _) = ellipsoid_dataset("noisy", 8);
     let mut views = views(&dir);
-    // View 0 loses a third of its silhouette (a wrong mask); view 1 gets specks (holes).
+    // View 0 loses the top-left quarter of its image (a wrong mask); view 1 gets specks.
     let (w, h) = (views[0].camera.width as usize, views[0].camera.height as usize);
     for y in 0..h {
         for x in 0..w / 2 {
