@@ -145,8 +145,13 @@ fn carve_round(views: &[ViewField], tables: &[Coverage], tolerance: usize, aabb:
             for i in 0..CELLS {
                 let c_lo = aabb.lo + cell * DVec3::new(i as f64, j as f64, k as f64);
                 let c = Aabb { lo: c_lo, hi: c_lo + cell };
-                let outside = views.iter().zip(tables).filter(|(v, t)| !cell_may_be_inside(v, t, &c)).count();
-                if outside <= tolerance {
+                // Stops at the first view past the tolerance.
+                let mut outside = 0;
+                let kept = views.iter().zip(tables).all(|(v, t)| {
+                    outside += usize::from(!cell_may_be_inside(v, t, &c));
+                    outside <= tolerance
+                });
+                if kept {
                     lo = lo.min(c.lo);
                     hi = hi.max(c.hi);
                 }
