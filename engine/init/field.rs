@@ -107,18 +107,18 @@ impl GridFrame {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A camera at `eye` looking at the origin, 64×64 px, 60° field of view.
-    fn camera(eye: DVec3) -> Camera {
+    pub(crate) fn camera(eye: DVec3) -> Camera {
         let f = 32.0 / (30f64.to_radians()).tan();
         Camera::look_at(64, 64, f, f, 32.0, 32.0, eye, DVec3::ZERO, DVec3::Y).unwrap()
     }
 
     /// The exact silhouette of a sphere of radius r at the origin in `cam`: a mask with pixel
     /// centres inside the projected disk.
-    fn sphere_view(cam: Camera, r: f64) -> ViewField {
+    pub(crate) fn sphere_view(cam: Camera, r: f64) -> ViewField {
         let mask: Vec<f32> = (0..64 * 64)
             .map(|p| {
                 let (o, d) = cam.pixel_ray((p % 64) as f64 + 0.5, (p / 64) as f64 + 0.5);

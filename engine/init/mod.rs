@@ -97,8 +97,6 @@ pub enum InitError {
     Disjoint { count: usize, tolerance: String, empty: String },
     #[error("invalid options: {0}")]
     Options(String),
-    #[error("the hull has no surface inside its bounds (every grid sample is on one side)")]
-    NoSurface,
     #[error("colouring or remeshing: {0}")]
     Surface(#[from] crate::track::TrackError),
     #[error("the extracted hull is not a manifold (a bug): {0}")]
@@ -189,19 +187,20 @@ pub fn init_mesh_from_views(views: &[HullView], options: &InitOptions) -> Result
     if empty.len() == views.len() {
         return Err(InitError::EmptyMasks { count: views.len(), names: names(&mut views.iter()) });
     }
+    let disjoint = || InitError::Disjoint {
+        count: views.len(),
+        tolerance: if options.tolerance > 0 { format!(" (even with {} views allowed to disagree)", options.tolerance) } else { String::new() },
+        empty: if empty.is_empty() { String::new() } else { format!("; empty masks in [{}]", names(&mut empty.iter().copied())) },
+    };
     let aabb = hull_bounds(&fields, options.tolerance).map_err(|p| match p {
         BoundsProblem::Parallel => InitError::Parallel { names: names(&mut views.iter()) },
-        BoundsProblem::Disjoint => InitError::Disjoint {
-            count: views.len(),
-            tolerance: if options.tolerance > 0 { format!(" (even with {} views allowed to disagree)", options.tolerance) } else { String::new() },
-            empty: if empty.is_empty() { String::new() } else { format!("; empty masks in [{}]", names(&mut empty.iter().copied())) },
-        },
+        BoundsProblem::Disjoint => disjoint(),
     })?;
     let mut seconds = StageSeconds { silhouettes: start.elapsed().as_secs_f64(), ..StageSeconds::default() };
     let pixel = typical_pixel(&fields, aabb);
     let field = HullField { views: fields, tolerance: options.tolerance, far: 1e3 * aabb.size().length() };
 
-    let Surface { mesh: hull, voxel, grid, cavity_samples, components_dropped } = extract_surface(&field, aabb, pixel * options.voxel_pixels, options.max_grid_bytes)?;
+    let Surface { mesh: hull, voxel, grid, cavity_samples, components_dropped } = extract_surface(&field, aabb, pixel * options.voxel_pixels, options.max_grid_bytes).ok_or_else(disjoint)?;
     seconds.extract = start.elapsed().as_secs_f64() - seconds.silhouettes;
     let area = surface_area(&hull);
     let edge_length = options.vertices.map_or(options.edge_pixels * pixel, |n| remesh::edge_for_vertices(area, n));
@@ -296,8 +295,10 @@ struct Surface {
 }
 
 /// Samples the field on a grid of spacing `voxel` (grown to fit `max_bytes`) over `aabb`
-/// padded by two voxels, and returns the largest closed piece of its zero set.
-fn extract_surface(field: &HullField, aabb: Aabb, voxel: f64, max_bytes: usize) -> Result<Surface, InitError> {
+/// padded by two voxels, and returns the largest closed piece of its zero set; `None` when no
+/// sample is inside (the conservative box can hold regions near cameras that the exact field
+/// then carves away).
+fn extract_surface(field: &HullField, aabb: Aabb, voxel: f64, max_bytes: usize) -> Option<Surface> {
     let cells = |step: f64| (aabb.size() / step).ceil() + 4.0;
     let mut step = voxel;
     let samples = |step: f64| cells(step).x * cells(step).y * cells(step).z;
@@ -311,10 +312,10 @@ fn extract_surface(field: &HullField, aabb: Aabb, voxel: f64, max_bytes: usize) 
     let cavity_samples = extract::close_grid(&mut values, &grid);
     let (positions, faces) = extract::marching_tetrahedra(&values, &grid);
     if faces.is_empty() {
-        return Err(InitError::NoSurface);
+        return None;
     }
     let (positions, faces, components_dropped) = components::largest_component(&positions, &faces);
-    Ok(Surface { mesh: TriMesh { positions, faces, colors: None }, voxel: step, grid: grid.dims, cavity_samples, components_dropped })
+    Some(Surface { mesh: TriMesh { positions, faces, colors: None }, voxel: step, grid: grid.dims, cavity_samples, components_dropped })
 }
 
 /// The hull remeshed to `edge_length` (with a wanted count: corrected once by the count it
