@@ -510,3 +510,44 @@ mod gaussians {
         assert_sound(&m, 2, "octahedron");
     }
 }
+
+/// The training loop's view of one densify + prune round: every per-vertex array it keeps
+/// (Adam moments, gradient statistics) follows the scene through the returned remaps.
+#[test]
+fn optimizer_moments_and_statistics_follow_the_gaussians() {
+    use tagsplat::topology::{densify, gaussians_from_mesh, prune, DensifyConfig, InitConfig, PruneConfig};
+    let mut m = sphere();
+    let mut scene = gaussians_from_mesh(&m, &[], &InitConfig { sh_degree: 0, ..Default::default() });
+    let n = scene.len();
+    // Ids in the DC term; moments = 10 × id (3 floats per row); statistics = id.
+    for i in 0..n {
+        scene.sh[3 * i] = i as f32;
+    }
+    let mut moments: Vec<f32> = (0..n).flat_map(|i| [10.0 * i as f32; 3]).collect();
+    let mut stats: Vec<f32> = (0..n).map(|i| i as f32).collect();
+    let scores: Vec<f32> = (0..m.face_rows()).map(|f| (f % 4 == 0) as u32 as f32).collect();
+    let d = densify(&mut m, &mut scene, &scores, &DensifyConfig { threshold: 0.5, large_scale: 10.0, ..Default::default() });
+    moments = tagsplat::topology::remap_strided(&moments, 3, &d.old_of_new, |_, row| row.fill(0.0));
+    stats = remap_rows(&stats, &d.old_of_new, |_| 0.0);
+    for (i, l) in scene.opacity_logits.iter_mut().enumerate() {
+        *l = if i % 7 == 3 { -10.0 } else { 3.0 };
+    }
+    let p = prune(&mut m, &mut scene, &PruneConfig { max_scale: 10.0, ..Default::default() });
+    moments = tagsplat::topology::remap_strided(&moments, 3, &p.old_of_new, |_, _| unreachable!("pruning adds no rows"));
+    stats = remap_rows(&stats, &p.old_of_new, |_| unreachable!("pruning adds no rows"));
+    assert!(d.split_faces > 50 && p.pruned > 20, "{} splits, {} merges", d.split_faces, p.pruned);
+    assert_eq!((moments.len(), stats.len()), (3 * scene.len(), scene.len()));
+    let mut fresh = 0;
+    for row in 0..scene.len() {
+        let kept_since_start = tagsplat::topology::compose(&d.old_of_new, &p.old_of_new)[row];
+        if kept_since_start == NEW_ROW {
+            fresh += 1;
+            assert_eq!((moments[3 * row], stats[row]), (0.0, 0.0), "row {row}: new Gaussians start with zero moments");
+        } else {
+            let id = scene.sh[3 * row];
+            assert_eq!(id, kept_since_start as f32, "row {row}");
+            assert_eq!((moments[3 * row], stats[row]), (10.0 * id, id), "row {row}");
+        }
+    }
+    assert!(fresh > 0);
+}

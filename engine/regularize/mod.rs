@@ -1,5 +1,5 @@
 //! The topology regularizers (seed §3.2–3.3, MISSION.md "Losses") as GPU kernels with
-//! analytic gradients, and their f64 CPU [`reference`].
+//! analytic gradients, and their f64 CPU [`mod@reference`].
 //!
 //! # The terms (n Gaussians, N(i) the 1-ring of i with m_i members, primes: frame t − 1)
 //! Parameters as stored: position μ, log-scale s, quaternion q = (w, x, y, z), q̂ = q / |q|.

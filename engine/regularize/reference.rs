@@ -188,7 +188,7 @@ fn rotation(nb: &Neighbourhoods, params: &Params, prev: &Params, scale: f64, w: 
 }
 
 /// Gradient of the unit quaternion (w, x, y, z) from the gradient `g` of its rotation matrix
-/// (`g.col(c)[r]` = dL/dR[r][c]).
+/// (`g.col(c)[r]` = `dL/dR[r][c]`).
 pub fn rotation_backward(q: [f64; 4], g: DMat3) -> DVec4 {
     let u = unit(q);
     let (w, x, y, z) = (u.w, u.x, u.y, u.z);
