@@ -130,7 +130,7 @@ impl ManifoldMesh {
             return Err(FlipRefusal::Boundary);
         }
         let (a, b, c, d) = (self.origin(h), self.dest(h), self.origin(prev(h)), self.origin(prev(t)));
-        if self.ring(c).contains(&d) {
+        if self.are_neighbours(c, d) {
             return Err(FlipRefusal::EdgeExists);
         }
         let [a, b, c, d] = [a, b, c, d].map(|v| self.point(v));
