@@ -13,6 +13,7 @@
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
 //! - [`track`]: surface points bound on frame 0 and followed through a mesh sequence.
 //! - [`eval`]: image, surface and tracking metrics.
+//! - [`regularize`]: the topology regularizers on the GPU and their f64 CPU reference.
 //! - [`topology`]: the manifold mesh the Gaussians live on, its local operations and remap.
 //! - [`synth`]: synthetic dynamic scenes with ground truth (procedural body, glTF skinning).
 //! - [`init`]: the first mesh of a frame from its masks (visual hull, marching tetrahedra,
@@ -27,6 +28,7 @@ pub mod io;
 pub mod mesh;
 pub mod rng;
 pub mod sort;
+pub mod regularize;
 pub mod splat;
 pub mod topology;
 pub mod track;

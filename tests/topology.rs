@@ -333,3 +333,221 @@ fn import_welds_seams_orients_and_names_the_file() {
     let err = import(&nan, path, false).unwrap_err().to_string();
     assert!(err.contains("soup.ply") && err.contains("vertex 3"), "{err}");
 }
+
+mod gaussians {
+    use super::*;
+    use tagsplat::topology::{dc_colors, densify, face_scores, gaussian_normal, gaussians_from_mesh, improve_angles, prune, DensifyConfig, InitConfig, PruneConfig};
+    use tagsplat::splat::GaussianScene;
+
+    fn min_angle_of(m: &ManifoldMesh) -> f64 {
+        m.faces()
+            .map(|f| {
+                let [a, b, c] = m.face(f).map(|v| m.point(v));
+                let angle = |p: glam::DVec3, q: glam::DVec3, r: glam::DVec3| (q - p).angle_between(r - p);
+                angle(a, b, c).min(angle(b, c, a)).min(angle(c, a, b))
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// A scene whose opacity logits hold the row ids, so rows can be followed.
+    fn tagged_scene(m: &ManifoldMesh) -> GaussianScene {
+        let colors: Vec<[f32; 3]> = (0..m.vertex_rows()).map(|i| [(i % 7) as f32 / 7.0, 0.5, 0.25]).collect();
+        let mut scene = gaussians_from_mesh(m, &colors, &InitConfig { sh_degree: 1, ..Default::default() });
+        scene.opacity_logits = (0..scene.len()).map(|i| i as f32).collect();
+        scene
+    }
+
+    #[test]
+    fn gaussians_lie_in_the_sphere_with_neighbour_scales_and_vertex_colours() {
+        let m = sphere();
+        let colors: Vec<[f32; 3]> = (0..m.vertex_rows()).map(|i| [i as f32 / 200.0, 0.2, 0.9]).collect();
+        let config = InitConfig::default();
+        let scene = gaussians_from_mesh(&m, &colors, &config);
+        scene.check().unwrap();
+        for v in m.vertices() {
+            let i = v as usize;
+            // On the unit sphere the area-weighted normal is close to the radial direction.
+            let radial = m.point(v).normalize();
+            assert!(gaussian_normal(scene.rotations[i]).dot(radial) > 0.995, "vertex {v}");
+            let ring = m.ring(v);
+            let mean = ring.iter().map(|&r| (m.point(r) - m.point(v)).length()).sum::<f64>() / ring.len() as f64;
+            let s = scene.log_scales[i];
+            assert!((s[0] as f64 - (0.5 * mean).ln()).abs() < 1e-5 && s[0] == s[1]);
+            assert!((s[2] as f64 - (0.05 * mean).ln()).abs() < 1e-5);
+            let opacity = 1.0 / (1.0 + (-scene.opacity_logits[i]).exp());
+            assert!((opacity - 0.95).abs() < 1e-5);
+            let dc = dc_colors(&scene)[i];
+            assert!(dc.iter().zip(colors[i]).all(|(a, b)| (a - b).abs() < 1e-5), "{dc:?}");
+        }
+    }
+
+    #[test]
+    fn densify_splits_the_chosen_faces_averages_parents_and_keeps_rows() {
+        for (name, mut m, euler) in shapes() {
+            let mut scene = tagged_scene(&m);
+            let n = m.vertex_count();
+            let mut scores = vec![0.0f32; m.vertex_rows()];
+            for v in (0..n).step_by(5) {
+                scores[v] = 1.0;
+            }
+            let faces = face_scores(&m, &scores);
+            let config = DensifyConfig { threshold: 0.3, large_scale: 10.0, ..Default::default() };
+            // New rows come in decreasing score order (ties by face index).
+            let mut chosen: Vec<u32> = m.faces().filter(|&f| faces[f as usize] > 0.3).collect();
+            chosen.sort_by(|&a, &b| faces[b as usize].total_cmp(&faces[a as usize]));
+            let chosen: Vec<[u32; 3]> = chosen.into_iter().map(|f| m.face(f)).collect();
+            let report = densify(&mut m, &mut scene, &faces, &config);
+            assert_sound(&m, euler, name);
+            assert_eq!(report.split_faces + report.refused_splits, chosen.len(), "{name}");
+            assert_eq!(m.vertex_count(), n + report.split_faces, "{name}");
+            assert_eq!(scene.len(), m.vertex_count());
+            assert_eq!(scene.positions, m.positions, "{name}: Gaussians sit on their vertices");
+            let mut new_rows = 0;
+            for (row, &old) in report.old_of_new.iter().enumerate() {
+                if old == NEW_ROW {
+                    // A new Gaussian averages three parents: its id is the mean of theirs.
+                    let parents = chosen[new_rows];
+                    let expected = parents.iter().map(|&p| p as f32).sum::<f32>() / 3.0;
+                    assert!((scene.opacity_logits[row] - expected).abs() < 1e-3, "{name} row {row}");
+                    let q = scene.rotations[row];
+                    assert!((q.iter().map(|c| c * c).sum::<f32>() - 1.0).abs() < 1e-5);
+                    new_rows += 1;
+                } else {
+                    assert_eq!(scene.opacity_logits[row], old as f32, "{name} row {row}");
+                }
+            }
+            assert_eq!(new_rows, report.split_faces);
+        }
+    }
+
+    #[test]
+    fn flips_after_repeated_splits_keep_angles_up() {
+        let split_all = |m: &mut ManifoldMesh, rounds: usize, flip: bool| {
+            for _ in 0..rounds {
+                let faces: Vec<u32> = m.faces().collect();
+                let mut touched = Vec::new();
+                for f in faces {
+                    let before = m.face_rows() as u32;
+                    let c = m.face(f).map(|v| m.positions[v as usize]);
+                    let centroid = [0, 1, 2].map(|k| (c[0][k] + c[1][k] + c[2][k]) / 3.0);
+                    if m.split_face(f, centroid).is_ok() {
+                        touched.extend([f, before, before + 1]);
+                    }
+                }
+                if flip {
+                    assert!(improve_angles(m, &touched) > 0);
+                }
+            }
+        };
+        let (mut plain, mut flipped) = (sphere(), sphere());
+        split_all(&mut plain, 2, false);
+        split_all(&mut flipped, 2, true);
+        assert_sound(&flipped, 2, "flipped");
+        assert_eq!(plain.vertex_count(), flipped.vertex_count());
+        let (a, b) = (min_angle_of(&plain).to_degrees(), min_angle_of(&flipped).to_degrees());
+        assert!(b > 2.0 * a, "min angle {a:.2}° without flips, {b:.2}° with");
+    }
+
+    #[test]
+    fn large_new_gaussians_and_their_corners_are_halved() {
+        let mut m = sphere();
+        let mut scene = tagged_scene(&m);
+        let f = m.faces().next().unwrap();
+        let corners = m.face(f);
+        let before: Vec<[f32; 3]> = corners.iter().map(|&c| scene.log_scales[c as usize]).collect();
+        let mut scores = vec![0.0; m.face_rows()];
+        scores[f as usize] = 1.0;
+        let report = densify(&mut m, &mut scene, &scores, &DensifyConfig { threshold: 0.5, large_scale: 1e-4, ..Default::default() });
+        assert_eq!((report.split_faces, report.halved), (1, 4));
+        for (k, &c) in corners.iter().enumerate() {
+            let row = report.old_of_new.iter().position(|&o| o == c).unwrap();
+            for (now, was) in scene.log_scales[row].iter().zip(before[k]) {
+                assert!((now - (was - std::f32::consts::LN_2)).abs() < 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn prune_merges_picked_gaussians_into_their_cheapest_neighbour() {
+        for (name, mut m, euler) in shapes() {
+            let mut scene = tagged_scene(&m);
+            let n = scene.len();
+            // Ids in the SH DC red channel (opacity is the criterion here).
+            let stride = scene.coefficients() * 3;
+            for i in 0..n {
+                scene.sh[i * stride] = i as f32;
+                scene.opacity_logits[i] = if i % 9 == 4 { -10.0 } else { 3.0 };
+            }
+            let picked: Vec<usize> = (0..n).filter(|i| i % 9 == 4).collect();
+            let config = PruneConfig { w_a: 0.0, ..Default::default() };
+            let report = prune(&mut m, &mut scene, &config);
+            assert_sound(&m, euler, name);
+            assert_eq!(report.candidates, picked.len());
+            assert_eq!(report.pruned + report.kept_no_legal_edge, picked.len(), "{name}");
+            assert!(report.pruned > picked.len() / 2, "{name}: {report:?}");
+            assert_eq!(scene.len(), n - report.pruned);
+            for (row, &old) in report.old_of_new.iter().enumerate() {
+                assert_ne!(old, NEW_ROW);
+                assert_eq!(scene.sh[row * stride], old as f32, "{name}: row {row} keeps its own parameters");
+                assert_eq!(scene.positions[row], m.positions[row]);
+            }
+            let survivors_picked = report.old_of_new.iter().filter(|&&o| o % 9 == 4).count();
+            assert_eq!(survivors_picked, report.kept_no_legal_edge, "{name}");
+        }
+    }
+
+    #[test]
+    fn prune_counts_gaussians_without_a_legal_edge() {
+        // An octahedron: after one merge 5 vertices remain, so the second is refused.
+        let positions = vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+        let faces = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        let mut m = ManifoldMesh::new(positions, faces).unwrap();
+        let mut scene = tagged_scene(&m);
+        scene.opacity_logits = vec![-10.0, -10.0, 3.0, 3.0, 3.0, 3.0];
+        let report = prune(&mut m, &mut scene, &PruneConfig { max_scale: 10.0, ..Default::default() });
+        assert_eq!((report.candidates, report.pruned, report.kept_no_legal_edge), (2, 1, 1));
+        assert_eq!(m.vertex_count(), 5);
+        assert_sound(&m, 2, "octahedron");
+    }
+}
+
+/// The training loop's view of one densify + prune round: every per-vertex array it keeps
+/// (Adam moments, gradient statistics) follows the scene through the returned remaps.
+#[test]
+fn optimizer_moments_and_statistics_follow_the_gaussians() {
+    use tagsplat::topology::{densify, gaussians_from_mesh, prune, DensifyConfig, InitConfig, PruneConfig};
+    let mut m = sphere();
+    let mut scene = gaussians_from_mesh(&m, &[], &InitConfig { sh_degree: 0, ..Default::default() });
+    let n = scene.len();
+    // Ids in the DC term; moments = 10 × id (3 floats per row); statistics = id.
+    for i in 0..n {
+        scene.sh[3 * i] = i as f32;
+    }
+    let mut moments: Vec<f32> = (0..n).flat_map(|i| [10.0 * i as f32; 3]).collect();
+    let mut stats: Vec<f32> = (0..n).map(|i| i as f32).collect();
+    let scores: Vec<f32> = (0..m.face_rows()).map(|f| (f % 4 == 0) as u32 as f32).collect();
+    let d = densify(&mut m, &mut scene, &scores, &DensifyConfig { threshold: 0.5, large_scale: 10.0, ..Default::default() });
+    moments = tagsplat::topology::remap_strided(&moments, 3, &d.old_of_new, |_, row| row.fill(0.0));
+    stats = remap_rows(&stats, &d.old_of_new, |_| 0.0);
+    for (i, l) in scene.opacity_logits.iter_mut().enumerate() {
+        *l = if i % 7 == 3 { -10.0 } else { 3.0 };
+    }
+    let p = prune(&mut m, &mut scene, &PruneConfig { max_scale: 10.0, ..Default::default() });
+    moments = tagsplat::topology::remap_strided(&moments, 3, &p.old_of_new, |_, _| unreachable!("pruning adds no rows"));
+    stats = remap_rows(&stats, &p.old_of_new, |_| unreachable!("pruning adds no rows"));
+    assert!(d.split_faces > 50 && p.pruned > 20, "{} splits, {} merges", d.split_faces, p.pruned);
+    assert_eq!((moments.len(), stats.len()), (3 * scene.len(), scene.len()));
+    let mut fresh = 0;
+    for row in 0..scene.len() {
+        let kept_since_start = tagsplat::topology::compose(&d.old_of_new, &p.old_of_new)[row];
+        if kept_since_start == NEW_ROW {
+            fresh += 1;
+            assert_eq!((moments[3 * row], stats[row]), (0.0, 0.0), "row {row}: new Gaussians start with zero moments");
+        } else {
+            let id = scene.sh[3 * row];
+            assert_eq!(id, kept_since_start as f32, "row {row}");
+            assert_eq!((moments[3 * row], stats[row]), (10.0 * id, id), "row {row}");
+        }
+    }
+    assert!(fresh > 0);
+}

@@ -12,6 +12,7 @@ mod dataset;
 mod eval;
 mod init_mesh;
 mod synth;
+mod topology;
 use tagsplat::bench::{bench_sort, bench_splat, SortBenchReport, SplatBenchConfig, SplatBenchReport};
 use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
 
@@ -55,6 +56,8 @@ enum Command {
 
 #[derive(Subcommand)]
 enum Bench {
+    /// Densify and prune steps on a 200k-vertex torus, and the regularizer kernels.
+    Topology(topology::BenchTopologyArgs),
     /// BVH build time and closest-point / ray-cast throughput against brute force.
     Track(track::BenchTrackArgs),
     /// GPU radix sort of random (key, u32) pairs: pairs/s, copy bandwidth, CPU sort_unstable.
@@ -111,6 +114,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Convert(args) => track::convert(args),
         Command::InitMesh(args) => init_mesh::run(args),
         Command::Bench(Bench::Track(args)) => track::bench(args),
+        Command::Bench(Bench::Topology(args)) => topology::bench(&context(&options)?, &args),
         Command::Render(args) => render::render(&context(&options)?, &args),
         Command::Dataset(command) => dataset::run(command),
         Command::Synth(args) => synth::run(args),

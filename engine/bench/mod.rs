@@ -1,13 +1,16 @@
 //! Benchmarks that report speed against a bound measured in the same run: the GPU copy
 //! bandwidth (a compute copy kernel and the transfer engine) and the CPU's `sort_unstable`;
-//! and the splatting renderer's forward and backward per view, pass by pass.
+//! the splatting renderer's forward and backward per view, pass by pass; and the topology
+//! steps (densify, prune) with the regularizer kernels.
 
 mod copy;
 mod sort;
 mod splat;
+mod topology;
 
 pub use copy::{CopyBandwidth, CopyProbe};
 pub use sort::{bench_sort, SortBenchReport};
+pub use topology::{bench_topology, TopologyBenchConfig, TopologyBenchError, TopologyBenchReport};
 pub use splat::{bench_splat, BenchWork, random_scene, ring_cameras, SplatBenchConfig, SplatBenchReport};
 
 /// Median of a sample; 0 for an empty one (nothing was timed).

@@ -47,3 +47,13 @@ pub enum GeometryRefusal {
     Degenerate,
     FoldsOver,
 }
+
+/// Smallest interior angle of a triangle, radians (0 for a degenerate one).
+pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let angle = |p: DVec3, q: DVec3, r: DVec3| {
+        let (u, v) = (q - p, r - p);
+        let denom = u.length() * v.length();
+        if denom > 0.0 { (u.dot(v) / denom).clamp(-1.0, 1.0).acos() } else { 0.0 }
+    };
+    angle(a, b, c).min(angle(b, c, a)).min(angle(c, a, b))
+}

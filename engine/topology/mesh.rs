@@ -187,6 +187,11 @@ impl ManifoldMesh {
         ring
     }
 
+    /// Whether `a` and `b` share an edge (no allocation, unlike [`Self::ring`]).
+    pub fn are_neighbours(&self, a: u32, b: u32) -> bool {
+        self.find_edge(a, b).is_some()
+    }
+
     /// Number of neighbours of `v`.
     pub fn valence(&self, v: u32) -> usize {
         self.ring(v).len()

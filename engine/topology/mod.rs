@@ -28,18 +28,43 @@
 //!   filled by the caller's closure). [`ManifoldMesh::live_faces`] gives plain face arrays.
 //! - Check: [`ManifoldMesh::problem`] (every invariant, O(V + F)),
 //!   [`ManifoldMesh::euler_characteristic`].
+//!
+//! # Gaussians on the mesh
+//! - [`gaussians_from_mesh`]: one Gaussian per vertex (z axis on the area-weighted
+//!   [`vertex_normals`], s_x = s_y from 1-ring distances, s_z small, opacity high, SH DC from
+//!   vertex colours).
+//! - [`densify`]: faces whose [`face_scores`] pass a threshold split 1→3 at the centroid (new
+//!   Gaussian = average of its corners, [`average_quaternion`]; scale rule), then
+//!   [`improve_angles`] flips edges that raise the minimum angle.
+//! - [`prune`]: Gaussians meeting [`should_prune`] merge into the 1-ring neighbour of cheapest
+//!   legal collapse, C = w_g·‖pᵢ − pⱼ‖ / mean edge + w_a·‖cᵢ − cⱼ‖; refusals are counted.
+//! - Both compact the mesh, remap the [`GaussianScene`](crate::splat::GaussianScene) with
+//!   [`remap_scene`] and return `old_of_new`: the caller applies that same array to every other
+//!   per-vertex array it keeps (optimizer moments: new rows zero; gradient statistics;
+//!   keypoint bindings) with [`remap_rows`] / [`remap_strided`], then re-uploads the 1-rings
+//!   (`regularize::Neighbourhoods::from_mesh`).
 
 mod check;
+mod gaussians;
 mod compact;
+mod densify;
+mod flips;
 mod geometry;
 mod mesh;
 mod import;
 mod ops;
 mod orient;
+mod prune;
 mod remap;
+mod scene_remap;
 pub mod shapes;
 mod weld;
 
+pub use gaussians::{dc_colors, gaussian_normal, gaussians_from_mesh, vertex_normals, InitConfig, SH_C0};
+pub use densify::{densify, face_scores, DensifyConfig, DensifyReport};
+pub use flips::improve_angles;
+pub use scene_remap::{average_quaternion, remap_scene};
+pub use prune::{mean_edge_length, prune, should_prune, PruneConfig, PruneReport};
 pub use import::{import, ImportReport, Imported};
 pub use mesh::{face_of, next, prev, ManifoldMesh, Outgoing, NONE};
 pub use ops::{CollapseRefusal, FlipRefusal, SplitRefusal};

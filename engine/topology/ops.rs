@@ -130,7 +130,7 @@ impl ManifoldMesh {
             return Err(FlipRefusal::Boundary);
         }
         let (a, b, c, d) = (self.origin(h), self.dest(h), self.origin(prev(h)), self.origin(prev(t)));
-        if self.ring(c).contains(&d) {
+        if self.are_neighbours(c, d) {
             return Err(FlipRefusal::EdgeExists);
         }
         let [a, b, c, d] = [a, b, c, d].map(|v| self.point(v));
@@ -152,24 +152,30 @@ impl ManifoldMesh {
     }
 
     /// Whether collapsing `h` (its origin merged into its destination, which moves to
-    /// `point`) is legal: more than 4 vertices remain, the link condition holds, an interior
-    /// edge does not join two boundary vertices, no vertex is left without a face, and no
-    /// remaining face around either end flips its normal or degenerates.
+    /// `point`) is legal; see [`Self::can_merge`].
     pub fn can_collapse(&self, h: u32, point: [f32; 3]) -> Result<(), CollapseRefusal> {
+        self.can_merge(h, self.origin(h), point)
+    }
+
+    /// Whether merging `removed` (either end of the edge of `h`) into the other end, which
+    /// moves to `point`, is legal: more than 4 vertices remain, the link condition holds, an
+    /// interior edge does not join two boundary vertices, no vertex is left without a face, and
+    /// no remaining face around either end flips its normal or degenerates.
+    pub fn can_merge(&self, h: u32, removed: u32, point: [f32; 3]) -> Result<(), CollapseRefusal> {
         if self.live_vertices <= 5 {
             return Err(CollapseRefusal::TooFewVertices);
         }
-        let (a, b, t) = (self.origin(h), self.dest(h), self.twin(h));
-        let mut opposite = vec![self.origin(prev(h))];
+        let (a, b) = self.ends(h, removed);
+        let t = self.twin(h);
+        let mut opposite = 1;
         if t != NONE {
-            opposite.push(self.origin(prev(t)));
+            opposite = 2;
             if self.is_boundary_vertex(a) && self.is_boundary_vertex(b) {
                 return Err(CollapseRefusal::BoundaryPinch);
             }
         }
         let ring_b = self.ring(b);
-        let common = self.ring(a).into_iter().filter(|v| ring_b.contains(v)).count();
-        if common != opposite.len() {
+        if self.ring(a).into_iter().filter(|v| ring_b.contains(v)).count() != opposite {
             return Err(CollapseRefusal::LinkCondition);
         }
         for e in [h, t] {
@@ -179,6 +185,14 @@ impl ManifoldMesh {
         }
         self.check_moved_faces(a, b, point)?;
         self.check_moved_faces(b, a, point)
+    }
+
+    /// `(removed, kept)` ends of the edge of `h`.
+    #[inline]
+    fn ends(&self, h: u32, removed: u32) -> (u32, u32) {
+        let (o, d) = (self.origin(h), self.dest(h));
+        debug_assert!(removed == o || removed == d, "vertex {removed} is not on edge {o}–{d}");
+        if removed == o { (o, d) } else { (d, o) }
     }
 
     /// Faces around `v` that do not contain `other`, with `v` moved to `point`.
@@ -204,8 +218,16 @@ impl ManifoldMesh {
     /// are re-attached to `dest(h)`, which moves to `point`; returns `dest(h)`. Removes 1
     /// vertex, 3 edges, 2 faces (interior edge) or 1 vertex, 2 edges, 1 face (boundary edge).
     pub fn collapse_edge(&mut self, h: u32, point: [f32; 3]) -> Result<u32, CollapseRefusal> {
-        self.can_collapse(h, point)?;
-        let (a, b, t) = (self.origin(h), self.dest(h), self.twin(h));
+        self.merge(h, self.origin(h), point)
+    }
+
+    /// Like [`Self::collapse_edge`] with the removed end chosen: `removed` (either end of the
+    /// edge of `h`) merges into the other, which moves to `point` and is returned. This is the
+    /// pruning step (a boundary edge has one half-edge, so its direction cannot choose).
+    pub fn merge(&mut self, h: u32, removed: u32, point: [f32; 3]) -> Result<u32, CollapseRefusal> {
+        self.can_merge(h, removed, point)?;
+        let (a, b) = self.ends(h, removed);
+        let t = self.twin(h);
         let removed: Vec<u32> = [h, t].into_iter().filter(|&e| e != NONE).map(face_of).collect();
         let mut touched: Vec<u32> = self.outgoing(a).chain(self.outgoing(b)).map(face_of).filter(|f| !removed.contains(f)).collect();
         touched.sort_unstable();
