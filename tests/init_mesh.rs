@@ -17,6 +17,7 @@ use tagsplat::mesh::TriMesh;
 use tagsplat::synth::icosphere::icosphere;
 use tagsplat::synth::manifold::closed_manifold_problem;
 use tagsplat::synth::{generate, render, SubjectSource, SynthOptions, Texture};
+use tagsplat::topology::{vertex_normals, ManifoldMesh};
 use tagsplat::track::SurfaceBvh;
 
 fn temp(name: &str) -> PathBuf {
@@ -149,13 +150,14 @@ fn color_error(built: &InitMesh, truth: &TriMesh, texture: &Texture, cameras: &[
     let bvh = SurfaceBvh::build(&truth.positions, &truth.faces).unwrap();
     let m = &built.mesh;
     let colors = m.colors.as_ref().unwrap();
-    let normals = tagsplat::init::normals::vertex_normals(&m.positions, &m.faces);
+    let normals = vertex_normals(&ManifoldMesh::new(m.positions.clone(), m.faces.clone()).unwrap());
     let (mut err, mut flat, mut n) = (0.0, 0.0, 0);
     let truths: Vec<[f32; 3]> = m.positions.iter().map(|p| texture.color(bvh.closest_point(DVec3::from(p.map(f64::from))).unwrap().position)).collect();
     let mean: Vec<f64> = (0..3).map(|c| truths.iter().map(|t| t[c] as f64).sum::<f64>() / truths.len() as f64).collect();
     for (v, p) in m.positions.iter().enumerate() {
         let p = DVec3::from(p.map(f64::from));
-        if !cameras.iter().any(|c| normals[v].dot((c.center() - p).normalize()) > 0.5) {
+        let normal = DVec3::from(normals[v].map(f64::from));
+        if !cameras.iter().any(|c| normal.dot((c.center() - p).normalize()) > 0.5) {
             continue;
         }
         for c in 0..3 {

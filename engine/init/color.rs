@@ -4,9 +4,9 @@
 //! it. The colour is the mean of those views' pixels weighted by the cosine between the
 //! normal and the view direction; vertices no view sees take the mean of coloured neighbours.
 
-use super::normals::vertex_normals;
 use crate::camera::Camera;
 use crate::io::image::Image;
+use crate::topology::{vertex_normals, ManifoldMesh};
 use crate::track::{SurfaceBvh, TrackError};
 use glam::DVec3;
 
@@ -18,10 +18,12 @@ pub struct ColorSource<'a> {
     pub mask: &'a [f32],
 }
 
-/// 8-bit colours per vertex and how many vertices no view saw (coloured from neighbours).
-pub fn vertex_colors(positions: &[[f32; 3]], faces: &[[u32; 3]], views: &[ColorSource], tolerance: f64) -> Result<(Vec<[u8; 3]>, usize), TrackError> {
+/// 8-bit colours per vertex row of a compacted `mesh` and how many vertices no view saw
+/// (coloured from neighbours).
+pub fn vertex_colors(mesh: &ManifoldMesh, views: &[ColorSource], tolerance: f64) -> Result<(Vec<[u8; 3]>, usize), TrackError> {
+    let (positions, faces) = (&mesh.positions, &mesh.live_faces());
     let bvh = SurfaceBvh::build(positions, faces)?;
-    let normals = vertex_normals(positions, faces);
+    let normals = vertex_normals(mesh);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let chunk = positions.len().div_ceil(threads).max(1);
     let mut seen: Vec<Option<DVec3>> = vec![None; positions.len()];
@@ -31,7 +33,7 @@ pub fn vertex_colors(positions: &[[f32; 3]], faces: &[[u32; 3]], views: &[ColorS
             scope.spawn(move || {
                 for (i, o) in out.iter_mut().enumerate() {
                     let v = t * chunk + i;
-                    *o = observed_color(bvh, DVec3::from(positions[v].map(f64::from)), normals[v], views, tolerance);
+                    *o = observed_color(bvh, DVec3::from(positions[v].map(f64::from)), DVec3::from(normals[v].map(f64::from)), views, tolerance);
                 }
             });
         }
@@ -124,7 +126,8 @@ mod tests {
         let (red, green, full) = (flat([1.0, 0.0, 0.0]), flat([0.0, 1.0, 0.0]), vec![1.0f32; 64 * 64]);
         let (c1, c2) = (camera(6.0), camera(-9.0));
         let views = [ColorSource { camera: &c1, image: &red, mask: &full }, ColorSource { camera: &c2, image: &green, mask: &full }];
-        let (colors, unseen) = vertex_colors(&positions, &faces, &views, 0.05).unwrap();
+        let mesh = ManifoldMesh::new(positions.clone(), faces).unwrap();
+        let (colors, unseen) = vertex_colors(&mesh, &views, 0.05).unwrap();
         assert!(unseen > 0);
         for (v, c) in colors.iter().enumerate() {
             let expected = if (v as u32) < n { [255, 0, 0] } else { [0, 255, 0] };

@@ -28,13 +28,13 @@ pub mod distance;
 pub mod extract;
 pub mod field;
 pub mod holes;
-pub mod normals;
 pub mod remesh;
 
 use crate::camera::Camera;
 use crate::io::dataset::{Dataset, DatasetError};
 use crate::io::image::Image;
 use crate::mesh::TriMesh;
+use crate::topology::ManifoldMesh;
 use bounds::{hull_bounds, Aabb, BoundsProblem};
 use field::{GridFrame, HullField, ViewField};
 use glam::DVec3;
@@ -204,15 +204,17 @@ pub fn init_mesh_from_views(views: &[HullView], options: &InitOptions) -> Result
     seconds.extract = start.elapsed().as_secs_f64() - seconds.silhouettes;
     let area = surface_area(&hull);
     let edge_length = options.vertices.map_or(options.edge_pixels * pixel, |n| remesh::edge_for_vertices(area, n));
-    let (mut mesh, stats) = remeshed(&hull, edge_length, options)?;
+    let (mesh, stats) = remeshed(&hull, edge_length, options)?;
     seconds.remesh = start.elapsed().as_secs_f64() - seconds.silhouettes - seconds.extract;
     let mut unseen_vertices = 0;
+    let mut colors = None;
     if options.colors && views.iter().all(|v| v.image.is_some()) {
         let sources: Vec<color::ColorSource> = views.iter().filter_map(|v| Some(color::ColorSource { camera: &v.camera, image: v.image.as_deref()?, mask: &v.mask })).collect();
-        let (colors, unseen) = color::vertex_colors(&mesh.positions, &mesh.faces, &sources, mean_edge_length(&mesh))?;
-        mesh.colors = Some(colors);
+        let (c, unseen) = color::vertex_colors(&mesh, &sources, crate::topology::mean_edge_length(&mesh) as f64)?;
+        colors = Some(c);
         unseen_vertices = unseen;
     }
+    let mesh = TriMesh { faces: mesh.live_faces(), positions: mesh.positions, colors };
     seconds.total = start.elapsed().as_secs_f64();
     seconds.color = seconds.total - seconds.silhouettes - seconds.extract - seconds.remesh;
     let report = InitReport {
@@ -320,12 +322,12 @@ fn extract_surface(field: &HullField, aabb: Aabb, voxel: f64, max_bytes: usize) 
 
 /// The hull remeshed to `edge_length` (with a wanted count: corrected once by the count it
 /// reached, counts going as 1 / length²), compacted; the hull itself with no rounds.
-fn remeshed(hull: &TriMesh, edge_length: f64, options: &InitOptions) -> Result<(TriMesh, remesh::RemeshStats), InitError> {
+fn remeshed(hull: &TriMesh, edge_length: f64, options: &InitOptions) -> Result<(ManifoldMesh, remesh::RemeshStats), InitError> {
+    let mut mesh = ManifoldMesh::new(hull.positions.clone(), hull.faces.clone())?;
     if options.remesh_rounds == 0 {
-        return Ok((hull.clone(), remesh::RemeshStats::default()));
+        return Ok((mesh, remesh::RemeshStats::default()));
     }
     let reference = crate::track::SurfaceBvh::build(&hull.positions, &hull.faces)?;
-    let mut mesh = crate::topology::ManifoldMesh::new(hull.positions.clone(), hull.faces.clone())?;
     let mut stats = remesh::remesh(&mut mesh, &reference, edge_length, options.remesh_rounds);
     if let Some(n) = options.vertices {
         let corrected = edge_length * (mesh.vertex_count() as f64 / n as f64).sqrt();
@@ -333,17 +335,10 @@ fn remeshed(hull: &TriMesh, edge_length: f64, options: &InitOptions) -> Result<(
         stats = remesh::RemeshStats { splits: stats.splits + more.splits, collapses: stats.collapses + more.collapses, flips: stats.flips + more.flips };
     }
     mesh.compact();
-    Ok((TriMesh { faces: mesh.live_faces(), positions: mesh.positions, colors: None }, stats))
+    Ok((mesh, stats))
 }
 
 fn surface_area(mesh: &TriMesh) -> f64 {
     let p = |i: u32| DVec3::from(mesh.positions[i as usize].map(f64::from));
     mesh.faces.iter().map(|f| 0.5 * (p(f[1]) - p(f[0])).cross(p(f[2]) - p(f[0])).length()).sum()
-}
-
-/// Mean length of the faces' edges (each interior edge counted twice; fine for a mean).
-fn mean_edge_length(mesh: &TriMesh) -> f64 {
-    let p = |i: u32| DVec3::from(mesh.positions[i as usize].map(f64::from));
-    let total: f64 = mesh.faces.iter().map(|f| (0..3).map(|k| p(f[k]).distance(p(f[(k + 1) % 3]))).sum::<f64>()).sum();
-    total / (3 * mesh.faces.len()).max(1) as f64
 }

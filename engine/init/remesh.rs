@@ -9,8 +9,7 @@
 //!    back onto the reference surface (the extracted hull surface). A move that would turn a
 //!    face against its old normal is undone.
 
-use super::normals::vertex_normals;
-use crate::topology::{prev, ManifoldMesh, NONE};
+use crate::topology::{prev, vertex_normals, ManifoldMesh, NONE};
 use crate::track::SurfaceBvh;
 use glam::DVec3;
 
@@ -99,7 +98,7 @@ fn flip_towards_valence_six(mesh: &mut ManifoldMesh) -> usize {
 /// since undoing one vertex can leave a neighbour's face folded against the old shape).
 fn smooth_tangentially(mesh: &mut ManifoldMesh, reference: &SurfaceBvh) {
     let faces = mesh.live_faces();
-    let normals = vertex_normals(&mesh.positions, &faces);
+    let normals: Vec<DVec3> = vertex_normals(mesh).iter().map(|n| DVec3::from(n.map(f64::from))).collect();
     let old: Vec<DVec3> = (0..mesh.vertex_rows() as u32).map(|v| mesh.point(v)).collect();
     let mut new = old.clone();
     for v in mesh.vertices() {
