@@ -297,6 +297,10 @@ fn bad_input_gets_a_clear_error() {
     short[3].mask.pop();
     let e = message(init_mesh_from_views(&short, &options));
     assert!(e.contains("cam03") && e.contains("96×96"), "{e}");
+    let mut small_image = good.clone();
+    small_image[1].image = Some(std::sync::Arc::new(Image { width: 48, height: 96, channels: 3, data: vec![0.5; 48 * 96 * 3] }));
+    let e = message(init_mesh_from_views(&small_image, &options));
+    assert!(e.contains("cam01") && e.contains("48×96"), "{e}");
 
     for bad in [
         InitOptions { voxel_pixels: 0.0, ..options.clone() },

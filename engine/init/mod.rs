@@ -89,6 +89,8 @@ pub enum InitError {
     TooFewViews { count: usize, names: String },
     #[error("view {name}: the mask has {len} values but the camera is {width}×{height} pixels")]
     MaskSize { name: String, len: usize, width: u32, height: u32 },
+    #[error("view {name}: the image is {image_width}×{image_height} with {channels} channels but the camera is {width}×{height} pixels")]
+    ImageSize { name: String, image_width: u32, image_height: u32, channels: u8, width: u32, height: u32 },
     #[error("the masks are empty in all {count} views [{names}]: nothing marks the subject")]
     EmptyMasks { count: usize, names: String },
     #[error("the rays through the silhouette centres of [{names}] are (nearly) parallel or fewer than 2 masks are non-empty: the cameras cannot locate the subject")]
@@ -264,6 +266,12 @@ fn check(views: &[HullView], o: &InitOptions) -> Result<(), InitError> {
         let (width, height) = (v.camera.width, v.camera.height);
         if v.mask.len() != width as usize * height as usize {
             return Err(InitError::MaskSize { name: v.name.clone(), len: v.mask.len(), width, height });
+        }
+        if let Some(image) = &v.image {
+            let wrong = (image.width, image.height) != (width, height) || image.channels == 0 || image.data.len() != (width * height) as usize * image.channels as usize;
+            if wrong {
+                return Err(InitError::ImageSize { name: v.name.clone(), image_width: image.width, image_height: image.height, channels: image.channels, width, height });
+            }
         }
     }
     Ok(())
