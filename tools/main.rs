@@ -11,7 +11,9 @@ use std::sync::Arc;
 mod dataset;
 mod eval;
 mod fit;
+mod init_mesh;
 mod synth;
+mod topology;
 use tagsplat::bench::{bench_sort, bench_splat, bench_train, SortBenchReport, SplatBenchConfig, SplatBenchReport, TrainBenchConfig, TrainBenchReport};
 use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
 
@@ -51,10 +53,14 @@ enum Command {
     Track(track::TrackArgs),
     /// Convert a mesh sequence between a folder of frames, OBJ + PC2 and GLB.
     Convert(track::ConvertArgs),
+    /// Build a frame's first mesh from its masks (visual hull), coloured from its images.
+    InitMesh(init_mesh::InitMeshArgs),
 }
 
 #[derive(Subcommand)]
 enum Bench {
+    /// Densify and prune steps on a 200k-vertex torus, and the regularizer kernels.
+    Topology(topology::BenchTopologyArgs),
     /// BVH build time and closest-point / ray-cast throughput against brute force.
     Track(track::BenchTrackArgs),
     /// GPU radix sort of random (key, u32) pairs: pairs/s, copy bandwidth, CPU sort_unstable.
@@ -127,7 +133,9 @@ fn run(cli: Cli) -> Result<()> {
         Command::Devices => devices(options.device.as_deref()),
         Command::Track(args) => track::track(args),
         Command::Convert(args) => track::convert(args),
+        Command::InitMesh(args) => init_mesh::run(args),
         Command::Bench(Bench::Track(args)) => track::bench(args),
+        Command::Bench(Bench::Topology(args)) => topology::bench(&context(&options)?, &args),
         Command::Render(args) => render::render(&context(&options)?, &args),
         Command::Dataset(command) => dataset::run(command),
         Command::Synth(args) => synth::run(args),
