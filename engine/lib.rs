@@ -11,6 +11,7 @@
 //! - [`io`]: file formats (PLY) and atomic writes.
 //! - [`splat`]: differentiable Gaussian splatting (forward, backward, CPU reference).
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
+//! - [`raster`]: differentiable visibility-buffer mesh rasterizer (forward, backward, CPU reference).
 //! - [`track`]: surface points bound on frame 0 and followed through a mesh sequence.
 //! - [`eval`]: image, surface and tracking metrics.
 //! - [`synth`]: synthetic dynamic scenes with ground truth (procedural body, glTF skinning).
@@ -21,6 +22,7 @@ pub mod eval;
 pub mod gpu;
 pub mod io;
 pub mod mesh;
+pub mod raster;
 pub mod rng;
 pub mod sort;
 pub mod splat;

@@ -1,0 +1,116 @@
+// Analytic anti-aliasing at silhouettes (the idea of nvdiffrast's antialias), shared by the
+// forward and the backward so both see the same crossings. For two neighbouring pixel centres
+// a and b with different triangle ids, the silhouette edge of the nearer triangle that crosses
+// the segment at fraction t from a (the covered side) blends the pair:
+//   t >= 1/2: out_b += (t - 1/2) (c_a - c_b)      t < 1/2: out_a += (1/2 - t) (c_b - c_a)
+// so the output moves continuously as the edge sweeps over pixel centres. Expects buffers
+// `ids`, `depth`, `faces`, `camera_positions`, `adjacency` and the include of triangle.glsl.
+#ifndef RASTER_AA_GLSL
+#define RASTER_AA_GLSL
+
+struct Crossing {
+    bool found;
+    uint triangle;
+    uint edge;       // edge k runs from corner k to corner k + 1
+    ivec2 covered;   // pixel a, inside the triangle
+    ivec2 other;     // pixel b
+    float t;         // where the edge crosses, from a (0) to b (1)
+};
+
+bool faces_camera(uint t) {
+    uvec3 v;
+    vec3 v0, v1, v2;
+    triangle_corners(t, v, v0, v1, v2);
+    return dot(face_normal(v0, v1, v2), v0) < 0.0;
+}
+
+// Edge k of t is on the outline when no triangle lies across it or that one faces the other
+// way (a manifold mesh gives the neighbour by adjacency).
+bool silhouette_edge(uint t, uint k) {
+    int across = adjacency[3u * t + k];
+    return across < 0 || faces_camera(uint(across)) != faces_camera(t);
+}
+
+float screen_edge(vec2 a, vec2 b, vec2 p) {
+    return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+}
+
+vec2 pixel_centre(ivec2 p) {
+    return vec2(p) + 0.5;
+}
+
+// The first silhouette edge of triangle t leaving pixel a towards pixel b, if any. Triangles
+// with a corner behind the near plane are skipped (their edges do not project to lines).
+Crossing crossing_from(uint t, ivec2 a, ivec2 b) {
+    Crossing c = Crossing(false, t, 0u, a, b, 2.0);
+    uvec3 v;
+    vec3 p[3];
+    triangle_corners(t, v, p[0], p[1], p[2]);
+    if (min(p[0].z, min(p[1].z, p[2].z)) < near_plane()) {
+        return c;
+    }
+    vec2 s[3] = vec2[3](project_point(p[0]), project_point(p[1]), project_point(p[2]));
+    float orientation = sign(screen_edge(s[0], s[1], s[2]));
+    for (uint k = 0u; k < 3u; k++) {
+        vec2 e0 = s[k], e1 = s[(k + 1u) % 3u];
+        float ea = orientation * screen_edge(e0, e1, pixel_centre(a));
+        float eb = orientation * screen_edge(e0, e1, pixel_centre(b));
+        if (ea >= 0.0 && eb < 0.0 && silhouette_edge(t, k)) {
+            float t_cross = ea / (ea - eb);
+            if (t_cross < c.t) {
+                c.found = true;
+                c.edge = k;
+                c.t = t_cross;
+            }
+        }
+    }
+    return c;
+}
+
+float depth_or_far(ivec2 p, uint t) {
+    return t == NO_TRIANGLE ? 1.0 / 0.0 : depth[pixel_index(p)];
+}
+
+// The crossing between neighbours p0 and p1 (p1 right of or below p0: each pair has one
+// answer whichever pixel asks). The nearer pixel's triangle is tried first.
+Crossing pair_crossing(ivec2 p0, ivec2 p1) {
+    uint t0 = ids[pixel_index(p0)], t1 = ids[pixel_index(p1)];
+    Crossing none = Crossing(false, 0u, 0u, p0, p1, 0.0);
+    if (t0 == t1) {
+        return none;
+    }
+    bool first0 = depth_or_far(p0, t0) <= depth_or_far(p1, t1);
+    ivec2 near_p = first0 ? p0 : p1, far_p = first0 ? p1 : p0;
+    uint near_t = first0 ? t0 : t1, far_t = first0 ? t1 : t0;
+    if (near_t != NO_TRIANGLE) {
+        Crossing c = crossing_from(near_t, near_p, far_p);
+        if (c.found) {
+            return c;
+        }
+    }
+    if (far_t != NO_TRIANGLE) {
+        return crossing_from(far_t, far_p, near_p);
+    }
+    return none;
+}
+
+// The pixel a crossing blends into and its weight (see the top of this file).
+ivec2 blend_target(Crossing c, out float w) {
+    w = abs(c.t - 0.5);
+    return c.t >= 0.5 ? c.other : c.covered;
+}
+
+bool in_image(ivec2 p) {
+    return p.x >= 0 && p.y >= 0 && p.x < int(image_width()) && p.y < int(image_height());
+}
+
+// Neighbour k (0 right, 1 down, 2 left, 3 up) of p, and the pair in canonical order.
+bool neighbour_pair(ivec2 p, uint k, out ivec2 q, out ivec2 first, out ivec2 second) {
+    const ivec2 steps[4] = ivec2[4](ivec2(1, 0), ivec2(0, 1), ivec2(-1, 0), ivec2(0, -1));
+    q = p + steps[k];
+    first = k < 2u ? p : q;
+    second = k < 2u ? q : p;
+    return in_image(q);
+}
+
+#endif
