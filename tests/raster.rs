@@ -207,3 +207,176 @@ fn ids_match_the_graphics_pipeline() {
         assert_ids_agree(&ours, &theirs, 0.999, &scene, &cam, near, what);
     }
 }
+
+fn render_counting(ctx: &Arc<GpuContext>, scene: &Scene, camera: &Camera, near: f64) -> (RasterFrame, Vec<u32>, [u32; 2]) {
+    let rasterizer = MeshRasterizer::new(ctx, &scene.raster_mesh(), camera.width, camera.height).unwrap();
+    rasterizer.render(camera, &RasterSettings { near: near as f32, count_writes: true }).unwrap();
+    (rasterizer.read_frame().unwrap(), rasterizer.read_write_counts().unwrap(), rasterizer.read_counters().unwrap())
+}
+
+#[test]
+fn closed_meshes_and_shared_edges_are_watertight() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(62);
+    // A plane covering the whole image, edges through pixel centres: every pixel exactly once,
+    // through the small-triangle path (5-pixel cells) and the tiled path (29-pixel cells).
+    for step in [5.0, 29.0] {
+        let (grid, cam) = pixel_grid(step, 70, 45);
+        let (_, counts, [large, _]) = render_counting(gpu.ctx(), &grid, &cam, 0.05);
+        assert_eq!(large > 0, step > 10.0, "cells of {step} pixels: {large} large triangles");
+        let wrong: Vec<_> = counts.iter().enumerate().filter(|(_, &c)| c != 1).collect();
+        assert!(wrong.is_empty(), "cells of {step} pixels: pixels not written exactly once: {:?}", &wrong[..wrong.len().min(10)]);
+    }
+    // A closed convex mesh: every pixel ray crosses it twice or not at all (a crack leaves 1,
+    // a double write 3), and the covered set is the reference's up to edge ties.
+    for (levels, eye) in [(3, [0.4, 0.2, 3.0]), (1, [0.1, 0.3, 1.9])] {
+        let sphere = Scene::ellipsoid(levels, [0.0; 3], [1.0, 0.7, 0.9]).jitter(&mut rng, 0.01).rounded();
+        let cam = camera(90, 70, 80.0, eye, [0.0; 3]);
+        let (frame, counts, _) = render_counting(gpu.ctx(), &sphere, &cam, 0.05);
+        let odd: Vec<_> = counts.iter().enumerate().filter(|(_, &c)| c != 0 && c != 2).collect();
+        assert!(odd.is_empty(), "sphere level {levels}: write counts other than 0 or 2: {:?}", &odd[..odd.len().min(10)]);
+        let reference = sphere.reference(&cam, 0.05);
+        let covered = |ids: &[u32]| ids.iter().map(|&t| t != NO_TRIANGLE).collect::<Vec<_>>();
+        let (ours, theirs) = (covered(&frame.ids), covered(&reference.ids));
+        for i in 0..ours.len() {
+            assert!(ours[i] == theirs[i] || is_tie(i, (frame.ids[i], reference.ids[i]), &sphere, &cam, 0.05), "sphere level {levels}: coverage differs at pixel {i}");
+            assert_eq!(ours[i], counts[i] == 2, "pixel {i}: covered but not written twice");
+        }
+    }
+}
+
+/// Largest absolute difference over the components of two pixel arrays at the given pixels.
+fn worst<const N: usize>(ours: &[[f32; N]], theirs: &[[f64; N]], pixels: &[usize]) -> f64 {
+    pixels.iter().flat_map(|&i| (0..N).map(move |k| (ours[i][k] as f64 - theirs[i][k]).abs())).fold(0.0, f64::max)
+}
+
+/// Resolve and anti-aliasing against the f64 reference: ids up to ties; barycentrics, colour,
+/// depth and normals where the ids agree; the anti-aliased image where the whole 3x3
+/// neighbourhood agrees (a pixel's blend reads its neighbours).
+fn assert_matches_reference(ctx: &Arc<GpuContext>, scene: &Scene, cam: &Camera, near: f64, what: &str) {
+    let frame = gpu_render(ctx, scene, cam, &settings(near));
+    let reference = scene.reference(cam, near);
+    assert_ids_agree(&frame.ids, &reference.ids, 0.995, scene, cam, near, what);
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let same: Vec<usize> = (0..w * h).filter(|&i| frame.ids[i] == reference.ids[i]).collect();
+    assert!(worst(&frame.barycentrics, &reference.barycentrics, &same) <= 2e-4, "{what}: barycentrics");
+    assert!(worst(&frame.resolved, &reference.resolved, &same) <= 2e-4, "{what}: resolved colour");
+    assert!(worst(&frame.normals, &reference.normals, &same) <= 1e-4, "{what}: normals");
+    for &i in &same {
+        assert!((frame.depth[i] as f64 - reference.depth[i]).abs() <= 1e-5 * reference.depth[i].max(1.0), "{what}: depth at {i}");
+    }
+    let neighbourhood_same: Vec<usize> = (0..w * h)
+        .filter(|&i| {
+            let (x, y) = ((i % w) as i64, (i / w) as i64);
+            (-1..=1).all(|dy| (-1..=1).all(|dx| {
+                let (nx, ny) = (x + dx, y + dy);
+                nx < 0 || ny < 0 || nx >= w as i64 || ny >= h as i64 || frame.ids[ny as usize * w + nx as usize] == reference.ids[ny as usize * w + nx as usize]
+            }))
+        })
+        .collect();
+    let aa: Vec<[f32; 4]> = (0..w * h).map(|i| [frame.color[i][0], frame.color[i][1], frame.color[i][2], frame.mask[i]]).collect();
+    let blended = neighbourhood_same.iter().filter(|&&i| aa[i] != frame.resolved[i]).count();
+    assert!(blended > 0 || reference.ids.iter().all(|&t| t == NO_TRIANGLE), "{what}: anti-aliasing changed nothing");
+    assert!(worst(&aa, &reference.antialiased, &neighbourhood_same) <= 2e-4, "{what}: anti-aliased image");
+}
+
+#[test]
+fn resolve_and_antialiasing_match_the_reference() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(63);
+    let scene = Scene::ellipsoid(2, [0.0; 3], [1.0, 0.8, 0.9]).jitter(&mut rng, 0.03).with_random_triangles(&mut rng, 40, [0.0; 3], 2.5, 0.7).rounded();
+    for (k, eye) in [[0.3, 0.5, 3.2], [-2.5, 1.0, 1.5], [0.0, -0.4, 2.0]].into_iter().enumerate() {
+        let cam = camera(70 + 9 * k as u32, 56, 70.0, eye, [0.05, 0.0, 0.0]);
+        assert_matches_reference(gpu.ctx(), &scene, &cam, 0.05, &format!("view {k}"));
+    }
+}
+
+#[test]
+fn meshes_crossing_the_near_plane() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(64);
+    // The camera sits inside a large sphere (every view ray hits it, triangles straddle the
+    // near plane), and a ground grid runs from behind the camera to far ahead.
+    let room = Scene::ellipsoid(2, [0.0; 3], [1.0; 3]).jitter(&mut rng, 0.02).with_random_triangles(&mut rng, 20, [0.0, 0.0, 0.6], 0.6, 0.5).rounded();
+    let near = 0.3;
+    let inside = camera(64, 48, 40.0, [0.0, 0.1, 0.05], [0.2, 0.0, 1.0]);
+    let (frame, _, _) = render_counting(gpu.ctx(), &room, &inside, near);
+    assert!(frame.ids.iter().all(|&t| t != NO_TRIANGLE), "a closed room must cover every pixel");
+    assert_matches_reference(gpu.ctx(), &room, &inside, near, "inside a sphere");
+    let theirs = oracle::triangle_ids(gpu.ctx(), &room.camera_positions(&inside), &room.faces, &inside, near);
+    assert_ids_agree(&frame.ids, &theirs, 0.999, &room, &inside, near, "inside a sphere vs graphics pipeline");
+
+    let (mut ground, _) = pixel_grid(9.0, 40, 40);
+    for p in &mut ground.positions {
+        *p = [p[0] * 8.0, -0.5, p[1] * 8.0];
+    }
+    let ground = ground.rounded();
+    let cam = camera(72, 54, 60.0, [0.0, 0.2, 0.0], [0.0, 0.0, 3.0]);
+    let cam_positions = ground.camera_positions(&cam);
+    assert!(cam_positions.iter().any(|p| p.z < 0.0) && cam_positions.iter().any(|p| p.z > 3.0), "the grid must cross the near plane");
+    assert_matches_reference(gpu.ctx(), &ground, &cam, 0.1, "ground plane");
+    let ours = gpu_render(gpu.ctx(), &ground, &cam, &settings(0.1)).ids;
+    let theirs = oracle::triangle_ids(gpu.ctx(), &cam_positions, &ground.faces, &cam, 0.1);
+    assert_ids_agree(&ours, &theirs, 0.999, &ground, &cam, 0.1, "ground plane vs graphics pipeline");
+}
+
+#[test]
+fn degenerate_edge_on_subpixel_and_empty_meshes() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(65);
+    let cam = camera(48, 40, 50.0, [0.0, 0.0, 3.0], [0.0; 3]);
+    let eye = cam.center();
+    // Edge-on: the plane through the camera centre; zero area: a repeated corner and three
+    // collinear corners. None covers a pixel.
+    let degenerate = Scene {
+        positions: vec![
+            [eye.x, eye.y + 0.7, eye.z - 3.0], [eye.x, eye.y - 0.5, eye.z - 2.5], [eye.x, eye.y + 0.2, eye.z - 4.0],
+            [-0.5, -0.5, 0.0], [0.6, 0.4, 0.0],
+            [-0.6, 0.3, 0.1], [0.0, 0.0, 0.1], [0.6, -0.3, 0.1],
+        ],
+        faces: vec![[0, 1, 2], [3, 4, 4], [5, 6, 7]],
+        colors: vec![[1.0; 3]; 8],
+    };
+    let (frame, counts, _) = render_counting(gpu.ctx(), &degenerate, &cam, 0.05);
+    assert!(frame.ids.iter().all(|&t| t == NO_TRIANGLE), "degenerate triangles drew pixels");
+    assert!(counts.iter().all(|&c| c == 0) && frame.mask.iter().all(|&m| m == 0.0));
+
+    // Sub-pixel triangles cover a pixel exactly when one holds a pixel centre.
+    let tiny = Scene { positions: vec![], faces: vec![], colors: vec![] }.with_random_triangles(&mut rng, 400, [0.0; 3], 1.6, 0.05).rounded();
+    let ours = gpu_render(gpu.ctx(), &tiny, &cam, &settings(0.05)).ids;
+    let reference = tiny.reference(&cam, 0.05);
+    assert_ids_agree(&ours, &reference.ids, 0.999, &tiny, &cam, 0.05, "sub-pixel triangles");
+    let drawn = ours.iter().filter(|&&t| t != NO_TRIANGLE).count();
+    assert!(drawn > 5 && drawn < 400, "{drawn} pixels drawn by 400 sub-pixel triangles");
+
+    // The empty mesh: nothing drawn, empty gradients, validation clean.
+    let empty = RasterMesh::default();
+    let rasterizer = MeshRasterizer::new(gpu.ctx(), &empty, cam.width, cam.height).unwrap();
+    rasterizer.render(&cam, &settings(0.05)).unwrap();
+    let frame = rasterizer.read_frame().unwrap();
+    assert!(frame.ids.iter().all(|&t| t == NO_TRIANGLE) && frame.mask.iter().all(|&m| m == 0.0));
+    let pixels = (cam.width * cam.height) as usize;
+    let (gp, gc) = rasterizer.gradients(&cam, &settings(0.05), &vec![[1.0; 3]; pixels], &vec![1.0; pixels]).unwrap();
+    assert!(gp.is_empty() && gc.is_empty());
+}
+
+#[test]
+fn bad_input_is_refused_with_a_clear_error() {
+    let gpu = common::gpu();
+    let scene = Scene::ellipsoid(1, [0.0; 3], [1.0; 3]);
+    let mut rasterizer = MeshRasterizer::new(gpu.ctx(), &scene.raster_mesh(), 32, 32).unwrap();
+    let mut positions: Vec<[f32; 3]> = scene.positions.iter().map(|p| p.map(|c| c as f32)).collect();
+    positions[5][2] = f32::INFINITY;
+    let e = rasterizer.write_positions(&positions).unwrap_err().to_string();
+    assert!(e.contains("vertex 5") && e.contains("non-finite"), "{e}");
+    let e = rasterizer.write_positions(&positions[..3]).unwrap_err().to_string();
+    assert!(e.contains("positions") && e.contains('3'), "{e}");
+    let wrong_size = camera(40, 32, 40.0, [0.0, 0.0, 3.0], [0.0; 3]);
+    let e = rasterizer.render(&wrong_size, &settings(0.05)).unwrap_err().to_string();
+    assert!(e.contains("(40, 32)") && e.contains("(32, 32)"), "{e}");
+    let cam = camera(32, 32, 40.0, [0.0, 0.0, 3.0], [0.0; 3]);
+    let e = rasterizer.render(&cam, &RasterSettings { near: -1.0, count_writes: false }).unwrap_err().to_string();
+    assert!(e.contains("near"), "{e}");
+    let e = rasterizer.gradients(&cam, &settings(0.05), &[[0.0; 3]; 10], &[0.0; 1024]).unwrap_err().to_string();
+    assert!(e.contains("dL/dcolour"), "{e}");
+}
