@@ -380,3 +380,164 @@ fn bad_input_is_refused_with_a_clear_error() {
     let e = rasterizer.gradients(&cam, &settings(0.05), &[[0.0; 3]; 10], &[0.0; 1024]).unwrap_err().to_string();
     assert!(e.contains("dL/dcolour"), "{e}");
 }
+
+/// Σ weights · (anti-aliased rgb, mask) of the reference render.
+fn reference_loss(scene: &Scene, cam: &Camera, near: f64, weights: &[[f64; 4]]) -> f64 {
+    let frame = scene.reference(cam, near);
+    frame.antialiased.iter().zip(weights).map(|(o, w)| (0..4).map(|k| o[k] * w[k]).sum::<f64>()).sum()
+}
+
+/// Central differences of `reference_loss` in every coordinate of `values(scene)`.
+fn finite_differences(scene: &Scene, cam: &Camera, near: f64, weights: &[[f64; 4]], eps: f64, colors: bool) -> Vec<[f64; 3]> {
+    let n = scene.positions.len();
+    (0..n)
+        .map(|v| {
+            [0, 1, 2].map(|k| {
+                let mut shifted = scene.clone();
+                let at = |s: &mut Scene, d: f64| if colors { s.colors[v][k] += d } else { s.positions[v][k] += d };
+                at(&mut shifted, eps);
+                let plus = reference_loss(&shifted, cam, near, weights);
+                at(&mut shifted, -2.0 * eps);
+                let minus = reference_loss(&shifted, cam, near, weights);
+                (plus - minus) / (2.0 * eps)
+            })
+        })
+        .collect()
+}
+
+/// ‖a − b‖ / ‖b‖ over all components.
+fn relative_error(a: &[[f32; 3]], b: &[[f64; 3]]) -> f64 {
+    let (mut diff, mut norm) = (0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        for k in 0..3 {
+            diff += (x[k] as f64 - y[k]).powi(2);
+            norm += y[k] * y[k];
+        }
+    }
+    (diff / norm).sqrt()
+}
+
+#[test]
+fn gradients_match_finite_differences() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(66);
+    let mut scene = Scene::ellipsoid(2, [0.0; 3], [1.0, 0.8, 0.9]).jitter(&mut rng, 0.03).with_random_triangles(&mut rng, 4, [0.0, 0.0, 1.2], 1.0, 0.6);
+    for c in &mut scene.colors {
+        *c = [rng.next_f64(), rng.next_f64(), rng.next_f64()];
+    }
+    let scene = scene.rounded();
+    let cam = camera(40, 36, 38.0, [0.3, 0.4, 3.0], [0.0; 3]);
+    let near = 0.05;
+    let pixels = (cam.width * cam.height) as usize;
+    let mut weight = || 2.0 * rng.next_f64() - 1.0;
+    // Colour and mask together, then the mask alone (only the outline can move it).
+    let mixed: Vec<[f64; 4]> = (0..pixels).map(|_| [weight(), weight(), weight(), weight()]).collect();
+    let mask_only: Vec<[f64; 4]> = mixed.iter().map(|w| [0.0, 0.0, 0.0, w[3]]).collect();
+    let rasterizer = MeshRasterizer::new(gpu.ctx(), &scene.raster_mesh(), cam.width, cam.height).unwrap();
+    rasterizer.render(&cam, &settings(near)).unwrap();
+    for (what, weights) in [("colour + mask", &mixed), ("mask only", &mask_only)] {
+        let grad_color: Vec<[f32; 3]> = weights.iter().map(|w| [w[0] as f32, w[1] as f32, w[2] as f32]).collect();
+        let grad_mask: Vec<f32> = weights.iter().map(|w| w[3] as f32).collect();
+        let (gp, gc) = rasterizer.gradients(&cam, &settings(near), &grad_color, &grad_mask).unwrap();
+        // Small steps keep edges from sweeping over pixel centres (where ids change).
+        let fd_positions = finite_differences(&scene, &cam, near, weights, 1e-6, false);
+        let position_error = relative_error(&gp, &fd_positions);
+        assert!(position_error <= 1e-3, "{what}: position gradients, relative error {position_error:.2e}");
+        let moved = fd_positions.iter().filter(|g| g.iter().any(|&x| x != 0.0)).count();
+        assert!(moved > 20, "{what}: only {moved} vertices change the loss");
+        let fd_colors = finite_differences(&scene, &cam, near, weights, 1e-3, true);
+        let color_error = if what == "mask only" { gc.iter().flatten().map(|g| g.abs() as f64).fold(0.0, f64::max) } else { relative_error(&gc, &fd_colors) };
+        assert!(color_error <= 1e-4, "{what}: colour gradients, error {color_error:.2e}");
+    }
+}
+
+/// Vertex neighbours from the faces (for the smoothing term of the fit).
+fn one_rings(vertices: usize, faces: &[[u32; 3]]) -> Vec<Vec<usize>> {
+    let mut rings = vec![Vec::new(); vertices];
+    for f in faces {
+        for k in 0..3 {
+            let (a, b) = (f[k] as usize, f[(k + 1) % 3] as usize);
+            for (x, y) in [(a, b), (b, a)] {
+                if !rings[x].contains(&y) {
+                    rings[x].push(y);
+                }
+            }
+        }
+    }
+    rings
+}
+
+/// Coverage of every view, and the mask-loss gradient of the anti-aliased mask towards `targets`.
+fn mask_step(rasterizer: &MeshRasterizer, cams: &[Camera], targets: &[Vec<f32>], grad: &mut [[f64; 3]]) -> Vec<Vec<bool>> {
+    let near = settings(0.05);
+    let mut coverage = Vec::new();
+    for (cam, target) in cams.iter().zip(targets) {
+        rasterizer.render(cam, &near).unwrap();
+        let frame = rasterizer.read_frame().unwrap();
+        let n = frame.mask.len() as f32;
+        let grad_mask: Vec<f32> = frame.mask.iter().zip(target).map(|(m, t)| 2.0 * (m - t) / n).collect();
+        let (gp, _) = rasterizer.gradients(cam, &near, &vec![[0.0; 3]; frame.mask.len()], &grad_mask).unwrap();
+        for (g, d) in grad.iter_mut().zip(&gp) {
+            for k in 0..3 {
+                g[k] += d[k] as f64;
+            }
+        }
+        coverage.push(frame.ids.iter().map(|&t| t != NO_TRIANGLE).collect());
+    }
+    coverage
+}
+
+fn iou(a: &[Vec<bool>], b: &[Vec<bool>]) -> f64 {
+    let pairs = a.iter().flatten().zip(b.iter().flatten());
+    let (both, either) = pairs.fold((0, 0), |(i, u), (&x, &y)| (i + (x && y) as usize, u + (x || y) as usize));
+    both as f64 / either as f64
+}
+
+#[test]
+fn sphere_fits_ellipsoid_silhouettes() {
+    let gpu = common::gpu();
+    let cams: Vec<Camera> = (0..8)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / 8.0;
+            let elevation = if k % 2 == 0 { 0.8 } else { -0.6 };
+            camera(64, 64, 60.0, [4.0 * a.cos(), elevation, 4.0 * a.sin()], [0.0; 3])
+        })
+        .collect();
+    let target = Scene::ellipsoid(4, [0.1, 0.0, -0.1], [1.3, 0.7, 0.95]);
+    let target_raster = MeshRasterizer::new(gpu.ctx(), &target.raster_mesh(), 64, 64).unwrap();
+    let (mut target_masks, mut target_coverage) = (Vec::new(), Vec::new());
+    for cam in &cams {
+        target_raster.render(cam, &settings(0.05)).unwrap();
+        let frame = target_raster.read_frame().unwrap();
+        target_coverage.push(frame.ids.iter().map(|&t| t != NO_TRIANGLE).collect::<Vec<_>>());
+        target_masks.push(frame.mask);
+    }
+    let mut scene = Scene::ellipsoid(2, [0.0; 3], [1.0; 3]);
+    let rings = one_rings(scene.positions.len(), &scene.faces);
+    let mut rasterizer = MeshRasterizer::new(gpu.ctx(), &scene.raster_mesh(), 64, 64).unwrap();
+    let mut grad = vec![[0.0; 3]; scene.positions.len()];
+    let start = iou(&mask_step(&rasterizer, &cams, &target_masks, &mut grad), &target_coverage);
+    // Adam on the positions with a mild pull towards each 1-ring's mean.
+    let (lr, smoothing) = (0.01, 0.05);
+    let (mut m, mut v) = (vec![[0.0; 3]; grad.len()], vec![[0.0; 3]; grad.len()]);
+    let mut last = start;
+    for step in 1..=120 {
+        for (i, ring) in rings.iter().enumerate() {
+            let mean = ring.iter().fold([0.0; 3], |acc, &j| [0, 1, 2].map(|k| acc[k] + scene.positions[j][k] / ring.len() as f64));
+            for k in 0..3 {
+                let g = grad[i][k] + smoothing * (scene.positions[i][k] - mean[k]);
+                m[i][k] = 0.9 * m[i][k] + 0.1 * g;
+                v[i][k] = 0.999 * v[i][k] + 0.001 * g * g;
+                let (mh, vh) = (m[i][k] / (1.0 - 0.9f64.powi(step)), v[i][k] / (1.0 - 0.999f64.powi(step)));
+                scene.positions[i][k] -= lr * mh / (vh.sqrt() + 1e-8);
+            }
+        }
+        let positions: Vec<[f32; 3]> = scene.positions.iter().map(|p| p.map(|c| c as f32)).collect();
+        rasterizer.write_positions(&positions).unwrap();
+        grad.iter_mut().for_each(|g| *g = [0.0; 3]);
+        last = iou(&mask_step(&rasterizer, &cams, &target_masks, &mut grad), &target_coverage);
+    }
+    eprintln!("silhouette fit: IoU {start:.3} -> {last:.3}");
+    assert!(start < 0.9, "the start must be a real fit (IoU {start:.3})");
+    assert!(last >= 0.95, "IoU {start:.3} -> {last:.3}");
+}
