@@ -1,12 +1,15 @@
 //! Benchmarks that report speed against a bound measured in the same run: the GPU copy
 //! bandwidth (a compute copy kernel and the transfer engine) and the CPU's `sort_unstable`;
-//! and the splatting renderer's forward and backward per view, pass by pass.
+//! the splatting renderer's and the mesh rasterizer's forward and backward per view, pass by
+//! pass.
 
 mod copy;
+mod mesh;
 mod sort;
 mod splat;
 
 pub use copy::{CopyBandwidth, CopyProbe};
+pub use mesh::{bench_mesh, bumpy_sphere, MeshBenchConfig, MeshBenchReport};
 pub use sort::{bench_sort, SortBenchReport};
 pub use splat::{bench_splat, BenchWork, random_scene, ring_cameras, SplatBenchConfig, SplatBenchReport};
 
