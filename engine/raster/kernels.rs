@@ -1,5 +1,5 @@
-//! The raster kernels, one pipeline per shader. Forward: transform → setup (with the small-
-//! triangle raster) → large-triangle raster → resolve → anti-aliasing. Backward:
+//! The raster kernels, one pipeline per shader. Forward: transform → outline flags → setup
+//! (with the small-triangle raster) → large-triangle raster → resolve → anti-aliasing. Backward:
 //! anti-aliasing backward → interior backward.
 
 use super::params::RasterParams;
@@ -12,6 +12,7 @@ pub(crate) const LINEAR_WORKGROUP: u32 = 128;
 
 pub(crate) struct Kernels {
     pub transform: ComputePipeline,
+    pub outline: ComputePipeline,
     pub setup: ComputePipeline,
     pub raster_large: ComputePipeline,
     pub resolve: ComputePipeline,
@@ -30,6 +31,7 @@ impl Kernels {
         };
         Ok(Self {
             transform: pipeline("raster transform", shaders::RASTER_TRANSFORM, 2, &linear)?,
+            outline: pipeline("raster outline flags", shaders::RASTER_OUTLINE, 4, &linear)?,
             setup: pipeline("raster setup", shaders::RASTER_SETUP, 7, &linear)?,
             raster_large: pipeline("raster large triangles", shaders::RASTER_RASTER_LARGE, 5, &[])?,
             resolve: pipeline("raster resolve", shaders::RASTER_RESOLVE, 9, &[])?,

@@ -35,6 +35,8 @@ pub(super) struct MeshBuffers {
     pub(super) faces: GpuBuffer<u32>,
     pub(super) adjacency: GpuBuffer<i32>,
     pub(super) camera_positions: GpuBuffer<[f32; 4]>,
+    /// Per triangle: outline edges (bits 0-2) and in front of the near plane (bit 3).
+    pub(super) outline_flags: GpuBuffer<u32>,
     /// Two per triangle: the near clip can split one in two.
     pub(super) subs: GpuBuffer<SubTriangle>,
     pub(super) large: GpuBuffer<u32>,
@@ -80,6 +82,7 @@ impl MeshBuffers {
             faces: GpuBuffer::from_slice(ctx, "mesh faces", faces)?,
             adjacency: GpuBuffer::from_slice(ctx, "mesh adjacency", &edge_adjacency(&mesh.faces))?,
             camera_positions: GpuBuffer::new(ctx, "mesh camera positions", mesh.positions.len())?,
+            outline_flags: GpuBuffer::new(ctx, "mesh outline flags", t)?,
             subs: GpuBuffer::new(ctx, "raster sub-triangles", 2 * t)?,
             large: GpuBuffer::new(ctx, "raster large list", 2 * t)?,
             counters: GpuBuffer::new(ctx, "raster counters", 2)?,

@@ -23,6 +23,10 @@ impl MeshRasterizer {
         rec.begin_pass("raster transform");
         rec.dispatch_1d(&k.transform, &[m.positions.binding(), m.camera_positions.binding()], params, linear_groups(self.vertices))?;
         rec.end_pass();
+        rec.begin_pass("raster outline");
+        let outline = [m.faces.binding(), m.camera_positions.binding(), m.adjacency.binding(), m.outline_flags.binding()];
+        rec.dispatch_1d(&k.outline, &outline, params, linear_groups(self.triangles))?;
+        rec.end_pass();
         rec.begin_pass("raster setup + small");
         let setup = [
             m.faces.binding(),
@@ -57,7 +61,7 @@ impl MeshRasterizer {
         let aa = [
             m.faces.binding(),
             m.camera_positions.binding(),
-            m.adjacency.binding(),
+            m.outline_flags.binding(),
             im.ids.binding(),
             im.depth.binding(),
             im.rgba.binding(),
@@ -91,7 +95,7 @@ impl MeshRasterizer {
         let aa = [
             m.faces.binding(),
             m.camera_positions.binding(),
-            m.adjacency.binding(),
+            m.outline_flags.binding(),
             im.ids.binding(),
             im.depth.binding(),
             im.rgba.binding(),

@@ -4,7 +4,8 @@
 // the segment at fraction t from a (the covered side) blends the pair:
 //   t >= 1/2: out_b += (t - 1/2) (c_a - c_b)      t < 1/2: out_a += (1/2 - t) (c_b - c_a)
 // so the output moves continuously as the edge sweeps over pixel centres. Expects buffers
-// `ids`, `depth`, `faces`, `camera_positions`, `adjacency` and the include of triangle.glsl.
+// `ids`, `depth`, `faces`, `camera_positions`, `outline_flags` (outline.comp) and the include
+// of triangle.glsl.
 #ifndef RASTER_AA_GLSL
 #define RASTER_AA_GLSL
 
@@ -17,20 +18,6 @@ struct Crossing {
     float t;         // where the edge crosses, from a (0) to b (1)
 };
 
-bool faces_camera(uint t) {
-    uvec3 v;
-    vec3 v0, v1, v2;
-    triangle_corners(t, v, v0, v1, v2);
-    return dot(face_normal(v0, v1, v2), v0) < 0.0;
-}
-
-// Edge k of t is on the outline when no triangle lies across it or that one faces the other
-// way (a manifold mesh gives the neighbour by adjacency).
-bool silhouette_edge(uint t, uint k) {
-    int across = adjacency[3u * t + k];
-    return across < 0 || faces_camera(uint(across)) != faces_camera(t);
-}
-
 float screen_edge(vec2 a, vec2 b, vec2 p) {
     return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
 }
@@ -39,23 +26,24 @@ vec2 pixel_centre(ivec2 p) {
     return vec2(p) + 0.5;
 }
 
-// The first silhouette edge of triangle t leaving pixel a towards pixel b, if any. Triangles
+// The first outline edge of triangle t leaving pixel a towards pixel b, if any. Triangles
 // with a corner behind the near plane are skipped (their edges do not project to lines).
 Crossing crossing_from(uint t, ivec2 a, ivec2 b) {
     Crossing c = Crossing(false, t, 0u, a, b, 2.0);
+    uint flags = outline_flags[t];
+    if ((flags & FLAG_IN_FRONT) == 0u || (flags & 7u) == 0u) {
+        return c;
+    }
     uvec3 v;
     vec3 p[3];
     triangle_corners(t, v, p[0], p[1], p[2]);
-    if (min(p[0].z, min(p[1].z, p[2].z)) < near_plane()) {
-        return c;
-    }
     vec2 s[3] = vec2[3](project_point(p[0]), project_point(p[1]), project_point(p[2]));
     float orientation = sign(screen_edge(s[0], s[1], s[2]));
     for (uint k = 0u; k < 3u; k++) {
         vec2 e0 = s[k], e1 = s[(k + 1u) % 3u];
         float ea = orientation * screen_edge(e0, e1, pixel_centre(a));
         float eb = orientation * screen_edge(e0, e1, pixel_centre(b));
-        if (ea >= 0.0 && eb < 0.0 && silhouette_edge(t, k)) {
+        if (ea >= 0.0 && eb < 0.0 && (flags & (1u << k)) != 0u) {
             float t_cross = ea / (ea - eb);
             if (t_cross < c.t) {
                 c.found = true;

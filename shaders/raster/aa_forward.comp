@@ -7,7 +7,7 @@ layout(local_size_x = 16, local_size_y = 16) in;
 
 layout(std430, binding = 0) readonly buffer Faces { uint faces[]; };
 layout(std430, binding = 1) readonly buffer CameraPositions { vec4 camera_positions[]; };
-layout(std430, binding = 2) readonly buffer Adjacency { int adjacency[]; };
+layout(std430, binding = 2) readonly buffer OutlineFlags { uint outline_flags[]; };
 layout(std430, binding = 3) readonly buffer Ids { uint ids[]; };
 layout(std430, binding = 4) readonly buffer Depth { float depth[]; };
 layout(std430, binding = 5) readonly buffer Rgba { vec4 rgba[]; };

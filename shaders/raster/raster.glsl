@@ -15,6 +15,8 @@ const uint SMALL_TRIANGLE_PIXELS = 64u;
 const float GUARD_BAND_PIXELS = 4194304.0;
 const uint NO_TRIANGLE = 0xffffffffu;
 const uint64_t EMPTY_PIXEL = 0xffffffffffffffffUL;
+// Bit 3 of a triangle's outline flags (outline.comp): all corners in front of the near plane.
+const uint FLAG_IN_FRONT = 8u;
 // Bits of RasterParams.counts.z.
 const uint FLAG_COUNT_WRITES = 1u;
 
