@@ -10,7 +10,7 @@ const uint TILE_SIZE = 16u;
 const int SUBPIXEL = 256;
 // A triangle whose clamped bounding box holds at most this many pixels is rasterized by one
 // thread; a larger one goes to the per-tile kernel.
-const uint SMALL_TRIANGLE_PIXELS = 64u;
+const uint SMALL_TRIANGLE_PIXELS = 256u;
 // Sub-pixel coordinates must stay below 2^30 so edge products fit in 63 bits.
 const float GUARD_BAND_PIXELS = 4194304.0;
 const uint NO_TRIANGLE = 0xffffffffu;
