@@ -197,7 +197,7 @@ fn ids_match_the_graphics_pipeline() {
     let cases = [
         ("sphere + random triangles", cluttered, camera(96, 72, 90.0, [0.3, 0.5, 3.2], [0.0; 3])),
         ("close-up (large triangles)", close, camera(80, 64, 80.0, [0.2, 0.3, 1.6], [0.0; 3])),
-        ("pixel-centre grid, small cells", grid_small, grid_camera.clone()),
+        ("pixel-centre grid, small cells", grid_small, grid_camera),
         ("pixel-centre grid, large cells", grid_large, grid_camera),
     ];
     for (what, scene, cam) in cases {
@@ -356,8 +356,8 @@ fn degenerate_edge_on_subpixel_and_empty_meshes() {
     let frame = rasterizer.read_frame().unwrap();
     assert!(frame.ids.iter().all(|&t| t == NO_TRIANGLE) && frame.mask.iter().all(|&m| m == 0.0));
     let pixels = (cam.width * cam.height) as usize;
-    let (gp, gc) = rasterizer.gradients(&cam, &settings(0.05), &vec![[1.0; 3]; pixels], &vec![1.0; pixels]).unwrap();
-    assert!(gp.is_empty() && gc.is_empty());
+    let grads = rasterizer.gradients(&cam, &settings(0.05), &vec![[1.0; 3]; pixels], &vec![1.0; pixels]).unwrap();
+    assert!(grads.positions.is_empty() && grads.colors.is_empty());
 }
 
 #[test]
@@ -438,7 +438,8 @@ fn gradients_match_finite_differences() {
     for (what, weights) in [("colour + mask", &mixed), ("mask only", &mask_only)] {
         let grad_color: Vec<[f32; 3]> = weights.iter().map(|w| [w[0] as f32, w[1] as f32, w[2] as f32]).collect();
         let grad_mask: Vec<f32> = weights.iter().map(|w| w[3] as f32).collect();
-        let (gp, gc) = rasterizer.gradients(&cam, &settings(near), &grad_color, &grad_mask).unwrap();
+        let grads = rasterizer.gradients(&cam, &settings(near), &grad_color, &grad_mask).unwrap();
+        let (gp, gc) = (grads.positions, grads.colors);
         // Small steps keep edges from sweeping over pixel centres (where ids change).
         let fd_positions = finite_differences(&scene, &cam, near, weights, 1e-6, false);
         let position_error = relative_error(&gp, &fd_positions);
@@ -476,7 +477,7 @@ fn mask_step(rasterizer: &MeshRasterizer, cams: &[Camera], targets: &[Vec<f32>],
         let frame = rasterizer.read_frame().unwrap();
         let n = frame.mask.len() as f32;
         let grad_mask: Vec<f32> = frame.mask.iter().zip(target).map(|(m, t)| 2.0 * (m - t) / n).collect();
-        let (gp, _) = rasterizer.gradients(cam, &near, &vec![[0.0; 3]; frame.mask.len()], &grad_mask).unwrap();
+        let gp = rasterizer.gradients(cam, &near, &vec![[0.0; 3]; frame.mask.len()], &grad_mask).unwrap().positions;
         for (g, d) in grad.iter_mut().zip(&gp) {
             for k in 0..3 {
                 g[k] += d[k] as f64;

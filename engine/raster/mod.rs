@@ -36,6 +36,7 @@ pub mod reference;
 pub use mesh::{edge_adjacency, RasterMesh};
 pub use params::{RasterParams, RasterSettings, SubTriangle, NO_TRIANGLE};
 pub use rasterizer::{MeshRasterizer, RasterFrame};
+pub use record::VertexGradients;
 
 use crate::gpu::GpuError;
 

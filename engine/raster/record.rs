@@ -7,6 +7,13 @@ use super::RasterError;
 use crate::camera::Camera;
 use crate::gpu::{GpuBuffer, PassTimes, Recorder};
 
+/// Loss gradients per vertex, read back.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct VertexGradients {
+    pub positions: Vec<[f32; 3]>,
+    pub colors: Vec<[f32; 3]>,
+}
+
 impl MeshRasterizer {
     /// Records the forward pass for `params` (from [`Self::params`]): afterwards the colour,
     /// mask, id, barycentric, depth and normal buffers hold this view.
@@ -130,8 +137,8 @@ impl MeshRasterizer {
     }
 
     /// Backward of [`Self::render`] with the same camera and settings, in its own submission:
-    /// returns (dL/dposition, dL/dcolour) per vertex from host-side image gradients.
-    pub fn gradients(&self, camera: &Camera, settings: &RasterSettings, grad_color: &[[f32; 3]], grad_mask: &[f32]) -> Result<(Vec<[f32; 3]>, Vec<[f32; 3]>), RasterError> {
+    /// returns dL/dposition and dL/dcolour per vertex from host-side image gradients.
+    pub fn gradients(&self, camera: &Camera, settings: &RasterSettings, grad_color: &[[f32; 3]], grad_mask: &[f32]) -> Result<VertexGradients, RasterError> {
         let params = self.params(camera, settings)?;
         let pixels = self.image.pixels();
         check_len("dL/dcolour image", grad_color.len(), pixels)?;
@@ -145,7 +152,7 @@ impl MeshRasterizer {
         self.record_backward(&mut rec, &params, (&grad_color, &grad_mask), (&grad_positions, &grad_colors))?;
         rec.submit_and_wait()?;
         let unflat = |v: Vec<f32>| v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        Ok((unflat(grad_positions.read()?), unflat(grad_colors.read()?)))
+        Ok(VertexGradients { positions: unflat(grad_positions.read()?), colors: unflat(grad_colors.read()?) })
     }
 
     /// Reads every image of the last forward.

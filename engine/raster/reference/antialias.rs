@@ -69,8 +69,9 @@ pub fn antialias(frame: &ReferenceFrame, cam: &[DVec3], mesh: &ReferenceMesh, ca
     let mut out = frame.resolved.clone();
     let mut blend = |c: Crossing| {
         let (target, source, weight) = if c.t >= 0.5 { (c.other, c.covered, c.t - 0.5) } else { (c.covered, c.other, 0.5 - c.t) };
-        for k in 0..4 {
-            out[target][k] += weight * (frame.resolved[source][k] - frame.resolved[target][k]);
+        let (from, to) = (frame.resolved[source], frame.resolved[target]);
+        for (k, value) in out[target].iter_mut().enumerate() {
+            *value += weight * (from[k] - to[k]);
         }
     };
     for y in 0..h {
