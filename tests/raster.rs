@@ -193,7 +193,7 @@ fn ids_match_the_graphics_pipeline() {
     let cluttered = sphere.clone().with_random_triangles(&mut rng, 60, [0.0; 3], 2.4, 0.8).rounded();
     let close = Scene::ellipsoid(1, [0.0; 3], [1.0; 3]).jitter(&mut rng, 0.05).rounded();
     let (grid_small, grid_camera) = pixel_grid(5.0, 64, 48);
-    let (grid_large, _) = pixel_grid(13.0, 64, 48);
+    let (grid_large, _) = pixel_grid(29.0, 64, 48);
     let cases = [
         ("sphere + random triangles", cluttered, camera(96, 72, 90.0, [0.3, 0.5, 3.2], [0.0; 3])),
         ("close-up (large triangles)", close, camera(80, 64, 80.0, [0.2, 0.3, 1.6], [0.0; 3])),
@@ -202,7 +202,9 @@ fn ids_match_the_graphics_pipeline() {
     ];
     for (what, scene, cam) in cases {
         let near = 0.05;
-        let ours = gpu_render(gpu.ctx(), &scene, &cam, &settings(near)).ids;
+        let (frame, _, [large, _]) = render_counting(gpu.ctx(), &scene, &cam, near);
+        assert!(large > 0 || !what.contains("large"), "{what}: no triangle took the tiled path");
+        let ours = frame.ids;
         let theirs = oracle::triangle_ids(gpu.ctx(), &scene.camera_positions(&cam), &scene.faces, &cam, near);
         assert_ids_agree(&ours, &theirs, 0.999, &scene, &cam, near, what);
     }
@@ -541,4 +543,23 @@ fn sphere_fits_ellipsoid_silhouettes() {
     eprintln!("silhouette fit: IoU {start:.3} -> {last:.3}");
     assert!(start < 0.9, "the start must be a real fit (IoU {start:.3})");
     assert!(last >= 0.95, "IoU {start:.3} -> {last:.3}");
+}
+
+#[test]
+fn sub_triangles_past_the_guard_band_are_dropped_and_counted() {
+    let gpu = common::gpu();
+    // With a tiny near plane, a corner just in front of it projects millions of pixels away.
+    let near = 1e-6;
+    let cam = camera(32, 32, 40.0, [0.0, 0.0, 3.0], [0.0; 3]);
+    let corner = cam.world_to_camera.inverse().transform_point3(DVec3::new(1.0, 0.0, 2e-6)).to_array();
+    let scene = Scene {
+        positions: vec![corner, [-0.5, -0.5, 0.0], [0.5, -0.5, 0.0], [-0.5, 0.5, 0.0], [0.5, 0.5, 0.0], [0.0, 0.6, 0.0]],
+        faces: vec![[0, 1, 2], [3, 4, 5]],
+        colors: vec![[1.0; 3]; 6],
+    }
+    .rounded();
+    let (frame, _, [_, dropped]) = render_counting(gpu.ctx(), &scene, &cam, near);
+    assert_eq!(dropped, 1, "the far-projecting triangle is dropped, once");
+    assert!(frame.ids.iter().all(|&t| t != 0), "the dropped triangle drew pixels");
+    assert!(frame.ids.contains(&1), "the ordinary triangle must still be drawn");
 }

@@ -1,6 +1,6 @@
 //! The raster kernels, one pipeline per shader. Forward: transform → outline flags → setup
-//! (with the small-triangle raster) → large-triangle raster → resolve → anti-aliasing. Backward:
-//! anti-aliasing backward → interior backward.
+//! (with the small-triangle raster) → large-triangle raster → resolve → anti-aliasing
+//! crossings → anti-aliasing blend. Backward: anti-aliasing backward → interior backward.
 
 use super::params::RasterParams;
 use crate::gpu::{ComputePipeline, GpuContext, GpuResult, PipelineDesc};
@@ -16,6 +16,7 @@ pub(crate) struct Kernels {
     pub setup: ComputePipeline,
     pub raster_large: ComputePipeline,
     pub resolve: ComputePipeline,
+    pub aa_pairs: ComputePipeline,
     pub aa_forward: ComputePipeline,
     pub aa_backward: ComputePipeline,
     pub interior_backward: ComputePipeline,
@@ -35,8 +36,9 @@ impl Kernels {
             setup: pipeline("raster setup", shaders::RASTER_SETUP, 7, &linear)?,
             raster_large: pipeline("raster large triangles", shaders::RASTER_RASTER_LARGE, 5, &[])?,
             resolve: pipeline("raster resolve", shaders::RASTER_RESOLVE, 9, &[])?,
-            aa_forward: pipeline("raster antialias", shaders::RASTER_AA_FORWARD, 8, &[])?,
-            aa_backward: pipeline("raster antialias backward", shaders::RASTER_AA_BACKWARD, 10, &[])?,
+            aa_pairs: pipeline("raster antialias crossings", shaders::RASTER_AA_PAIRS, 6, &[])?,
+            aa_forward: pipeline("raster antialias", shaders::RASTER_AA_FORWARD, 4, &[])?,
+            aa_backward: pipeline("raster antialias backward", shaders::RASTER_AA_BACKWARD, 8, &[])?,
             interior_backward: pipeline("raster interior backward", shaders::RASTER_INTERIOR_BACKWARD, 7, &[])?,
         })
     }

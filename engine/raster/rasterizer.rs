@@ -57,6 +57,8 @@ pub(super) struct ImageBuffers {
     pub(super) color: GpuBuffer<f32>,
     pub(super) mask: GpuBuffer<f32>,
     pub(super) grad_rgba: GpuBuffer<[f32; 4]>,
+    /// Two per pixel (pair with the right, then the lower neighbour): `PairRecord` in blend.glsl.
+    pub(super) pairs: GpuBuffer<[u32; 4]>,
 }
 
 pub struct MeshRasterizer {
@@ -106,6 +108,7 @@ impl ImageBuffers {
             color: GpuBuffer::new(ctx, "raster colour", 3 * n)?,
             mask: GpuBuffer::new(ctx, "raster mask", n)?,
             grad_rgba: GpuBuffer::new(ctx, "raster resolved colour gradient", n)?,
+            pairs: GpuBuffer::new(ctx, "raster anti-aliasing crossings", 2 * n)?,
         })
     }
 

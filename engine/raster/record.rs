@@ -65,16 +65,16 @@ impl MeshRasterizer {
         rec.dispatch(&k.resolve, &resolve, params, params.tiles());
         rec.end_pass();
         rec.begin_pass("raster antialias");
-        let aa = [
+        let pairs = [
             m.faces.binding(),
             m.camera_positions.binding(),
             m.outline_flags.binding(),
             im.ids.binding(),
             im.depth.binding(),
-            im.rgba.binding(),
-            im.color.binding(),
-            im.mask.binding(),
+            im.pairs.binding(),
         ];
+        rec.dispatch(&k.aa_pairs, &pairs, params, params.tiles());
+        let aa = [im.pairs.binding(), im.rgba.binding(), im.color.binding(), im.mask.binding()];
         rec.dispatch(&k.aa_forward, &aa, params, params.tiles());
         rec.end_pass();
         Ok(())
@@ -102,9 +102,7 @@ impl MeshRasterizer {
         let aa = [
             m.faces.binding(),
             m.camera_positions.binding(),
-            m.outline_flags.binding(),
-            im.ids.binding(),
-            im.depth.binding(),
+            im.pairs.binding(),
             im.rgba.binding(),
             grad_color.binding(),
             grad_mask.binding(),

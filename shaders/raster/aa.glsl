@@ -1,30 +1,10 @@
-// Analytic anti-aliasing at silhouettes (the idea of nvdiffrast's antialias), shared by the
-// forward and the backward so both see the same crossings. For two neighbouring pixel centres
-// a and b with different triangle ids, the silhouette edge of the nearer triangle that crosses
-// the segment at fraction t from a (the covered side) blends the pair:
-//   t >= 1/2: out_b += (t - 1/2) (c_a - c_b)      t < 1/2: out_a += (1/2 - t) (c_b - c_a)
-// so the output moves continuously as the edge sweeps over pixel centres. Expects buffers
-// `ids`, `depth`, `faces`, `camera_positions`, `outline_flags` (outline.comp) and the include
-// of triangle.glsl.
+// Finding the crossing of a pixel pair (the rule is in blend.glsl). Expects buffers `ids`,
+// `depth`, `faces`, `camera_positions`, `outline_flags` (outline.comp) and the include of
+// triangle.glsl.
 #ifndef RASTER_AA_GLSL
 #define RASTER_AA_GLSL
 
-struct Crossing {
-    bool found;
-    uint triangle;
-    uint edge;       // edge k runs from corner k to corner k + 1
-    ivec2 covered;   // pixel a, inside the triangle
-    ivec2 other;     // pixel b
-    float t;         // where the edge crosses, from a (0) to b (1)
-};
-
-float screen_edge(vec2 a, vec2 b, vec2 p) {
-    return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
-}
-
-vec2 pixel_centre(ivec2 p) {
-    return vec2(p) + 0.5;
-}
+#include "blend.glsl"
 
 // The first outline edge of triangle t leaving pixel a towards pixel b, if any. Triangles
 // with a corner behind the near plane are skipped (their edges do not project to lines).
@@ -55,6 +35,12 @@ Crossing crossing_from(uint t, ivec2 a, ivec2 b) {
     return c;
 }
 
+// Whether triangle t can produce a crossing at all: drawn, in front, with an outline edge.
+bool has_outline(uint t) {
+    uint flags = t == NO_TRIANGLE ? 0u : outline_flags[t];
+    return (flags & FLAG_IN_FRONT) != 0u && (flags & 7u) != 0u;
+}
+
 float depth_or_far(ivec2 p, uint t) {
     return t == NO_TRIANGLE ? 1.0 / 0.0 : depth[pixel_index(p)];
 }
@@ -64,7 +50,7 @@ float depth_or_far(ivec2 p, uint t) {
 Crossing pair_crossing(ivec2 p0, ivec2 p1) {
     uint t0 = ids[pixel_index(p0)], t1 = ids[pixel_index(p1)];
     Crossing none = Crossing(false, 0u, 0u, p0, p1, 0.0);
-    if (t0 == t1) {
+    if (t0 == t1 || !(has_outline(t0) || has_outline(t1))) {
         return none;
     }
     bool first0 = depth_or_far(p0, t0) <= depth_or_far(p1, t1);
@@ -80,25 +66,6 @@ Crossing pair_crossing(ivec2 p0, ivec2 p1) {
         return crossing_from(far_t, far_p, near_p);
     }
     return none;
-}
-
-// The pixel a crossing blends into and its weight (see the top of this file).
-ivec2 blend_target(Crossing c, out float w) {
-    w = abs(c.t - 0.5);
-    return c.t >= 0.5 ? c.other : c.covered;
-}
-
-bool in_image(ivec2 p) {
-    return p.x >= 0 && p.y >= 0 && p.x < int(image_width()) && p.y < int(image_height());
-}
-
-// Neighbour k (0 right, 1 down, 2 left, 3 up) of p, and the pair in canonical order.
-bool neighbour_pair(ivec2 p, uint k, out ivec2 q, out ivec2 first, out ivec2 second) {
-    const ivec2 steps[4] = ivec2[4](ivec2(1, 0), ivec2(0, 1), ivec2(-1, 0), ivec2(0, -1));
-    q = p + steps[k];
-    first = k < 2u ? p : q;
-    second = k < 2u ? q : p;
-    return in_image(q);
 }
 
 #endif

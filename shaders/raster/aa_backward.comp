@@ -1,6 +1,6 @@
 #version 460
-// Anti-aliasing, backward: one invocation per pixel. Writes dL/d(resolved rgb, mask) of its
-// pixel (the identity plus the blends of its four pairs), and for the pairs it owns (right and
+// Anti-aliasing, backward: one invocation per pixel, reading the crossings aa_pairs.comp
+// stored. Writes dL/d(resolved rgb, mask) of its pixel (the identity plus the blends of its four pairs), and for the pairs it owns (right and
 // down neighbour) adds dL/dt through the crossing edge to that edge's two vertex positions.
 #extension GL_EXT_shader_atomic_float : require
 #include "raster.glsl"
@@ -9,17 +9,18 @@ layout(local_size_x = 16, local_size_y = 16) in;
 
 layout(std430, binding = 0) readonly buffer Faces { uint faces[]; };
 layout(std430, binding = 1) readonly buffer CameraPositions { vec4 camera_positions[]; };
-layout(std430, binding = 2) readonly buffer OutlineFlags { uint outline_flags[]; };
-layout(std430, binding = 3) readonly buffer Ids { uint ids[]; };
-layout(std430, binding = 4) readonly buffer Depth { float depth[]; };
-layout(std430, binding = 5) readonly buffer Rgba { vec4 rgba[]; };
-layout(std430, binding = 6) readonly buffer GradColor { float grad_color[]; };
-layout(std430, binding = 7) readonly buffer GradMask { float grad_mask[]; };
-layout(std430, binding = 8) writeonly buffer GradRgba { vec4 grad_rgba[]; };
-layout(std430, binding = 9) buffer GradPositions { float grad_positions[]; };
+layout(std430, binding = 3) readonly buffer Rgba { vec4 rgba[]; };
+layout(std430, binding = 4) readonly buffer GradColor { float grad_color[]; };
+layout(std430, binding = 5) readonly buffer GradMask { float grad_mask[]; };
+layout(std430, binding = 6) writeonly buffer GradRgba { vec4 grad_rgba[]; };
+layout(std430, binding = 7) buffer GradPositions { float grad_positions[]; };
 
 #include "triangle.glsl"
-#include "aa.glsl"
+#include "blend.glsl"
+
+layout(std430, binding = 2) readonly buffer Pairs { PairRecord pairs[]; };
+
+#include "pairs.glsl"
 
 vec4 output_gradient(ivec2 p) {
     uint i = pixel_index(p);
@@ -62,12 +63,9 @@ void main() {
     vec4 g_p = output_gradient(p);
     vec4 g_resolved = g_p;
     for (uint k = 0u; k < 4u; k++) {
-        ivec2 q, first, second;
-        if (!neighbour_pair(p, k, q, first, second)) {
-            continue;
-        }
-        Crossing c = pair_crossing(first, second);
-        if (!c.found) {
+        ivec2 q;
+        Crossing c;
+        if (!pair_around(p, k, q, c)) {
             continue;
         }
         float w;

@@ -1,21 +1,19 @@
 #version 460
 // Anti-aliasing, forward: one invocation per pixel; gathers the blends of its four pairs
-// (aa.glsl) onto the resolved (rgb, mask) and writes the final colour and mask images.
+// (crossings from aa_pairs.comp, rule in aa.glsl) onto the resolved (rgb, mask) and writes the
+// final colour and mask images.
 #include "raster.glsl"
 
 layout(local_size_x = 16, local_size_y = 16) in;
 
-layout(std430, binding = 0) readonly buffer Faces { uint faces[]; };
-layout(std430, binding = 1) readonly buffer CameraPositions { vec4 camera_positions[]; };
-layout(std430, binding = 2) readonly buffer OutlineFlags { uint outline_flags[]; };
-layout(std430, binding = 3) readonly buffer Ids { uint ids[]; };
-layout(std430, binding = 4) readonly buffer Depth { float depth[]; };
-layout(std430, binding = 5) readonly buffer Rgba { vec4 rgba[]; };
-layout(std430, binding = 6) writeonly buffer Color { float color_out[]; };
-layout(std430, binding = 7) writeonly buffer Mask { float mask_out[]; };
+#include "blend.glsl"
 
-#include "triangle.glsl"
-#include "aa.glsl"
+layout(std430, binding = 0) readonly buffer Pairs { PairRecord pairs[]; };
+layout(std430, binding = 1) readonly buffer Rgba { vec4 rgba[]; };
+layout(std430, binding = 2) writeonly buffer Color { float color_out[]; };
+layout(std430, binding = 3) writeonly buffer Mask { float mask_out[]; };
+
+#include "pairs.glsl"
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -26,13 +24,10 @@ void main() {
     vec4 c_p = rgba[i];
     vec4 out_p = c_p;
     for (uint k = 0u; k < 4u; k++) {
-        ivec2 q, first, second;
-        if (!neighbour_pair(p, k, q, first, second)) {
-            continue;
-        }
-        Crossing c = pair_crossing(first, second);
+        ivec2 q;
+        Crossing c;
         float w;
-        if (c.found && blend_target(c, w) == p) {
+        if (pair_around(p, k, q, c) && blend_target(c, w) == p) {
             out_p += w * (rgba[pixel_index(q)] - c_p);
         }
     }

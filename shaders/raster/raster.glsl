@@ -107,6 +107,15 @@ uint64_t coverage_key(SubTriangle t, ivec2 pixel) {
     return (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(uint(t.xy2_id.z));
 }
 
+// Twice the signed area of (a, b, p) in float pixels (the anti-aliasing's edge function).
+float screen_edge(vec2 a, vec2 b, vec2 p) {
+    return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+}
+
+vec2 pixel_centre(ivec2 p) {
+    return vec2(p) + 0.5;
+}
+
 uint pixel_index(ivec2 pixel) {
     return uint(pixel.y) * image_width() + uint(pixel.x);
 }
