@@ -88,3 +88,37 @@ fn id_image(frame: &RasterFrame) -> Image {
         .collect();
     Image { width: frame.width, height: frame.height, channels: 3, data }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Writes `text` to a fresh file named `name` and returns load_mesh's error for it.
+    fn load_error(name: &str, text: &str) -> String {
+        let dir = std::env::temp_dir().join(format!("tagsplat-render-mesh-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let error = format!("{:#}", load_mesh(&path).unwrap_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(error.contains(name), "the error must name the file: {error}");
+        error
+    }
+
+    #[test]
+    fn files_that_are_not_triangle_meshes_are_refused_by_name() {
+        assert!(load_error("lines.obj", "v 0 0 0\nv 1 0 0\nl 1 2\n").contains("no triangles"));
+        assert!(load_error("mesh.stl", "solid x\nendsolid x\n").contains("expected .ply or .obj"));
+        assert!(load_error("nan.obj", "v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").contains("non-finite"));
+        assert!(load_error("index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").contains("past the 3 vertices"));
+    }
+
+    #[test]
+    fn ids_are_encoded_exactly_in_24_bits() {
+        let frame = RasterFrame { width: 3, height: 1, ids: vec![NO_TRIANGLE, 0, 0x12_3456], ..Default::default() };
+        let image = id_image(&frame);
+        let bytes: Vec<u32> = image.data.iter().map(|v| (v * 255.0).round() as u32).collect();
+        let decode = |p: usize| bytes[3 * p] + 256 * bytes[3 * p + 1] + 65536 * bytes[3 * p + 2];
+        assert_eq!([decode(0), decode(1), decode(2)], [0, 1, 0x12_3457]);
+    }
+}
