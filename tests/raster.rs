@@ -194,8 +194,11 @@ fn ids_match_the_graphics_pipeline() {
     let close = Scene::ellipsoid(1, [0.0; 3], [1.0; 3]).jitter(&mut rng, 0.05).rounded();
     let (grid_small, grid_camera) = pixel_grid(5.0, 64, 48);
     let (grid_large, _) = pixel_grid(29.0, 64, 48);
+    // More large triangles over the centre tiles than a tile list holds (256): the fallback.
+    let pile = Scene { positions: vec![], faces: vec![], colors: vec![] }.with_random_triangles(&mut rng, 600, [0.0; 3], 0.4, 3.0).rounded();
     let cases = [
         ("sphere + random triangles", cluttered, camera(96, 72, 90.0, [0.3, 0.5, 3.2], [0.0; 3])),
+        ("600 overlapping large triangles", pile, camera(64, 48, 50.0, [0.1, 0.2, 3.0], [0.0; 3])),
         ("close-up (large triangles)", close, camera(80, 64, 80.0, [0.2, 0.3, 1.6], [0.0; 3])),
         ("pixel-centre grid, small cells", grid_small, grid_camera),
         ("pixel-centre grid, large cells", grid_large, grid_camera),

@@ -33,8 +33,8 @@ impl Kernels {
         Ok(Self {
             transform: pipeline("raster transform", shaders::RASTER_TRANSFORM, 2, &linear)?,
             outline: pipeline("raster outline flags", shaders::RASTER_OUTLINE, 4, &linear)?,
-            setup: pipeline("raster setup", shaders::RASTER_SETUP, 7, &linear)?,
-            raster_large: pipeline("raster large triangles", shaders::RASTER_RASTER_LARGE, 5, &[])?,
+            setup: pipeline("raster setup", shaders::RASTER_SETUP, 9, &linear)?,
+            raster_large: pipeline("raster large triangles", shaders::RASTER_RASTER_LARGE, 7, &[])?,
             resolve: pipeline("raster resolve", shaders::RASTER_RESOLVE, 9, &[])?,
             aa_pairs: pipeline("raster antialias crossings", shaders::RASTER_AA_PAIRS, 6, &[])?,
             aa_forward: pipeline("raster antialias", shaders::RASTER_AA_FORWARD, 4, &[])?,

@@ -7,6 +7,8 @@ use bytemuck::{Pod, Zeroable};
 
 /// Tile edge of the large-triangle raster and the per-pixel kernels' workgroups.
 pub const TILE_SIZE: u32 = 16;
+/// Large sub-triangles listed per tile (`TILE_LIST_CAPACITY` in raster.glsl).
+pub(crate) const TILE_LIST_CAPACITY: usize = 256;
 /// Triangle id of an uncovered pixel.
 pub const NO_TRIANGLE: u32 = u32::MAX;
 /// Bit of `counts[2]`: count every covering write per pixel (a test mode).

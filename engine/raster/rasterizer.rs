@@ -4,7 +4,7 @@
 
 use super::kernels::Kernels;
 use super::mesh::{check_positions, edge_adjacency, RasterMesh};
-use super::params::{RasterParams, RasterSettings, SubTriangle};
+use super::params::{RasterParams, RasterSettings, SubTriangle, TILE_LIST_CAPACITY, TILE_SIZE};
 use super::RasterError;
 use crate::camera::Camera;
 use crate::gpu::{GpuBuffer, GpuContext, GpuResult};
@@ -57,6 +57,9 @@ pub(super) struct ImageBuffers {
     pub(super) color: GpuBuffer<f32>,
     pub(super) mask: GpuBuffer<f32>,
     pub(super) grad_rgba: GpuBuffer<[f32; 4]>,
+    /// Per 16x16 tile: large sub-triangles binned to it, and their slots (capacity per tile).
+    pub(super) tile_counts: GpuBuffer<u32>,
+    pub(super) tile_lists: GpuBuffer<u32>,
     /// Two per pixel (pair with the right, then the lower neighbour): `PairRecord` in blend.glsl.
     pub(super) pairs: GpuBuffer<[u32; 4]>,
 }
@@ -95,6 +98,7 @@ impl MeshBuffers {
 impl ImageBuffers {
     fn new(ctx: &Arc<GpuContext>, width: u32, height: u32) -> GpuResult<Self> {
         let n = width as usize * height as usize;
+        let tiles = width.div_ceil(TILE_SIZE) as usize * height.div_ceil(TILE_SIZE) as usize;
         Ok(Self {
             width,
             height,
@@ -109,6 +113,8 @@ impl ImageBuffers {
             mask: GpuBuffer::new(ctx, "raster mask", n)?,
             grad_rgba: GpuBuffer::new(ctx, "raster resolved colour gradient", n)?,
             pairs: GpuBuffer::new(ctx, "raster anti-aliasing crossings", 2 * n)?,
+            tile_counts: GpuBuffer::new(ctx, "raster tile counts", tiles)?,
+            tile_lists: GpuBuffer::new(ctx, "raster tile lists", tiles * TILE_LIST_CAPACITY)?,
         })
     }
 

@@ -23,6 +23,7 @@ impl MeshRasterizer {
         rec.begin_pass("raster clear");
         rec.fill_buffer(&im.visibility, u32::MAX);
         rec.fill_buffer(&m.counters, 0);
+        rec.fill_buffer(&im.tile_counts, 0);
         if params.counts_writes() {
             rec.fill_buffer(&im.write_counts, 0);
         }
@@ -43,11 +44,21 @@ impl MeshRasterizer {
             m.large.binding(),
             m.counters.binding(),
             im.write_counts.binding(),
+            im.tile_counts.binding(),
+            im.tile_lists.binding(),
         ];
         rec.dispatch_1d(&k.setup, &setup, params, linear_groups(self.triangles))?;
         rec.end_pass();
         rec.begin_pass("raster large");
-        let large = [m.subs.binding(), im.visibility.binding(), m.large.binding(), m.counters.binding(), im.write_counts.binding()];
+        let large = [
+            m.subs.binding(),
+            im.visibility.binding(),
+            m.large.binding(),
+            m.counters.binding(),
+            im.write_counts.binding(),
+            im.tile_counts.binding(),
+            im.tile_lists.binding(),
+        ];
         rec.dispatch(&k.raster_large, &large, params, params.tiles());
         rec.end_pass();
         rec.begin_pass("raster resolve");

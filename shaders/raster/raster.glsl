@@ -11,6 +11,8 @@ const int SUBPIXEL = 256;
 // A triangle whose clamped bounding box holds at most this many pixels is rasterized by one
 // thread; a larger one goes to the per-tile kernel.
 const uint SMALL_TRIANGLE_PIXELS = 256u;
+// Large sub-triangles listed per tile; a tile that gets more falls back to the whole list.
+const uint TILE_LIST_CAPACITY = 256u;
 // Sub-pixel coordinates must stay below 2^30 so edge products fit in 63 bits.
 const float GUARD_BAND_PIXELS = 4194304.0;
 const uint NO_TRIANGLE = 0xffffffffu;

@@ -1,6 +1,7 @@
 #version 460
 // Large-triangle raster: one workgroup per 16x16 tile, one invocation per pixel. The tile
-// walks the list of large sub-triangles in chunks, keeps those whose bounds touch it in shared
+// walks its own list of large sub-triangles (setup.comp binned them), or the list of all large
+// ones if its own overflowed, in chunks: those whose bounds touch the tile go to shared
 // memory, and each pixel tests only those; one atomicMin per pixel at the end.
 #extension GL_EXT_shader_atomic_int64 : require
 #include "raster.glsl"
@@ -12,6 +13,8 @@ layout(std430, binding = 1) buffer Visibility { uint64_t visibility[]; };
 layout(std430, binding = 2) readonly buffer LargeList { uint large_list[]; };
 layout(std430, binding = 3) readonly buffer Counters { uint counters[]; };
 layout(std430, binding = 4) buffer WriteCounts { uint write_counts[]; };
+layout(std430, binding = 5) readonly buffer TileCounts { uint tile_counts[]; };
+layout(std430, binding = 6) readonly buffer TileLists { uint tile_lists[]; };
 
 const uint CHUNK = TILE_SIZE * TILE_SIZE;
 shared SubTriangle chunk[CHUNK];
@@ -24,7 +27,10 @@ void main() {
     bool inside = pixel.x < int(image_width()) && pixel.y < int(image_height());
     bool count = (params.counts.z & FLAG_COUNT_WRITES) != 0u;
     uint local = gl_LocalInvocationIndex;
-    uint total = counters[0];
+    uint tile = gl_WorkGroupID.y * params.size.z + gl_WorkGroupID.x;
+    uint binned = tile_counts[tile];
+    bool own_list = binned <= TILE_LIST_CAPACITY;
+    uint total = own_list ? binned : counters[0];
     uint64_t best = EMPTY_PIXEL;
     uint writes = 0u;
     for (uint base = 0u; base < total; base += CHUNK) {
@@ -33,7 +39,8 @@ void main() {
         }
         barrier();
         if (base + local < total) {
-            SubTriangle t = subs[large_list[base + local]];
+            uint entry = base + local;
+            SubTriangle t = subs[own_list ? tile_lists[tile * TILE_LIST_CAPACITY + entry] : large_list[entry]];
             ivec4 b = pixel_bounds(t);
             if (b.x <= tile_hi.x && b.z >= tile_lo.x && b.y <= tile_hi.y && b.w >= tile_lo.y) {
                 chunk[atomicAdd(chunk_count, 1u)] = t;

@@ -1,8 +1,9 @@
 #version 460
 // Triangle setup and small-triangle raster: one invocation per triangle. Clips against the
 // near plane (up to two sub-triangles), snaps to 1/256 pixel, orients counter-clockwise,
-// stores the sub-triangles, rasterizes small ones here into the visibility buffer and appends
-// large ones to the list raster_large.comp bins by tile.
+// stores the sub-triangles, rasterizes small ones here into the visibility buffer, and bins
+// large ones: appended to the list of every tile their bounds touch (and to the list of all
+// large ones, which a tile whose list overflowed walks instead).
 #extension GL_EXT_shader_atomic_int64 : require
 #include "raster.glsl"
 #include "../common/grid.glsl"
@@ -17,6 +18,8 @@ layout(std430, binding = 4) writeonly buffer LargeList { uint large_list[]; };
 // [0] large sub-triangles, [1] sub-triangles dropped outside the guard band.
 layout(std430, binding = 5) buffer Counters { uint counters[]; };
 layout(std430, binding = 6) buffer WriteCounts { uint write_counts[]; };
+layout(std430, binding = 7) buffer TileCounts { uint tile_counts[]; };
+layout(std430, binding = 8) writeonly buffer TileLists { uint tile_lists[]; };
 
 // Where edge (a, b) meets the near plane, always interpolated from the lower vertex index so
 // the two triangles sharing the edge get the same bits.
@@ -77,6 +80,21 @@ void rasterize_small(SubTriangle t, ivec4 bounds) {
     }
 }
 
+// Appends `slot` to the list of every tile that pixel bounds b touch (one thread walks tiles,
+// 256 times fewer than pixels).
+void bin_by_tile(uint slot, ivec4 b) {
+    uvec4 tiles = uvec4(b) / TILE_SIZE;
+    for (uint ty = tiles.y; ty <= tiles.w; ty++) {
+        for (uint tx = tiles.x; tx <= tiles.z; tx++) {
+            uint tile = ty * params.size.z + tx;
+            uint at = atomicAdd(tile_counts[tile], 1u);
+            if (at < TILE_LIST_CAPACITY) {
+                tile_lists[tile * TILE_LIST_CAPACITY + at] = slot;
+            }
+        }
+    }
+}
+
 void emit(uint slot, SubTriangle t) {
     subs[slot] = t;
     if (uint(t.xy2_id.z) == NO_TRIANGLE) {
@@ -91,6 +109,7 @@ void emit(uint slot, SubTriangle t) {
         rasterize_small(t, b);
     } else {
         large_list[atomicAdd(counters[0], 1u)] = slot;
+        bin_by_tile(slot, b);
     }
 }
 
