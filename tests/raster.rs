@@ -366,6 +366,33 @@ fn degenerate_edge_on_subpixel_and_empty_meshes() {
 }
 
 #[test]
+fn positions_from_a_caller_buffer_render_like_written_positions() {
+    let gpu = common::gpu();
+    let mut rng = common::rng(67);
+    let scene = Scene::ellipsoid(2, [0.0; 3], [1.0; 3]);
+    let moved = scene.clone().jitter(&mut rng, 0.3).rounded();
+    let cam = camera(40, 32, 40.0, [0.0, 0.3, 3.0], [0.0; 3]);
+    let mut rasterizer = MeshRasterizer::new(gpu.ctx(), &scene.raster_mesh(), 40, 32).unwrap();
+    let flat: Vec<f32> = moved.positions.iter().flatten().map(|&c| c as f32).collect();
+    let external = tagsplat::gpu::GpuBuffer::from_slice(gpu.ctx(), "external positions", &flat).unwrap();
+    let params = rasterizer.params(&cam, &settings(0.05)).unwrap();
+    let mut rec = tagsplat::gpu::Recorder::new(gpu.ctx()).unwrap();
+    rasterizer.record_forward_from(&mut rec, &params, &external).unwrap();
+    rec.submit_and_wait().unwrap();
+    let from_buffer = rasterizer.read_frame().unwrap();
+    rasterizer.write_positions(&moved.raster_mesh().positions).unwrap();
+    rasterizer.render(&cam, &settings(0.05)).unwrap();
+    let written = rasterizer.read_frame().unwrap();
+    assert_eq!(from_buffer.ids, written.ids);
+    assert_eq!(from_buffer.color, written.color);
+    assert_ne!(written.ids, gpu_render(gpu.ctx(), &scene, &cam, &settings(0.05)).ids, "the jitter must change the image");
+    let short = tagsplat::gpu::GpuBuffer::<f32>::new(gpu.ctx(), "short", 5).unwrap();
+    let mut rec = tagsplat::gpu::Recorder::new(gpu.ctx()).unwrap();
+    let e = rasterizer.record_forward_from(&mut rec, &params, &short).unwrap_err().to_string();
+    assert!(e.contains("vertex positions"), "{e}");
+}
+
+#[test]
 fn bad_input_is_refused_with_a_clear_error() {
     let gpu = common::gpu();
     let scene = Scene::ellipsoid(1, [0.0; 3], [1.0; 3]);

@@ -18,7 +18,15 @@ impl MeshRasterizer {
     /// Records the forward pass for `params` (from [`Self::params`]): afterwards the colour,
     /// mask, id, barycentric, depth and normal buffers hold this view.
     pub fn record_forward<'a>(&'a self, rec: &mut Recorder<'a>, params: &RasterParams) -> Result<(), RasterError> {
+        self.record_forward_from(rec, params, &self.mesh.positions)
+    }
+
+    /// [`Self::record_forward`] with vertex positions from the caller's buffer (3 floats per
+    /// vertex, e.g. the Gaussian positions an optimizer updates), for the same faces. The
+    /// backward needs no positions buffer: it reads what this forward transformed.
+    pub fn record_forward_from<'a>(&'a self, rec: &mut Recorder<'a>, params: &RasterParams, positions: &'a GpuBuffer<f32>) -> Result<(), RasterError> {
         self.check_params(params)?;
+        check_len("vertex positions", positions.len(), 3 * self.vertices)?;
         let (m, im, k) = (&self.mesh, &self.image, &self.kernels);
         rec.begin_pass("raster clear");
         rec.fill_buffer(&im.visibility, u32::MAX);
@@ -29,7 +37,7 @@ impl MeshRasterizer {
         }
         rec.end_pass();
         rec.begin_pass("raster transform");
-        rec.dispatch_1d(&k.transform, &[m.positions.binding(), m.camera_positions.binding()], params, linear_groups(self.vertices))?;
+        rec.dispatch_1d(&k.transform, &[positions.binding(), m.camera_positions.binding()], params, linear_groups(self.vertices))?;
         rec.end_pass();
         rec.begin_pass("raster outline");
         let outline = [m.faces.binding(), m.camera_positions.binding(), m.adjacency.binding(), m.outline_flags.binding()];
