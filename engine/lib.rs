@@ -12,7 +12,10 @@
 //! - [`splat`]: differentiable Gaussian splatting (forward, backward, CPU reference).
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
 //! - [`raster`]: differentiable visibility-buffer mesh rasterizer (forward, backward, CPU reference).
+//! - [`train`]: the training loops (single-frame fit with the 3DGS baseline densification).
 //! - [`track`]: surface points bound on frame 0 and followed through a mesh sequence.
+//! - [`loss`]: the fused image loss (L1 + SSIM) with its gradient.
+//! - [`optim`]: fused Adam with moments that survive Gaussian-set changes, schedules.
 //! - [`eval`]: image, surface and tracking metrics.
 //! - [`synth`]: synthetic dynamic scenes with ground truth (procedural body, glTF skinning).
 
@@ -21,12 +24,15 @@ pub mod camera;
 pub mod eval;
 pub mod gpu;
 pub mod io;
+pub mod loss;
 pub mod mesh;
+pub mod optim;
 pub mod raster;
 pub mod rng;
 pub mod sort;
 pub mod splat;
 pub mod track;
+pub mod train;
 pub mod synth;
 
 /// SPIR-V of every compute shader, compiled from `shaders/` by `build.rs`.

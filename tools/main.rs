@@ -11,8 +11,12 @@ use std::sync::Arc;
 
 mod dataset;
 mod eval;
+mod fit;
 mod synth;
-use tagsplat::bench::{bench_mesh, bench_sort, bench_splat, MeshBenchConfig, MeshBenchReport, SortBenchReport, SplatBenchConfig, SplatBenchReport};
+use tagsplat::bench::{
+    bench_mesh, bench_sort, bench_splat, bench_train, MeshBenchConfig, MeshBenchReport, SortBenchReport, SplatBenchConfig,
+    SplatBenchReport, TrainBenchConfig, TrainBenchReport,
+};
 use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
 
 #[derive(Parser)]
@@ -40,6 +44,8 @@ enum Command {
     /// Inspect a multi-view video dataset.
     #[command(subcommand)]
     Dataset(dataset::DatasetCommand),
+    /// Fit Gaussians to one frame of a multi-view dataset (plain 3DGS densification).
+    Fit(fit::FitArgs),
     /// Generate a synthetic dynamic scene with ground truth.
     Synth(synth::SynthArgs),
     /// Metrics of a prediction folder against a ground-truth folder.
@@ -68,6 +74,24 @@ enum Bench {
         /// Timed repetitions (after one warm-up); the fastest sets pairs/s and the fraction.
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=1000))]
         repetitions: u64,
+        /// Print one JSON object instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Full training iterations (forward, loss, backward, Adam) on the splat bench's scene,
+    /// against splatting forward + backward alone in the same run.
+    Train {
+        #[arg(long, default_value_t = 20_000)]
+        gaussians: usize,
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..=1000))]
+        views: u64,
+        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=16384))]
+        resolution: u32,
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=3))]
+        sh_degree: u32,
+        /// Timed iterations (after a warm-up round over the views).
+        #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u64).range(1..=100000))]
+        iterations: u64,
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
@@ -141,6 +165,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Dataset(command) => dataset::run(command),
         Command::Synth(args) => synth::run(args),
+        Command::Fit(args) => fit::fit(|| context(&options), args),
         Command::Eval(args) => eval::run(args),
         Command::Bench(Bench::Sort { n, bits, repetitions, json }) => {
             let ctx = context(&options)?;
@@ -149,6 +174,17 @@ fn run(cli: Cli) -> Result<()> {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
                 print_sort_report(&report);
+            }
+            Ok(())
+        }
+        Command::Bench(Bench::Train { gaussians, views, resolution, sh_degree, iterations, json }) => {
+            let ctx = context(&options)?;
+            let scene = SplatBenchConfig { gaussians, views: views as usize, resolution, sh_degree, rounds: 2 };
+            let report = bench_train(&ctx, &TrainBenchConfig { scene, iterations: iterations as usize }).context("bench train")?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print_train_report(&report);
             }
             Ok(())
         }
@@ -239,4 +275,17 @@ fn print_mesh_report(r: &MeshBenchReport) {
     }
     println!("copy bandwidth      {:.2} GB/s compute kernel", r.copy.compute_bytes_per_s * 1e-9);
     println!("pixel passes        {:.2} ms bound at copy bandwidth; measured {:.1}x the bound", r.pixel_passes_bound_ms, r.pixel_passes_over_bound);
+}
+
+fn print_train_report(r: &TrainBenchReport) {
+    let c = &r.config.scene;
+    println!("device              {}", r.device);
+    println!("scene               {} Gaussians, SH degree {}, {} views of {}x{}, no densification", c.gaussians, c.sh_degree, c.views, c.resolution, c.resolution);
+    println!("iteration           {:.1} ms (median of {}) = {:.2} it/s", r.s_per_iter * 1e3, r.config.iterations, r.iters_per_s);
+    println!("splatting alone     {:.1} ms forward + backward per view (same run)", r.splat_fwd_bwd_s * 1e3);
+    println!("loss + Adam + rest  {:.0}% of an iteration", r.overhead_fraction * 100.0);
+    println!("GPU passes (median ms per iteration):");
+    for (name, ms) in &r.passes_ms {
+        println!("  {name:<20}{ms:.2}");
+    }
 }

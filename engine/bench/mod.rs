@@ -1,17 +1,19 @@
 //! Benchmarks that report speed against a bound measured in the same run: the GPU copy
 //! bandwidth (a compute copy kernel and the transfer engine) and the CPU's `sort_unstable`;
 //! the splatting renderer's and the mesh rasterizer's forward and backward per view, pass by
-//! pass.
+//! pass; and full training iterations against splatting alone.
 
 mod copy;
 mod mesh;
 mod sort;
 mod splat;
+mod train;
 
 pub use copy::{CopyBandwidth, CopyProbe};
 pub use mesh::{bench_mesh, bumpy_sphere, MeshBenchConfig, MeshBenchReport};
 pub use sort::{bench_sort, SortBenchReport};
 pub use splat::{bench_splat, BenchWork, random_scene, ring_cameras, SplatBenchConfig, SplatBenchReport};
+pub use train::{bench_train, TrainBenchConfig, TrainBenchReport};
 
 /// Median of a sample; 0 for an empty one (nothing was timed).
 fn median(mut samples: Vec<f64>) -> f64 {

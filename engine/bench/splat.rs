@@ -161,7 +161,7 @@ pub fn bench_splat(ctx: &Arc<GpuContext>, config: &SplatBenchConfig) -> Result<S
 }
 
 /// GPU ms per top-level pass name, summed over the submissions of one view.
-fn top_level_ms(submissions: &[PassTimes]) -> BTreeMap<String, f64> {
+pub(super) fn top_level_ms(submissions: &[PassTimes]) -> BTreeMap<String, f64> {
     let mut by_name = BTreeMap::new();
     for pass in submissions.iter().flat_map(|t| &t.passes).filter(|p| p.depth == 0) {
         *by_name.entry(pass.name.clone()).or_insert(0.0) += pass.ms;

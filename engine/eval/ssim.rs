@@ -11,11 +11,11 @@
 use super::EvalError;
 
 /// Window radius: scikit-image uses `int(3.5 · σ + 0.5)` = 5 for σ = 1.5.
-const RADIUS: usize = 5;
-const WINDOW: usize = 2 * RADIUS + 1;
+pub(crate) const RADIUS: usize = 5;
+pub(crate) const WINDOW: usize = 2 * RADIUS + 1;
 const SIGMA: f64 = 1.5;
-const C1: f64 = 0.01 * 0.01;
-const C2: f64 = 0.03 * 0.03;
+pub(crate) const C1: f64 = 0.01 * 0.01;
+pub(crate) const C2: f64 = 0.03 * 0.03;
 
 /// Mean SSIM (unitless, ≤ 1) of `pred` against `gt`: interleaved `height × width × channels`
 /// arrays with values in [0, 1]. Both images must be at least 11×11.
@@ -37,7 +37,7 @@ pub fn ssim(pred: &[f32], gt: &[f32], width: usize, height: usize, channels: usi
     Ok(total / channels as f64)
 }
 
-fn gaussian_weights() -> [f64; WINDOW] {
+pub(crate) fn gaussian_weights() -> [f64; WINDOW] {
     let mut w = [0.0; WINDOW];
     for (k, wk) in w.iter_mut().enumerate() {
         let x = k as f64 - RADIUS as f64;
@@ -88,7 +88,7 @@ fn ssim_channel(pred: &[f32], gt: &[f32], width: usize, height: usize, channels:
 
 /// S from the moments (μx, μy, E[x²], E[y²], E[xy]), with population (co)variances.
 #[inline]
-fn ssim_formula([ux, uy, uxx, uyy, uxy]: [f64; 5]) -> f64 {
+pub(crate) fn ssim_formula([ux, uy, uxx, uyy, uxy]: [f64; 5]) -> f64 {
     let vx = uxx - ux * ux;
     let vy = uyy - uy * uy;
     let vxy = uxy - ux * uy;

@@ -10,6 +10,7 @@ pub mod dataset;
 pub mod glb;
 pub mod image;
 pub mod pc2;
+pub mod plot;
 pub mod ply;
 pub mod sequence;
 

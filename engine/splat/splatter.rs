@@ -144,14 +144,30 @@ impl Splatter {
     /// norms in pixels, renders on screen). `grad_rgba` and `grad_depth` are per pixel,
     /// row-major: dL/dcolour with dL/dalpha in the fourth lane, and dL/ddepth.
     pub fn backward(
-        &mut self,
+        &self,
         scene: &GaussianBuffers,
         grad_rgba: &GpuBuffer<[f32; 4]>,
         grad_depth: &GpuBuffer<f32>,
         grads: &GaussianBuffers,
         densify_stats: &GpuBuffer<[f32; 2]>,
     ) -> Result<PassTimes, SplatError> {
+        let mut rec = Recorder::new(&self.ctx)?;
+        self.record_backward(&mut rec, scene, (grad_rgba, grad_depth), grads, densify_stats)?;
+        Ok(rec.submit_and_wait()?)
+    }
+
+    /// [`Self::backward`], recorded into a submission the caller owns (so a training step can
+    /// put loss, backward and optimizer in one). `image_grads` are (dL/drgba, dL/ddepth).
+    pub fn record_backward<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        scene: &'a GaussianBuffers,
+        image_grads: (&'a GpuBuffer<[f32; 4]>, &'a GpuBuffer<f32>),
+        grads: &'a GaussianBuffers,
+        densify_stats: &'a GpuBuffer<[f32; 2]>,
+    ) -> Result<(), SplatError> {
         let frame = self.last_frame.ok_or(SplatError::NoForward)?;
+        let (grad_rgba, grad_depth) = image_grads;
         let n = scene.len();
         let shapes = [
             ("scene Gaussians", n, frame.gaussians()),
@@ -164,15 +180,20 @@ impl Splatter {
         if let Some((what, len, expected)) = shapes.into_iter().find(|(_, len, expected)| len != expected) {
             return Err(SplatError::Shape(format!("{what}: {len} where the last forward needs {expected}")));
         }
-        let mut rec = Recorder::new(&self.ctx)?;
         rec.begin_pass("rasterize backward");
         rec.fill_buffer(&self.grad2d, 0);
-        self.kernels.rasterize_backward(&mut rec, &frame, (&self.raster_inputs(), &self.raster_outputs()), (grad_rgba, grad_depth), &self.grad2d);
+        self.kernels.rasterize_backward(rec, &frame, (&self.raster_inputs(), &self.raster_outputs()), image_grads, &self.grad2d);
         rec.end_pass();
         rec.begin_pass("project backward");
-        self.kernels.project_backward(&mut rec, &frame, scene, &self.grad2d, grads, densify_stats)?;
+        self.kernels.project_backward(rec, &frame, scene, &self.grad2d, grads, densify_stats)?;
         rec.end_pass();
-        Ok(rec.submit_and_wait()?)
+        Ok(())
+    }
+
+    /// The last forward's colour (with the background) and alpha per pixel, row-major, on
+    /// the GPU (it may hold more elements than the image has pixels).
+    pub fn rgba(&self) -> &GpuBuffer<[f32; 4]> {
+        &self.rgba
     }
 
     fn raster_inputs(&self) -> RasterInputs<'_> {

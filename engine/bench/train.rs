@@ -1,0 +1,82 @@
+//! `tagsplat bench train`: full training iterations (forward, fused loss, backward, fused
+//! Adam) on the splatting bench's scene, against the splatting forward + backward alone
+//! measured in the same run (the floor the loss and optimizer add to).
+
+use super::splat::{bench_splat, random_scene, ring_cameras, SplatBenchConfig};
+use crate::gpu::GpuContext;
+use crate::optim::{AdamParams, LearningRates};
+use crate::splat::{GaussianBuffers, RenderSettings, Splatter};
+use crate::train::{Trainer, TrainError, ViewTarget};
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::Instant;
+
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct TrainBenchConfig {
+    pub scene: SplatBenchConfig,
+    /// Timed iterations, after one warm-up round over the views.
+    pub iterations: usize,
+}
+
+impl Default for TrainBenchConfig {
+    fn default() -> Self {
+        Self { scene: SplatBenchConfig::default(), iterations: 24 }
+    }
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct TrainBenchReport {
+    pub device: String,
+    pub config: TrainBenchConfig,
+    /// Median wall seconds of one full iteration.
+    pub s_per_iter: f64,
+    pub iters_per_s: f64,
+    /// Median GPU ms per iteration of each top-level pass.
+    pub passes_ms: BTreeMap<String, f64>,
+    /// Median wall seconds of splatting forward + backward alone, same scene, same run.
+    pub splat_fwd_bwd_s: f64,
+    /// What loss, optimizer and step overhead add: 1 − splat_fwd_bwd_s / s_per_iter.
+    pub overhead_fraction: f64,
+}
+
+/// Learning rates of the fit's defaults (their values do not change the work).
+const RATES: LearningRates = LearningRates { positions: 1.6e-4, log_scales: 5e-3, rotations: 1e-3, opacity_logits: 0.05, sh_dc: 2.5e-3, sh_rest: 1.25e-4 };
+
+pub fn bench_train(ctx: &Arc<GpuContext>, config: &TrainBenchConfig) -> Result<TrainBenchReport, TrainError> {
+    let c = &config.scene;
+    let scene = random_scene(c.gaussians, c.sh_degree, 0x5EED);
+    let settings = RenderSettings { sh_degree: c.sh_degree, ..Default::default() };
+    // Targets: another scene of the same kind, so the loss and its gradients are realistic.
+    let other = GaussianBuffers::from_scene(ctx, &random_scene(c.gaussians, c.sh_degree, 0xF00D))?;
+    let mut splatter = Splatter::new(ctx)?;
+    let mut views = Vec::new();
+    for (i, camera) in ring_cameras(c.views, c.resolution).into_iter().enumerate() {
+        splatter.forward(&other, &camera, &settings)?;
+        views.push(ViewTarget { name: format!("ring{i}"), camera, target: splatter.read_rgba()? });
+    }
+    drop(splatter);
+    let mut trainer = Trainer::new(ctx, &scene, &views)?;
+    let (mut walls, mut passes) = (Vec::new(), Vec::new());
+    for it in 0..c.views + config.iterations {
+        let adam = AdamParams::new(&RATES, it as u32 + 1, trainer.gaussians(), trainer.sh_degree());
+        let start = Instant::now();
+        let times = trainer.step(it % c.views, &settings, [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0], &adam)?;
+        if it >= c.views {
+            walls.push(start.elapsed().as_secs_f64());
+            passes.push(super::splat::top_level_ms(&[times]));
+        }
+    }
+    let names: Vec<String> = passes.first().map(|p: &BTreeMap<String, f64>| p.keys().cloned().collect()).unwrap_or_default();
+    let passes_ms = names.into_iter().map(|name| (name.clone(), super::median(passes.iter().map(|p| p.get(&name).copied().unwrap_or(0.0)).collect()))).collect();
+    let s_per_iter = super::median(walls);
+    let splat = bench_splat(ctx, &SplatBenchConfig { rounds: 2, ..*c })?;
+    Ok(TrainBenchReport {
+        device: ctx.info().name.clone(),
+        config: *config,
+        s_per_iter,
+        iters_per_s: if s_per_iter > 0.0 { 1.0 / s_per_iter } else { 0.0 },
+        passes_ms,
+        splat_fwd_bwd_s: splat.fwd_bwd_s,
+        overhead_fraction: if s_per_iter > 0.0 { 1.0 - splat.fwd_bwd_s / s_per_iter } else { 0.0 },
+    })
+}

@@ -1,0 +1,62 @@
+//! The push constants of the loss kernels (`LossParams` in shaders/loss/loss.glsl).
+
+use crate::eval::ssim::{gaussian_weights, RADIUS, WINDOW};
+use bytemuck::{Pod, Zeroable};
+
+/// Shares of the two terms of the image loss (3DGS's λ_D-SSIM = 0.2).
+pub const LOSS_SHARE_L1: f32 = 0.8;
+pub const LOSS_SHARE_SSIM: f32 = 0.2;
+
+/// One image size, the per-channel weights λ and the SSIM window.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct LossParams {
+    channel_weights: [f32; 4],
+    size: [u32; 4],
+    scales: [f32; 4],
+    window: [f32; WINDOW],
+    _pad: [u32; 1],
+}
+
+impl LossParams {
+    /// `has_weight`: whether a per-pixel weight image is bound.
+    pub fn new(width: u32, height: u32, channel_weights: [f32; 4], has_weight: bool) -> Self {
+        let pixels = width as f64 * height as f64;
+        let valid = |n: u32| n.saturating_sub(2 * RADIUS as u32) as f64;
+        let ssim_pixels = valid(width) * valid(height);
+        let inverse = |n: f64| if n > 0.0 { (1.0 / n) as f32 } else { 0.0 };
+        Self {
+            channel_weights,
+            size: [width, height, has_weight as u32, 0],
+            scales: [LOSS_SHARE_L1, LOSS_SHARE_SSIM, inverse(pixels), inverse(ssim_pixels)],
+            window: gaussian_weights().map(|w| w as f32),
+            _pad: [0],
+        }
+    }
+
+    pub fn pixels(&self) -> usize {
+        self.size[0] as usize * self.size[1] as usize
+    }
+
+    pub fn channel_weights(&self) -> [f32; 4] {
+        self.channel_weights
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fits_the_push_constant_minimum() {
+        assert!(size_of::<LossParams>() <= 128);
+        assert_eq!(size_of::<LossParams>() % 16, 0);
+    }
+
+    #[test]
+    fn small_images_have_no_ssim_term() {
+        let p = LossParams::new(10, 40, [1.0; 4], false);
+        assert_eq!(p.scales[3], 0.0);
+        assert_eq!(LossParams::new(11, 11, [1.0; 4], false).scales[3], 1.0);
+    }
+}

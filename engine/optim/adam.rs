@@ -1,0 +1,150 @@
+//! Fused Adam (Kingma & Ba) over the five Gaussian parameter buffers in one dispatch, six
+//! learning rates (SH DC and the higher SH bands apart). Moments (m, v) live on the GPU beside
+//! each parameter buffer; [`Adam::remap`] carries them through a change of the Gaussian set.
+
+use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder};
+use crate::shaders;
+use crate::splat::{sh_coefficients, GaussianBuffers};
+use bytemuck::{Pod, Zeroable};
+use std::sync::Arc;
+
+const WORKGROUP: u32 = 128;
+const BETA1: f64 = 0.9;
+const BETA2: f64 = 0.999;
+const EPSILON: f32 = 1e-15;
+/// A remap entry for a row with no old row: its moments start at zero.
+pub const NEW_ROW: u32 = u32::MAX;
+
+/// Learning rate per parameter group for one step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LearningRates {
+    pub positions: f32,
+    pub log_scales: f32,
+    pub rotations: f32,
+    pub opacity_logits: f32,
+    pub sh_dc: f32,
+    pub sh_rest: f32,
+}
+
+/// Push constants of adam_step.comp (`AdamParams` in shaders/optim/adam.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct AdamParams {
+    lr_a: [f32; 4],
+    lr_b: [f32; 4],
+    betas: [f32; 4],
+    bias: [f32; 4],
+    counts: [u32; 4],
+}
+
+impl AdamParams {
+    /// `step` counts from 1 (the bias corrections need it).
+    pub fn new(lr: &LearningRates, step: u32, gaussians: usize, sh_degree: u32) -> Self {
+        let step = step.max(1) as i32;
+        // 1 − β and the bias corrections in f64: in f32, 1 − 0.999 is off by 1e-5 relative.
+        let f = |v: f64| v as f32;
+        Self {
+            lr_a: [lr.positions, lr.log_scales, lr.rotations, lr.opacity_logits],
+            lr_b: [lr.sh_dc, lr.sh_rest, EPSILON, 0.0],
+            betas: [f(BETA1), f(BETA2), f(1.0 - BETA1), f(1.0 - BETA2)],
+            bias: [f(1.0 - BETA1.powi(step)), f(1.0 - BETA2.powi(step)), 0.0, 0.0],
+            counts: [gaussians as u32, sh_coefficients(sh_degree) as u32, 0, 0],
+        }
+    }
+}
+
+/// Push constants of remap_rows.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct RemapParams {
+    new_rows: u32,
+    old_rows: u32,
+    row_width: u32,
+    unused: u32,
+}
+
+pub struct Adam {
+    ctx: Arc<GpuContext>,
+    step: ComputePipeline,
+    remap_rows: ComputePipeline,
+    /// (m, v) per parameter float, in the order of [`GaussianBuffers`]' buffers.
+    moments: [GpuBuffer<[f32; 2]>; 5],
+    gaussians: usize,
+    sh_degree: u32,
+}
+
+/// Floats per Gaussian in each parameter buffer.
+fn row_widths(sh_degree: u32) -> [usize; 5] {
+    [3, 3, 4, 1, 3 * sh_coefficients(sh_degree)]
+}
+
+fn zero_moments(ctx: &Arc<GpuContext>, gaussians: usize, sh_degree: u32) -> GpuResult<[GpuBuffer<[f32; 2]>; 5]> {
+    let names = ["positions", "log-scales", "rotations", "opacity logits", "SH"];
+    let make = |k: usize| GpuBuffer::new(ctx, &format!("adam moments of {}", names[k]), gaussians * row_widths(sh_degree)[k]);
+    Ok([make(0)?, make(1)?, make(2)?, make(3)?, make(4)?])
+}
+
+impl Adam {
+    /// An optimizer for parameters shaped like `params`, moments at zero.
+    pub fn new(ctx: &Arc<GpuContext>, params: &GaussianBuffers) -> GpuResult<Self> {
+        let pipeline = |name, spirv, bindings, bytes: usize| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes: bytes as u32, specialization: &[WORKGROUP] })
+        };
+        let adam = Self {
+            ctx: ctx.clone(),
+            step: pipeline("adam step", shaders::OPTIM_ADAM_STEP, 15, size_of::<AdamParams>())?,
+            remap_rows: pipeline("adam remap rows", shaders::OPTIM_REMAP_ROWS, 3, size_of::<RemapParams>())?,
+            moments: zero_moments(ctx, params.len(), params.sh_degree())?,
+            gaussians: params.len(),
+            sh_degree: params.sh_degree(),
+        };
+        let mut rec = Recorder::new(ctx)?;
+        adam.moments.iter().for_each(|m| rec.fill_buffer(m, 0));
+        rec.submit_and_wait()?;
+        Ok(adam)
+    }
+
+    pub fn len(&self) -> usize {
+        self.gaussians
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.gaussians == 0
+    }
+
+    /// Records one Adam step of `params` along `grads` (both shaped like the optimizer).
+    pub fn record_step<'a>(&'a self, rec: &mut Recorder<'a>, params: &'a GaussianBuffers, grads: &'a GaussianBuffers, adam: &AdamParams) -> GpuResult<()> {
+        for (what, buffers) in [("adam parameters", params), ("adam gradients", grads)] {
+            if buffers.len() != self.gaussians || buffers.sh_degree() != self.sh_degree {
+                return Err(GpuError::LengthMismatch { what, name: buffers.positions.name().to_string(), len: buffers.len(), capacity: self.gaussians });
+            }
+        }
+        let bindings: Vec<_> = params.bindings().into_iter().chain(grads.bindings()).chain(self.moments.iter().map(|m| m.binding())).collect();
+        // One invocation per four floats of each buffer (see adam_step.comp).
+        let chunks: usize = row_widths(self.sh_degree).iter().map(|w| (w * self.gaussians).div_ceil(4)).sum();
+        rec.dispatch_1d(&self.step, &bindings, adam, chunks.div_ceil(WORKGROUP as usize) as u64)
+    }
+
+    /// Carries the moments to a new Gaussian set: new row `i` takes the moments of old row
+    /// `old_of_new[i]`, or zero for [`NEW_ROW`] (any index past the old rows counts as new).
+    pub fn remap(&mut self, old_of_new: &[u32]) -> GpuResult<()> {
+        let remap = GpuBuffer::from_slice(&self.ctx, "adam remap", if old_of_new.is_empty() { &[NEW_ROW] } else { old_of_new })?;
+        let moments = zero_moments(&self.ctx, old_of_new.len(), self.sh_degree)?;
+        let mut rec = Recorder::new(&self.ctx)?;
+        for ((old, new), width) in self.moments.iter().zip(&moments).zip(row_widths(self.sh_degree)) {
+            let params = RemapParams { new_rows: old_of_new.len() as u32, old_rows: self.gaussians as u32, row_width: width as u32, unused: 0 };
+            let groups = (old_of_new.len() * width).div_ceil(WORKGROUP as usize) as u64;
+            rec.dispatch_1d(&self.remap_rows, &[old.binding(), remap.binding(), new.binding()], &params, groups)?;
+        }
+        rec.submit_and_wait()?;
+        self.moments = moments;
+        self.gaussians = old_of_new.len();
+        Ok(())
+    }
+
+    /// The moments as host arrays, in [`GaussianBuffers`]' buffer order.
+    pub fn read_moments(&self) -> GpuResult<[Vec<[f32; 2]>; 5]> {
+        let [a, b, c, d, e] = &self.moments;
+        Ok([a.read()?, b.read()?, c.read()?, d.read()?, e.read()?])
+    }
+}

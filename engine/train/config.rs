@@ -1,0 +1,248 @@
+//! The fit configuration: a TOML file whose every key has a documented default
+//! (`tagsplat fit --print-config` prints them). Unknown keys and out-of-range values are errors
+//! naming the key.
+
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FitConfig {
+    /// Optimisation steps (one view each).
+    pub iterations: u32,
+    /// SH degree stored per Gaussian; the active degree rises by one every `sh_increase_every`.
+    pub sh_degree: u32,
+    pub sh_increase_every: u32,
+    /// Colour behind the Gaussians; targets are composited over it with their masks.
+    pub background: [f32; 3],
+    /// Seeds view order, initial points and splits.
+    pub seed: u64,
+    pub loss: LossWeights,
+    pub learning_rates: LearningRateConfig,
+    pub densify: DensifyConfig,
+    pub init: InitConfig,
+    pub report: ReportConfig,
+}
+
+/// λ of the image loss per target (0.8 L1 + 0.2 (1 − SSIM) each).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LossWeights {
+    /// Rendered colour against the image.
+    pub color: f32,
+    /// Rendered alpha against the mask (the paper's Gaussian mask weight).
+    pub mask: f32,
+}
+
+/// Adam learning rates (the 3DGS values); positions are scaled by the scene extent and decay
+/// exponentially from `positions` to `positions_final` over the run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LearningRateConfig {
+    pub positions: f32,
+    pub positions_final: f32,
+    pub log_scales: f32,
+    pub rotations: f32,
+    pub opacity_logits: f32,
+    pub sh_dc: f32,
+    pub sh_rest: f32,
+}
+
+/// The topology-free 3DGS densification: clone small Gaussians and split large ones whose
+/// mean view-space gradient passes the threshold, prune transparent or huge ones.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DensifyConfig {
+    pub enabled: bool,
+    pub from: u32,
+    pub until: u32,
+    pub every: u32,
+    /// Mean 2D mean-gradient norm in NDC units (3DGS: 2e-4).
+    pub grad_threshold: f32,
+    /// Largest scale (× extent) below which a Gaussian is cloned rather than split.
+    pub percent_dense: f32,
+    pub prune_opacity: f32,
+    /// Largest scale (× extent) beyond which a Gaussian is pruned.
+    pub prune_scale: f32,
+    /// Opacities are reset to 0.01 this often (0: never).
+    pub opacity_reset_every: u32,
+    /// Most Gaussians densification may reach.
+    pub budget: u32,
+}
+
+/// Random initialisation (without `--init`): points inside every mask.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InitConfig {
+    pub points: u32,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReportConfig {
+    /// Held-out evaluation (one point of the speed-against-error curve) this often.
+    pub eval_every: u32,
+    /// The loss is read back (and checked for NaN) this often.
+    pub stats_every: u32,
+}
+
+impl Default for FitConfig {
+    fn default() -> Self {
+        Self {
+            iterations: 3000,
+            sh_degree: 3,
+            sh_increase_every: 1000,
+            background: [0.0; 3],
+            seed: 0,
+            loss: LossWeights::default(),
+            learning_rates: LearningRateConfig::default(),
+            densify: DensifyConfig::default(),
+            init: InitConfig::default(),
+            report: ReportConfig::default(),
+        }
+    }
+}
+
+impl Default for LossWeights {
+    fn default() -> Self {
+        Self { color: 1.0, mask: 3.0 }
+    }
+}
+
+impl Default for LearningRateConfig {
+    fn default() -> Self {
+        Self { positions: 1.6e-4, positions_final: 1.6e-6, log_scales: 5e-3, rotations: 1e-3, opacity_logits: 0.05, sh_dc: 2.5e-3, sh_rest: 2.5e-3 / 20.0 }
+    }
+}
+
+impl Default for DensifyConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            from: 500,
+            until: 1500,
+            every: 100,
+            grad_threshold: 2e-4,
+            percent_dense: 0.01,
+            prune_opacity: 0.005,
+            prune_scale: 0.1,
+            opacity_reset_every: 0,
+            budget: 200_000,
+        }
+    }
+}
+
+impl Default for InitConfig {
+    fn default() -> Self {
+        Self { points: 5000 }
+    }
+}
+
+impl Default for ReportConfig {
+    fn default() -> Self {
+        Self { eval_every: 250, stats_every: 50 }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("cannot read config {path}: {error}")]
+    Read { path: PathBuf, error: std::io::Error },
+    #[error("config {path}: {error}")]
+    Parse { path: PathBuf, error: Box<toml::de::Error> },
+    #[error("config{}: `{key}` {problem}", .path.as_ref().map(|p| format!(" {}", p.display())).unwrap_or_default())]
+    Value { path: Option<PathBuf>, key: &'static str, problem: String },
+}
+
+impl FitConfig {
+    /// Reads and checks a TOML config; missing keys take their defaults.
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|error| ConfigError::Read { path: path.to_owned(), error })?;
+        let config: Self = toml::from_str(&text).map_err(|error| ConfigError::Parse { path: path.to_owned(), error: Box::new(error) })?;
+        config.check().map_err(|e| match e {
+            ConfigError::Value { key, problem, .. } => ConfigError::Value { path: Some(path.to_owned()), key, problem },
+            other => other,
+        })?;
+        Ok(config)
+    }
+
+    /// The defaults as TOML, for `--print-config`.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).unwrap_or_else(|e| format!("# cannot print the config: {e}"))
+    }
+
+    /// Every value in its range; the first that is not, by key.
+    pub fn check(&self) -> Result<(), ConfigError> {
+        let bad = |key: &'static str, problem: String| Err(ConfigError::Value { path: None, key, problem });
+        let positive = [
+            ("iterations", self.iterations as f32),
+            ("sh_increase_every", self.sh_increase_every as f32),
+            ("learning_rates.positions", self.learning_rates.positions),
+            ("learning_rates.positions_final", self.learning_rates.positions_final),
+            ("densify.every", self.densify.every as f32),
+            ("densify.grad_threshold", self.densify.grad_threshold),
+            ("densify.percent_dense", self.densify.percent_dense),
+            ("densify.prune_scale", self.densify.prune_scale),
+            ("densify.budget", self.densify.budget as f32),
+            ("init.points", self.init.points as f32),
+            ("report.eval_every", self.report.eval_every as f32),
+            ("report.stats_every", self.report.stats_every as f32),
+        ];
+        let non_negative = [
+            ("loss.color", self.loss.color),
+            ("loss.mask", self.loss.mask),
+            ("learning_rates.log_scales", self.learning_rates.log_scales),
+            ("learning_rates.rotations", self.learning_rates.rotations),
+            ("learning_rates.opacity_logits", self.learning_rates.opacity_logits),
+            ("learning_rates.sh_dc", self.learning_rates.sh_dc),
+            ("learning_rates.sh_rest", self.learning_rates.sh_rest),
+            ("densify.prune_opacity", self.densify.prune_opacity),
+        ];
+        // Phrased as positive so NaN fails too.
+        if let Some((key, v)) = positive.into_iter().find(|(_, v)| !(*v > 0.0 && v.is_finite())) {
+            return bad(key, format!("must be positive and finite (got {v})"));
+        }
+        if let Some((key, v)) = non_negative.into_iter().find(|(_, v)| !(*v >= 0.0 && v.is_finite())) {
+            return bad(key, format!("must be zero or positive and finite (got {v})"));
+        }
+        if self.sh_degree > crate::splat::MAX_SH_DEGREE {
+            return bad("sh_degree", format!("must be at most {} (got {})", crate::splat::MAX_SH_DEGREE, self.sh_degree));
+        }
+        if !self.background.iter().all(|c| (0.0..=1.0).contains(c)) {
+            return bad("background", format!("must be three values in [0, 1] (got {:?})", self.background));
+        }
+        if !(self.densify.prune_opacity < 1.0) {
+            return bad("densify.prune_opacity", format!("must be below 1 (got {})", self.densify.prune_opacity));
+        }
+        if self.densify.from > self.densify.until {
+            return bad("densify.from", format!("({}) must not be after densify.until ({})", self.densify.from, self.densify.until));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_round_trip_and_pass() {
+        let config = FitConfig::default();
+        config.check().unwrap();
+        assert_eq!(toml::from_str::<FitConfig>(&config.to_toml()).unwrap(), config);
+        let partial: FitConfig = toml::from_str("iterations = 10\n[densify]\nenabled = false\n").unwrap();
+        assert_eq!((partial.iterations, partial.densify.enabled, partial.densify.every), (10, false, 100));
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        let unknown = toml::from_str::<FitConfig>("[densify]\ngrad_treshold = 1\n").unwrap_err().to_string();
+        assert!(unknown.contains("grad_treshold"), "{unknown}");
+        let config: FitConfig = toml::from_str("[learning_rates]\nrotations = -1\n").unwrap();
+        assert!(config.check().unwrap_err().to_string().contains("learning_rates.rotations"));
+        let config: FitConfig = toml::from_str("[densify]\ngrad_threshold = nan\n").unwrap();
+        assert!(config.check().unwrap_err().to_string().contains("densify.grad_threshold"));
+        let config: FitConfig = toml::from_str("sh_degree = 4\n").unwrap();
+        assert!(config.check().unwrap_err().to_string().contains("sh_degree"));
+    }
+}

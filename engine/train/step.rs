@@ -1,0 +1,161 @@
+//! One training step on the GPU, and the state it carries between steps: forward (two
+//! submissions: the intersection count sizes the sort), then loss, backward and Adam in one
+//! submission. Nothing is read back unless the caller asks.
+
+use super::views::ViewTarget;
+use super::TrainError;
+use crate::camera::Camera;
+use crate::gpu::{GpuBuffer, GpuContext, PassTimes, Recorder};
+use crate::loss::{ImageLoss, LossParams, LossTerms};
+use crate::optim::{Adam, AdamParams};
+use crate::splat::{GaussianBuffers, GaussianScene, RenderSettings, Splatter};
+use std::sync::Arc;
+
+/// Everything on the GPU that has one row per Gaussian.
+struct GaussianState {
+    params: GaussianBuffers,
+    grads: GaussianBuffers,
+    /// The parameters at the last [`Trainer::checkpoint`].
+    last_good: GaussianBuffers,
+    densify_stats: GpuBuffer<[f32; 2]>,
+}
+
+impl GaussianState {
+    fn new(ctx: &Arc<GpuContext>, scene: &GaussianScene) -> Result<Self, TrainError> {
+        let params = GaussianBuffers::from_scene(ctx, scene)?;
+        let state = Self {
+            grads: GaussianBuffers::shaped_like(ctx, &params)?,
+            last_good: GaussianBuffers::from_scene(ctx, scene)?,
+            densify_stats: GpuBuffer::new(ctx, "densify statistics", scene.len())?,
+            params,
+        };
+        let mut rec = Recorder::new(ctx)?;
+        rec.fill_buffer(&state.densify_stats, 0);
+        rec.submit_and_wait()?;
+        Ok(state)
+    }
+}
+
+pub struct Trainer {
+    ctx: Arc<GpuContext>,
+    splatter: Splatter,
+    loss: ImageLoss,
+    cameras: Vec<Camera>,
+    targets: Vec<GpuBuffer<[f32; 4]>>,
+    grad_rgba: GpuBuffer<[f32; 4]>,
+    /// Zero: no depth loss.
+    grad_depth: GpuBuffer<f32>,
+    /// The loss terms summed since the last [`Trainer::take_terms`].
+    terms: GpuBuffer<f32>,
+    state: GaussianState,
+    /// Its moments follow the Gaussian set through [`Trainer::replace`].
+    adam: Adam,
+}
+
+impl Trainer {
+    /// Uploads `scene` and the views' targets; the optimizer starts at zero moments.
+    pub fn new(ctx: &Arc<GpuContext>, scene: &GaussianScene, views: &[ViewTarget]) -> Result<Self, TrainError> {
+        scene.check().map_err(crate::splat::SplatError::from)?;
+        let max_pixels = views.iter().map(|v| v.target.len()).max().unwrap_or(0);
+        let mut loss = ImageLoss::new(ctx)?;
+        loss.reserve(max_pixels)?;
+        let state = GaussianState::new(ctx, scene)?;
+        let trainer = Self {
+            ctx: ctx.clone(),
+            splatter: Splatter::new(ctx)?,
+            loss,
+            cameras: views.iter().map(|v| v.camera.clone()).collect(),
+            targets: views.iter().map(|v| GpuBuffer::from_slice(ctx, &format!("target {}", v.name), &v.target)).collect::<Result<_, _>>()?,
+            grad_rgba: GpuBuffer::new(ctx, "loss gradient", max_pixels)?,
+            grad_depth: GpuBuffer::new(ctx, "depth gradient (unused)", max_pixels)?,
+            terms: GpuBuffer::new(ctx, "loss terms", 8)?,
+            adam: Adam::new(ctx, &state.params)?,
+            state,
+        };
+        let mut rec = Recorder::new(ctx)?;
+        rec.fill_buffer(&trainer.grad_depth, 0);
+        rec.fill_buffer(&trainer.terms, 0);
+        rec.submit_and_wait()?;
+        Ok(trainer)
+    }
+
+    pub fn gaussians(&self) -> usize {
+        self.state.params.len()
+    }
+
+    pub fn sh_degree(&self) -> u32 {
+        self.state.params.sh_degree()
+    }
+
+    /// forward → loss (λ per rgba channel) → backward → Adam on training view `view`.
+    pub fn step(&mut self, view: usize, settings: &RenderSettings, lambda: [f32; 4], adam: &AdamParams) -> Result<PassTimes, TrainError> {
+        let camera = &self.cameras[view];
+        let state = &self.state;
+        let mut times = self.splatter.forward(&state.params, camera, settings)?;
+        let splatter = &self.splatter;
+        let mut rec = Recorder::new(&self.ctx)?;
+        rec.begin_pass("loss");
+        state.grads.record_zero(&mut rec);
+        let params = LossParams::new(camera.width, camera.height, lambda, false);
+        self.loss.record(&mut rec, &params, splatter.rgba(), &self.targets[view], None, &self.terms, &self.grad_rgba)?;
+        rec.end_pass();
+        splatter.record_backward(&mut rec, &state.params, (&self.grad_rgba, &self.grad_depth), &state.grads, &state.densify_stats)?;
+        rec.begin_pass("adam");
+        self.adam.record_step(&mut rec, &state.params, &state.grads, adam)?;
+        rec.end_pass();
+        times.passes.extend(rec.submit_and_wait()?.passes);
+        Ok(times)
+    }
+
+    /// The loss terms summed since the last call (which restarts the sum).
+    pub fn take_terms(&self) -> Result<LossTerms, TrainError> {
+        let terms = LossTerms::from_floats(&self.terms.read()?);
+        let mut rec = Recorder::new(&self.ctx)?;
+        rec.fill_buffer(&self.terms, 0);
+        rec.submit_and_wait()?;
+        Ok(terms)
+    }
+
+    /// Keeps a GPU copy of the current parameters, what [`Self::last_good_scene`] returns.
+    pub fn checkpoint(&self) -> Result<(), TrainError> {
+        let (from, to) = (&self.state.params, &self.state.last_good);
+        let mut rec = Recorder::new(&self.ctx)?;
+        rec.copy_buffer(&from.positions, &to.positions, from.positions.len());
+        rec.copy_buffer(&from.log_scales, &to.log_scales, from.log_scales.len());
+        rec.copy_buffer(&from.rotations, &to.rotations, from.rotations.len());
+        rec.copy_buffer(&from.opacity_logits, &to.opacity_logits, from.opacity_logits.len());
+        rec.copy_buffer(&from.sh, &to.sh, from.sh.len());
+        rec.submit_and_wait()?;
+        Ok(())
+    }
+
+    pub fn scene(&self) -> Result<GaussianScene, TrainError> {
+        Ok(self.state.params.to_scene()?)
+    }
+
+    pub fn last_good_scene(&self) -> Result<GaussianScene, TrainError> {
+        Ok(self.state.last_good.to_scene()?)
+    }
+
+    /// Per Gaussian: summed 2D mean-gradient norm (pixels) and renders on screen, since the
+    /// Gaussian set last changed.
+    pub fn densify_stats(&self) -> Result<Vec<[f32; 2]>, TrainError> {
+        Ok(self.state.densify_stats.read()?)
+    }
+
+    /// Replaces the Gaussian set: the optimizer's moments follow `old_of_new` (see
+    /// [`Adam::remap`]), the densification statistics restart, the checkpoint is the new set.
+    pub fn replace(&mut self, scene: &GaussianScene, old_of_new: &[u32]) -> Result<(), TrainError> {
+        scene.check().map_err(crate::splat::SplatError::from)?;
+        self.adam.remap(old_of_new)?;
+        self.state = GaussianState::new(&self.ctx, scene)?;
+        Ok(())
+    }
+
+    /// Renders the current (or checkpointed) Gaussians from `camera`: RGB per pixel in [0, 1].
+    pub fn render(&mut self, camera: &Camera, settings: &RenderSettings, last_good: bool) -> Result<Vec<f32>, TrainError> {
+        let params = if last_good { &self.state.last_good } else { &self.state.params };
+        self.splatter.forward(params, camera, settings)?;
+        Ok(self.splatter.read_rgba()?.iter().flat_map(|p| [p[0], p[1], p[2]]).map(|c| c.clamp(0.0, 1.0)).collect())
+    }
+}

@@ -1,0 +1,85 @@
+#version 460
+// Adam over every parameter group in one dispatch. One invocation per chunk of four floats of
+// one buffer (positions, log-scales, rotations, opacity logits, SH in turn), loaded as vec4:
+// on CPU devices every buffer access is a loop over lanes, so four floats per access is four
+// times fewer loops. Moments (m, v) are interleaved beside each float; a buffer whose length
+// is not a multiple of four ends in a chunk updated float by float.
+#include "adam.glsl"
+layout(local_size_x_id = 0) in;
+
+// Each buffer is bound once and seen both as floats and as vec4 (aliases of one binding).
+#define PARAMS(b, name) \
+    layout(std430, binding = b) buffer name##_f { float name[]; }; \
+    layout(std430, binding = b) buffer name##_v { vec4 name##4[]; };
+PARAMS(0, positions)
+PARAMS(1, log_scales)
+PARAMS(2, rotations)
+PARAMS(3, opacity_logits)
+PARAMS(4, sh)
+PARAMS(5, g_positions)
+PARAMS(6, g_log_scales)
+PARAMS(7, g_rotations)
+PARAMS(8, g_opacity_logits)
+PARAMS(9, g_sh)
+#define MOMENTS(b, name) \
+    layout(std430, binding = b) buffer name##_f { vec2 name[]; }; \
+    layout(std430, binding = b) buffer name##_v { vec4 name##4[]; };
+MOMENTS(10, m_positions)
+MOMENTS(11, m_log_scales)
+MOMENTS(12, m_rotations)
+MOMENTS(13, m_opacity_logits)
+MOMENTS(14, m_sh)
+
+// Updates the moments and returns the step to subtract, for four floats.
+vec4 adam(inout vec4 m, inout vec4 v, vec4 g, vec4 lr) {
+    vec4 b = params.betas;
+    m = b.x * m + b.z * g;
+    v = b.y * v + b.w * g * g;
+    return lr * (m / params.bias.x) / (sqrt(v / params.bias.y) + params.lr_b.z);
+}
+
+// Learning rate of SH float j: SH is Gaussian-major, DC first.
+float sh_rate(uint j) {
+    return (j / 3u) % params.counts.y == 0u ? params.lr_b.x : params.lr_b.y;
+}
+
+#define UPDATE(P, G, M, len, c, RATE) { \
+    uint first = 4u * (c); \
+    if (first + 4u <= (len)) { \
+        vec4 lr = vec4(RATE(first), RATE(first + 1u), RATE(first + 2u), RATE(first + 3u)); \
+        vec4 m01 = M##4[2u * (c)], m23 = M##4[2u * (c) + 1u]; \
+        vec4 m = vec4(m01.xz, m23.xz), v = vec4(m01.yw, m23.yw); \
+        P##4[c] -= adam(m, v, G##4[c], lr); \
+        M##4[2u * (c)] = vec4(m.x, v.x, m.y, v.y); \
+        M##4[2u * (c) + 1u] = vec4(m.z, v.z, m.w, v.w); \
+    } else { \
+        for (uint j = first; j < (len); j++) { \
+            vec4 m = vec4(M[j].x), v = vec4(M[j].y); \
+            P[j] -= adam(m, v, vec4(G[j]), vec4(RATE(j))).x; \
+            M[j] = vec2(m.x, v.x); \
+        } \
+    } \
+}
+
+#define RATE_POSITIONS(j) params.lr_a.x
+#define RATE_SCALES(j) params.lr_a.y
+#define RATE_ROTATIONS(j) params.lr_a.z
+#define RATE_OPACITY(j) params.lr_a.w
+#define RATE_SH(j) sh_rate(j)
+
+uint chunks(uint len) { return (len + 3u) / 4u; }
+
+void main() {
+    uint n = params.counts.x;
+    uint lens[5] = uint[5](3u * n, 3u * n, 4u * n, n, 3u * params.counts.y * n);
+    uint c = gl_GlobalInvocationID.x;
+    if (c < chunks(lens[0])) { UPDATE(positions, g_positions, m_positions, lens[0], c, RATE_POSITIONS) return; }
+    c -= chunks(lens[0]);
+    if (c < chunks(lens[1])) { UPDATE(log_scales, g_log_scales, m_log_scales, lens[1], c, RATE_SCALES) return; }
+    c -= chunks(lens[1]);
+    if (c < chunks(lens[2])) { UPDATE(rotations, g_rotations, m_rotations, lens[2], c, RATE_ROTATIONS) return; }
+    c -= chunks(lens[2]);
+    if (c < chunks(lens[3])) { UPDATE(opacity_logits, g_opacity_logits, m_opacity_logits, lens[3], c, RATE_OPACITY) return; }
+    c -= chunks(lens[3]);
+    if (c < chunks(lens[4])) { UPDATE(sh, g_sh, m_sh, lens[4], c, RATE_SH) }
+}

@@ -1,0 +1,164 @@
+//! The fused image loss on the GPU against its f64 reference, the reference against central
+//! finite differences, and the SSIM term against the metric (itself checked against
+//! scikit-image in tests/eval.rs).
+
+mod common;
+
+use common::{gpu, rng};
+use tagsplat::eval::ssim;
+use tagsplat::gpu::{GpuBuffer, GpuContext, Recorder};
+use tagsplat::loss::reference::{image_loss, ReferenceLoss};
+use tagsplat::loss::{ImageLoss, LossParams, LossTerms};
+use std::sync::Arc;
+
+struct Images {
+    width: usize,
+    height: usize,
+    render: Vec<[f32; 4]>,
+    target: Vec<[f32; 4]>,
+    weight: Option<Vec<f32>>,
+}
+
+fn random_images(width: usize, height: usize, weighted: bool, seed: u64) -> Images {
+    let mut r = rng(seed);
+    let mut pixel = || [0; 4].map(|_| r.next_f64() as f32);
+    let render = (0..width * height).map(|_| pixel()).collect();
+    let target = (0..width * height).map(|_| pixel()).collect();
+    let mut r = rng(seed + 1);
+    let weight = weighted.then(|| (0..width * height).map(|_| 0.25 + r.next_f64() as f32).collect());
+    Images { width, height, render, target, weight }
+}
+
+fn gpu_loss(ctx: &Arc<GpuContext>, images: &Images, lambda: [f32; 4]) -> (LossTerms, Vec<[f32; 4]>) {
+    let pixels = images.width * images.height;
+    let mut loss = ImageLoss::new(ctx).unwrap();
+    loss.reserve(pixels).unwrap();
+    let render = GpuBuffer::from_slice(ctx, "render", &images.render).unwrap();
+    let target = GpuBuffer::from_slice(ctx, "target", &images.target).unwrap();
+    let weight = images.weight.as_ref().map(|w| GpuBuffer::from_slice(ctx, "weight", w).unwrap());
+    let terms = GpuBuffer::<f32>::new(ctx, "terms", 8).unwrap();
+    let gradient = GpuBuffer::<[f32; 4]>::new(ctx, "gradient", pixels).unwrap();
+    let params = LossParams::new(images.width as u32, images.height as u32, lambda, weight.is_some());
+    let mut rec = Recorder::new(ctx).unwrap();
+    rec.fill_buffer(&terms, 0);
+    loss.record(&mut rec, &params, &render, &target, weight.as_ref(), &terms, &gradient).unwrap();
+    rec.submit_and_wait().unwrap();
+    (LossTerms::from_floats(&terms.read().unwrap()), gradient.read().unwrap())
+}
+
+fn reference(images: &Images, lambda: [f32; 4]) -> ReferenceLoss {
+    image_loss(&images.render, &images.target, images.weight.as_deref(), images.width, images.height, lambda.map(f64::from))
+}
+
+fn max_abs(values: impl Iterator<Item = f64>) -> f64 {
+    values.fold(0.0, |m, v| m.max(v.abs()))
+}
+
+#[test]
+fn gpu_loss_matches_the_reference() {
+    let g = gpu();
+    let lambda = [0.3, 0.3, 0.3, 3.0];
+    for (width, height, weighted) in [(37, 29, false), (23, 41, true), (16, 16, true)] {
+        let images = random_images(width, height, weighted, width as u64);
+        let (terms, gradient) = gpu_loss(g.ctx(), &images, lambda);
+        let expect = reference(&images, lambda);
+        for c in 0..4 {
+            assert!((terms.l1[c] as f64 - expect.l1[c]).abs() < 1e-5, "{width}×{height} L1 channel {c}: {} vs {}", terms.l1[c], expect.l1[c]);
+            assert!((terms.dssim[c] as f64 - expect.dssim[c]).abs() < 1e-5, "{width}×{height} SSIM channel {c}: {} vs {}", terms.dssim[c], expect.dssim[c]);
+        }
+        assert!((terms.total(lambda) as f64 - expect.total).abs() < 1e-5 * expect.total);
+        let scale = max_abs(expect.gradient.iter().flatten().copied());
+        let error = max_abs(gradient.iter().flatten().zip(expect.gradient.iter().flatten()).map(|(&a, &b)| a as f64 - b));
+        assert!(error < 1e-4 * scale, "{width}×{height}: gradient error {error:e} of max {scale:e}");
+    }
+}
+
+#[test]
+fn reference_gradient_matches_finite_differences() {
+    let lambda = [0.5, 1.0, 0.25, 3.0];
+    let images = random_images(15, 13, true, 7);
+    let analytic = reference(&images, lambda).gradient;
+    let mut r = rng(99);
+    let mut checked = 0;
+    while checked < 40 {
+        let p = (r.next_u32() as usize) % (images.width * images.height);
+        let c = (r.next_u32() % 4) as usize;
+        // Stay off the L1 kink, where the loss has no derivative.
+        if (images.render[p][c] - images.target[p][c]).abs() < 0.02 {
+            continue;
+        }
+        let at = |delta: f32| {
+            let mut moved = Images { render: images.render.clone(), target: images.target.clone(), weight: images.weight.clone(), ..images };
+            moved.render[p][c] += delta;
+            (reference(&moved, lambda).total, moved.render[p][c] as f64 - images.render[p][c] as f64)
+        };
+        let ((plus, dp), (minus, dm)) = (at(5e-3), at(-5e-3));
+        let numeric = (plus - minus) / (dp - dm);
+        let error = (numeric - analytic[p][c]).abs();
+        assert!(error < 1e-6 + 1e-4 * analytic[p][c].abs(), "pixel {p} channel {c}: analytic {} numeric {numeric}", analytic[p][c]);
+        checked += 1;
+    }
+}
+
+#[test]
+fn ssim_term_is_one_minus_the_metric() {
+    let g = gpu();
+    let images = random_images(31, 24, false, 3);
+    let (terms, _) = gpu_loss(g.ctx(), &images, [1.0; 4]);
+    let channel = |img: &[[f32; 4]], c: usize| img.iter().map(|p| p[c]).collect::<Vec<f32>>();
+    for c in 0..4 {
+        let metric = ssim(&channel(&images.render, c), &channel(&images.target, c), 31, 24, 1).unwrap();
+        assert!((1.0 - terms.dssim[c] as f64 - metric).abs() < 2e-6, "channel {c}: {} vs {metric}", 1.0 - terms.dssim[c]);
+    }
+    // Constant images have no variance: S = (2ab + C1) / (a² + b² + C1) exactly. In f32 the
+    // variance E[x²] − μ² cancels to within ~1e-7, which C2 = 9e-4 magnifies to ~1e-4 in S:
+    // the price of single-pass moments, and harmless where the image is flat.
+    let constant = |v: f32| vec![[v; 4]; 12 * 12];
+    let flat = Images { width: 12, height: 12, render: constant(0.25), target: constant(0.75), weight: None };
+    let (terms, _) = gpu_loss(g.ctx(), &flat, [1.0; 4]);
+    let s = (2.0 * 0.25 * 0.75 + 1e-4) / (0.25 * 0.25 + 0.75 * 0.75 + 1e-4);
+    assert!((terms.dssim[0] as f64 - (1.0 - s)).abs() < 3e-4, "{} vs {}", terms.dssim[0], 1.0 - s);
+    assert!((terms.l1[0] - 0.5).abs() < 1e-6);
+}
+
+#[test]
+fn hard_cases() {
+    let g = gpu();
+    // Identical images: zero loss, zero gradient (S is at its maximum).
+    let mut same = random_images(20, 20, false, 11);
+    same.target = same.render.clone();
+    let (terms, gradient) = gpu_loss(g.ctx(), &same, [1.0; 4]);
+    assert!(terms.total([1.0; 4]).abs() < 1e-6);
+    assert!(max_abs(gradient.iter().flatten().map(|&v| v as f64)) < 1e-6);
+    // Smaller than the window: L1 only, and still its exact gradient.
+    let small = random_images(7, 9, false, 12);
+    let (terms, gradient) = gpu_loss(g.ctx(), &small, [1.0; 4]);
+    let expect = reference(&small, [1.0; 4]);
+    assert_eq!(terms.dssim, [0.0; 4]);
+    let error = max_abs(gradient.iter().flatten().zip(expect.gradient.iter().flatten()).map(|(&a, &b)| a as f64 - b));
+    assert!(error < 1e-7);
+    // An empty image records nothing and scores nothing.
+    let empty = Images { width: 0, height: 0, render: vec![], target: vec![], weight: None };
+    assert_eq!(gpu_loss(g.ctx(), &empty, [1.0; 4]).0, LossTerms::default());
+    // A NaN in the render reaches the loss value, where the training loop looks for it.
+    let mut nan = random_images(16, 16, false, 13);
+    nan.render[100][1] = f32::NAN;
+    let (terms, _) = gpu_loss(g.ctx(), &nan, [1.0; 4]);
+    assert!(!terms.total([1.0; 4]).is_finite());
+}
+
+#[test]
+fn short_buffers_are_refused_by_name() {
+    let g = gpu();
+    let ctx = g.ctx();
+    let mut loss = ImageLoss::new(ctx).unwrap();
+    loss.reserve(100).unwrap();
+    let render = GpuBuffer::<[f32; 4]>::new(ctx, "render", 100).unwrap();
+    let target = GpuBuffer::<[f32; 4]>::new(ctx, "target of view 3", 99).unwrap();
+    let terms = GpuBuffer::<f32>::new(ctx, "terms", 8).unwrap();
+    let params = LossParams::new(10, 10, [1.0; 4], false);
+    let mut rec = Recorder::new(ctx).unwrap();
+    let error = loss.record(&mut rec, &params, &render, &target, None, &terms, &render).unwrap_err().to_string();
+    assert!(error.contains("target of view 3"), "{error}");
+    drop(rec);
+}
