@@ -11,6 +11,7 @@
 //! - [`io`]: file formats (PLY) and atomic writes.
 //! - [`splat`]: differentiable Gaussian splatting (forward, backward, CPU reference).
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
+//! - [`raster`]: differentiable visibility-buffer mesh rasterizer (forward, backward, CPU reference).
 //! - [`train`]: the training loops (single-frame fit with the 3DGS baseline densification).
 //! - [`track`]: surface points bound on frame 0 and followed through a mesh sequence.
 //! - [`loss`]: the fused image loss (L1 + SSIM) with its gradient.
@@ -31,6 +32,7 @@ pub mod io;
 pub mod loss;
 pub mod mesh;
 pub mod optim;
+pub mod raster;
 pub mod rng;
 pub mod sort;
 pub mod regularize;

@@ -161,15 +161,18 @@ impl GpuContext {
         &self.push_descriptor
     }
 
-    pub(crate) fn queue(&self) -> MutexGuard<'_, vk::Queue> {
+    /// The queue all work goes to (lock held while submitting). Public so tests can record
+    /// their own command buffers, e.g. a graphics pipeline used as an oracle.
+    pub fn queue(&self) -> MutexGuard<'_, vk::Queue> {
         self.queue.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    pub(crate) fn queue_family(&self) -> u32 {
+    pub fn queue_family(&self) -> u32 {
         self.queue_family
     }
 
-    pub(crate) fn allocator(&self) -> MutexGuard<'_, Option<Allocator>> {
+    /// The memory allocator (`None` only while the context is dropped).
+    pub fn allocator(&self) -> MutexGuard<'_, Option<Allocator>> {
         self.allocator.lock().unwrap_or_else(|e| e.into_inner())
     }
 

@@ -1,0 +1,50 @@
+//! The raster kernels, one pipeline per shader. Forward: transform → outline flags → setup
+//! (with the small-triangle raster) → large-triangle raster → resolve → anti-aliasing
+//! crossings → anti-aliasing blend. Backward: anti-aliasing backward → interior backward.
+
+use super::params::RasterParams;
+use crate::gpu::{ComputePipeline, GpuContext, GpuResult, PipelineDesc};
+use crate::shaders;
+use std::sync::Arc;
+
+/// Invocations per workgroup of the per-vertex and per-triangle kernels.
+pub(crate) const LINEAR_WORKGROUP: u32 = 128;
+
+pub(crate) struct Kernels {
+    pub transform: ComputePipeline,
+    pub outline: ComputePipeline,
+    pub setup: ComputePipeline,
+    pub raster_large: ComputePipeline,
+    pub resolve: ComputePipeline,
+    pub aa_pairs: ComputePipeline,
+    pub aa_forward: ComputePipeline,
+    pub aa_backward: ComputePipeline,
+    pub interior_backward: ComputePipeline,
+}
+
+impl Kernels {
+    pub(crate) fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
+        let push = size_of::<RasterParams>() as u32;
+        let linear = [LINEAR_WORKGROUP];
+        // The per-pixel kernels fix their 16x16 workgroup in the shader.
+        let pipeline = |name, spirv, bindings, specialization: &[u32]| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes: push, specialization })
+        };
+        Ok(Self {
+            transform: pipeline("raster transform", shaders::RASTER_TRANSFORM, 2, &linear)?,
+            outline: pipeline("raster outline flags", shaders::RASTER_OUTLINE, 4, &linear)?,
+            setup: pipeline("raster setup", shaders::RASTER_SETUP, 9, &linear)?,
+            raster_large: pipeline("raster large triangles", shaders::RASTER_RASTER_LARGE, 7, &[])?,
+            resolve: pipeline("raster resolve", shaders::RASTER_RESOLVE, 9, &[])?,
+            aa_pairs: pipeline("raster antialias crossings", shaders::RASTER_AA_PAIRS, 6, &[])?,
+            aa_forward: pipeline("raster antialias", shaders::RASTER_AA_FORWARD, 4, &[])?,
+            aa_backward: pipeline("raster antialias backward", shaders::RASTER_AA_BACKWARD, 8, &[])?,
+            interior_backward: pipeline("raster interior backward", shaders::RASTER_INTERIOR_BACKWARD, 7, &[])?,
+        })
+    }
+}
+
+/// Workgroups of the linear kernels for `items` items.
+pub(crate) fn linear_groups(items: usize) -> u64 {
+    items.div_ceil(LINEAR_WORKGROUP as usize) as u64
+}
