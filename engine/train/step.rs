@@ -8,7 +8,7 @@ use crate::camera::Camera;
 use crate::gpu::{GpuBuffer, GpuContext, PassTimes, Recorder};
 use crate::loss::{ImageLoss, LossParams, LossTerms};
 use crate::optim::{Adam, AdamParams};
-use crate::splat::{GaussianBuffers, GaussianScene, RenderSettings, Splatter};
+use crate::splat::{FrameParams, GaussianBuffers, GaussianScene, RenderSettings, Splatter};
 use std::sync::Arc;
 
 /// Everything on the GPU that has one row per Gaussian.
@@ -99,26 +99,71 @@ impl Trainer {
 
     /// forward → loss (λ per rgba channel) → backward → Adam on training view `view`, in one
     /// submission. Returns the pass times and whether every intersection fit the splatter's
-    /// buffers: when not, this step rendered without the ones past the capacity (its gradient
-    /// is slightly off) and the buffers have grown for the next.
+    /// buffers (see [`Self::finish_step`]).
     pub fn step(&mut self, view: usize, settings: &RenderSettings, lambda: [f32; 4], adam: &AdamParams) -> Result<(PassTimes, bool), TrainError> {
-        let camera = &self.cameras[view];
-        let frame = self.splatter.prepare_forward(&self.state.params, camera, settings)?;
-        let (state, splatter) = (&self.state, &self.splatter);
+        let frame = self.prepare_step(view, settings)?;
         let mut rec = Recorder::new(&self.ctx)?;
-        splatter.record_forward(&mut rec, &state.params, &frame)?;
-        rec.begin_pass("loss");
-        state.grads.record_zero(&mut rec);
-        let params = LossParams::new(camera.width, camera.height, lambda, false);
-        self.loss.record(&mut rec, &params, splatter.rgba(), &self.targets[view], None, &self.terms, &self.grad_rgba)?;
-        rec.end_pass();
-        splatter.record_backward_of(&mut rec, &frame, &state.params, (&self.grad_rgba, &self.grad_depth), &state.grads, &state.densify_stats)?;
-        rec.begin_pass("adam");
-        self.adam.record_step(&mut rec, &state.params, &state.grads, adam)?;
-        rec.end_pass();
+        self.record_splat(&mut rec, view, &frame, lambda)?;
+        self.record_adam(&mut rec, adam)?;
         let times = rec.submit_and_wait()?;
-        let complete = self.splatter.finish_forward(frame)?;
+        let complete = self.finish_step(frame)?;
         Ok((times, complete))
+    }
+
+    /// Sizes the splatter for training view `view`; the frame goes to the record calls of
+    /// this step and then to [`Self::finish_step`]. A step with more terms than the splatting
+    /// loss records them between [`Self::record_splat`] and [`Self::record_adam`], adding
+    /// their gradients to [`Self::grads`].
+    pub fn prepare_step(&mut self, view: usize, settings: &RenderSettings) -> Result<FrameParams, TrainError> {
+        Ok(self.splatter.prepare_forward(&self.state.params, &self.cameras[view], settings)?)
+    }
+
+    /// Records zeroing the gradients, the splatting forward, its loss against the view's
+    /// target (λ per rgba channel) and its backward.
+    pub fn record_splat<'a>(&'a self, rec: &mut Recorder<'a>, view: usize, frame: &FrameParams, lambda: [f32; 4]) -> Result<(), TrainError> {
+        let (state, splatter, camera) = (&self.state, &self.splatter, &self.cameras[view]);
+        splatter.record_forward(rec, &state.params, frame)?;
+        rec.begin_pass("loss");
+        state.grads.record_zero(rec);
+        let params = LossParams::new(camera.width, camera.height, lambda, false);
+        self.loss.record(rec, &params, splatter.rgba(), &self.targets[view], None, &self.terms, &self.grad_rgba)?;
+        rec.end_pass();
+        splatter.record_backward_of(rec, frame, &state.params, (&self.grad_rgba, &self.grad_depth), &state.grads, &state.densify_stats)?;
+        Ok(())
+    }
+
+    /// Records the Adam step along the gradients recorded so far.
+    pub fn record_adam<'a>(&'a self, rec: &mut Recorder<'a>, adam: &AdamParams) -> Result<(), TrainError> {
+        rec.begin_pass("adam");
+        self.adam.record_step(rec, &self.state.params, &self.state.grads, adam)?;
+        rec.end_pass();
+        Ok(())
+    }
+
+    /// After the step's submission completed: whether every intersection fit the splatter's
+    /// buffers. When not, the step rendered without those past the capacity (its gradient is
+    /// slightly off) and the buffers have grown for the next.
+    pub fn finish_step(&mut self, frame: FrameParams) -> Result<bool, TrainError> {
+        Ok(self.splatter.finish_forward(frame)?)
+    }
+
+    /// The Gaussian parameters on the GPU.
+    pub fn params(&self) -> &GaussianBuffers {
+        &self.state.params
+    }
+
+    /// Their gradients, zeroed by [`Self::record_splat`] and added to by every term after it.
+    pub fn grads(&self) -> &GaussianBuffers {
+        &self.state.grads
+    }
+
+    /// Training view `view`'s target (rgb over the background, mask), on the GPU.
+    pub fn target(&self, view: usize) -> &GpuBuffer<[f32; 4]> {
+        &self.targets[view]
+    }
+
+    pub fn camera(&self, view: usize) -> &Camera {
+        &self.cameras[view]
     }
 
     /// The loss terms summed since the last call (which restarts the sum).
