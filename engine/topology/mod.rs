@@ -95,6 +95,8 @@ pub enum TopologyError {
     Open { a: u32, b: u32 },
     #[error("the mesh has {faces} faces; at least 4 are needed")]
     TooSmall { faces: usize },
+    #[error("mismatched inputs: {0}")]
+    Mismatch(String),
     #[error("{}: {source}", path.display())]
     InFile { path: PathBuf, source: Box<TopologyError> },
 }
