@@ -570,3 +570,20 @@ fn densify_and_prune_refuse_mismatched_inputs() {
     let err = prune(&mut m, &mut scene, &PruneConfig::default()).unwrap_err().to_string();
     assert!(err.contains("compact"), "{err}");
 }
+
+#[test]
+fn collapsing_a_thin_tube_across_is_refused_and_leaves_the_mesh_untouched() {
+    // A torus whose tube has a triangular cross-section: collapsing an edge of a cross-section
+    // ring would press the tube flat, two sheets glued along an edge.
+    let minor = 3;
+    let (p, f) = torus(8, minor);
+    let mut m = ManifoldMesh::new(p, f).unwrap();
+    let before = counts(&m);
+    let across: Vec<u32> = m.edges().filter(|&h| m.origin(h) / minor == m.dest(h) / minor).collect();
+    assert_eq!(across.len(), 8 * 3);
+    for h in across {
+        assert_eq!(m.collapse_edge(h, midpoint(&m, h)), Err(CollapseRefusal::LinkCondition));
+    }
+    assert_eq!(counts(&m), before);
+    assert_sound(&m, 0, "thin torus");
+}
