@@ -263,6 +263,8 @@ fn random_operation_sequences_keep_every_invariant() {
                     assert!(if new { got == NONE && want >= synced.len() as u32 } else { got == want }, "{name}: row {row}");
                 }
                 assert_sound(&m, euler, &format!("{name} compaction at step {step}"));
+                let (positions, faces, identity) = m.clone().into_arrays();
+                assert_eq!((positions, faces, identity), (m.positions.clone(), m.live_faces(), (0..m.vertex_count() as u32).collect()));
                 ids = live;
                 synced = ids.clone();
             }

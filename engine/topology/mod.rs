@@ -24,7 +24,7 @@
 //!   condition, boundary pinch, dangling vertex, normal flip, degenerate face, > 4 vertices kept).
 //!   Removed faces and vertices are tombstones; new vertices are appended rows.
 //! - Finish: [`ManifoldMesh::compact`] drops tombstones and returns `old_of_new`, the vertex
-//!   remap; [`remap_rows`] / [`remap_strided`] apply it to any per-vertex host array (new rows
+//!   remap ([`ManifoldMesh::into_arrays`] also hands back plain positions and faces); [`remap_rows`] / [`remap_strided`] apply it to any per-vertex host array (new rows
 //!   filled by the caller's closure). [`ManifoldMesh::live_faces`] gives plain face arrays.
 //! - Check: [`ManifoldMesh::problem`] (every invariant, O(V + F)),
 //!   [`ManifoldMesh::euler_characteristic`].
