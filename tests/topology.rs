@@ -263,6 +263,8 @@ fn random_operation_sequences_keep_every_invariant() {
                     assert!(if new { got == NONE && want >= synced.len() as u32 } else { got == want }, "{name}: row {row}");
                 }
                 assert_sound(&m, euler, &format!("{name} compaction at step {step}"));
+                let (positions, faces, identity) = m.clone().into_arrays();
+                assert_eq!((positions, faces, identity), (m.positions.clone(), m.live_faces(), (0..m.vertex_count() as u32).collect()));
                 ids = live;
                 synced = ids.clone();
             }
@@ -396,7 +398,7 @@ mod gaussians {
             let mut chosen: Vec<u32> = m.faces().filter(|&f| faces[f as usize] > 0.3).collect();
             chosen.sort_by(|&a, &b| faces[b as usize].total_cmp(&faces[a as usize]));
             let chosen: Vec<[u32; 3]> = chosen.into_iter().map(|f| m.face(f)).collect();
-            let report = densify(&mut m, &mut scene, &faces, &config);
+            let report = densify(&mut m, &mut scene, &faces, &config).unwrap();
             assert_sound(&m, euler, name);
             assert_eq!(report.split_faces + report.refused_splits, chosen.len(), "{name}");
             assert_eq!(m.vertex_count(), n + report.split_faces, "{name}");
@@ -457,7 +459,7 @@ mod gaussians {
         let before: Vec<[f32; 3]> = corners.iter().map(|&c| scene.log_scales[c as usize]).collect();
         let mut scores = vec![0.0; m.face_rows()];
         scores[f as usize] = 1.0;
-        let report = densify(&mut m, &mut scene, &scores, &DensifyConfig { threshold: 0.5, large_scale: 1e-4, ..Default::default() });
+        let report = densify(&mut m, &mut scene, &scores, &DensifyConfig { threshold: 0.5, large_scale: 1e-4, ..Default::default() }).unwrap();
         assert_eq!((report.split_faces, report.halved), (1, 4));
         for (k, &c) in corners.iter().enumerate() {
             let row = report.old_of_new.iter().position(|&o| o == c).unwrap();
@@ -480,7 +482,7 @@ mod gaussians {
             }
             let picked: Vec<usize> = (0..n).filter(|i| i % 9 == 4).collect();
             let config = PruneConfig { w_a: 0.0, ..Default::default() };
-            let report = prune(&mut m, &mut scene, &config);
+            let report = prune(&mut m, &mut scene, &config).unwrap();
             assert_sound(&m, euler, name);
             assert_eq!(report.candidates, picked.len());
             assert_eq!(report.pruned + report.kept_no_legal_edge, picked.len(), "{name}");
@@ -504,7 +506,7 @@ mod gaussians {
         let mut m = ManifoldMesh::new(positions, faces).unwrap();
         let mut scene = tagged_scene(&m);
         scene.opacity_logits = vec![-10.0, -10.0, 3.0, 3.0, 3.0, 3.0];
-        let report = prune(&mut m, &mut scene, &PruneConfig { max_scale: 10.0, ..Default::default() });
+        let report = prune(&mut m, &mut scene, &PruneConfig { max_scale: 10.0, ..Default::default() }).unwrap();
         assert_eq!((report.candidates, report.pruned, report.kept_no_legal_edge), (2, 1, 1));
         assert_eq!(m.vertex_count(), 5);
         assert_sound(&m, 2, "octahedron");
@@ -526,13 +528,13 @@ fn optimizer_moments_and_statistics_follow_the_gaussians() {
     let mut moments: Vec<f32> = (0..n).flat_map(|i| [10.0 * i as f32; 3]).collect();
     let mut stats: Vec<f32> = (0..n).map(|i| i as f32).collect();
     let scores: Vec<f32> = (0..m.face_rows()).map(|f| (f % 4 == 0) as u32 as f32).collect();
-    let d = densify(&mut m, &mut scene, &scores, &DensifyConfig { threshold: 0.5, large_scale: 10.0, ..Default::default() });
+    let d = densify(&mut m, &mut scene, &scores, &DensifyConfig { threshold: 0.5, large_scale: 10.0, ..Default::default() }).unwrap();
     moments = tagsplat::topology::remap_strided(&moments, 3, &d.old_of_new, |_, row| row.fill(0.0));
     stats = remap_rows(&stats, &d.old_of_new, |_| 0.0);
     for (i, l) in scene.opacity_logits.iter_mut().enumerate() {
         *l = if i % 7 == 3 { -10.0 } else { 3.0 };
     }
-    let p = prune(&mut m, &mut scene, &PruneConfig { max_scale: 10.0, ..Default::default() });
+    let p = prune(&mut m, &mut scene, &PruneConfig { max_scale: 10.0, ..Default::default() }).unwrap();
     moments = tagsplat::topology::remap_strided(&moments, 3, &p.old_of_new, |_, _| unreachable!("pruning adds no rows"));
     stats = remap_rows(&stats, &p.old_of_new, |_| unreachable!("pruning adds no rows"));
     assert!(d.split_faces > 50 && p.pruned > 20, "{} splits, {} merges", d.split_faces, p.pruned);
@@ -550,4 +552,40 @@ fn optimizer_moments_and_statistics_follow_the_gaussians() {
         }
     }
     assert!(fresh > 0);
+}
+
+#[test]
+fn densify_and_prune_refuse_mismatched_inputs() {
+    use tagsplat::topology::{densify, gaussians_from_mesh, prune, DensifyConfig, InitConfig, PruneConfig};
+    let mut m = sphere();
+    let mut scene = gaussians_from_mesh(&m, &[], &InitConfig { sh_degree: 0, ..Default::default() });
+    let short = vec![1.0; m.face_rows() - 1];
+    let err = densify(&mut m, &mut scene, &short, &DensifyConfig::default()).unwrap_err().to_string();
+    assert!(err.contains("face scores"), "{err}");
+    scene.positions.pop();
+    let err = prune(&mut m, &mut scene, &PruneConfig::default()).unwrap_err().to_string();
+    assert!(err.contains("Gaussians for"), "{err}");
+    let mut scene = gaussians_from_mesh(&m, &[], &InitConfig { sh_degree: 0, ..Default::default() });
+    let h = m.edges().next().unwrap();
+    let mid = [0, 1, 2].map(|k| 0.5 * (m.positions[m.origin(h) as usize][k] + m.positions[m.dest(h) as usize][k]));
+    m.collapse_edge(h, mid).unwrap();
+    let err = prune(&mut m, &mut scene, &PruneConfig::default()).unwrap_err().to_string();
+    assert!(err.contains("compact"), "{err}");
+}
+
+#[test]
+fn collapsing_a_thin_tube_across_is_refused_and_leaves_the_mesh_untouched() {
+    // A torus whose tube has a triangular cross-section: collapsing an edge of a cross-section
+    // ring would press the tube flat, two sheets glued along an edge.
+    let minor = 3;
+    let (p, f) = torus(8, minor);
+    let mut m = ManifoldMesh::new(p, f).unwrap();
+    let before = counts(&m);
+    let across: Vec<u32> = m.edges().filter(|&h| m.origin(h) / minor == m.dest(h) / minor).collect();
+    assert_eq!(across.len(), 8 * 3);
+    for h in across {
+        assert_eq!(m.collapse_edge(h, midpoint(&m, h)), Err(CollapseRefusal::LinkCondition));
+    }
+    assert_eq!(counts(&m), before);
+    assert_sound(&m, 0, "thin torus");
 }

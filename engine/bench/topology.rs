@@ -91,7 +91,7 @@ pub fn bench_topology(ctx: &Arc<GpuContext>, config: &TopologyBenchConfig) -> Re
         let scores: Vec<f32> = (0..mesh.face_rows()).map(|_| if rng.next_f64() < config.fraction { 1.0 } else { 0.0 }).collect();
         let (mut m, mut s) = (mesh.clone(), scene.clone());
         let t = Instant::now();
-        densified = densify(&mut m, &mut s, &scores, &DensifyConfig { threshold: 0.5, ..Default::default() });
+        densified = densify(&mut m, &mut s, &scores, &DensifyConfig { threshold: 0.5, ..Default::default() })?;
         densify_ms.push(ms(t));
         let (mut m, mut s) = (mesh.clone(), scene.clone());
         for (i, l) in s.opacity_logits.iter_mut().enumerate() {
@@ -100,7 +100,7 @@ pub fn bench_topology(ctx: &Arc<GpuContext>, config: &TopologyBenchConfig) -> Re
             }
         }
         let t = Instant::now();
-        pruned = prune(&mut m, &mut s, &PruneConfig { max_scale: f32::INFINITY, ..Default::default() });
+        pruned = prune(&mut m, &mut s, &PruneConfig { max_scale: f32::INFINITY, ..Default::default() })?;
         prune_ms.push(ms(t));
         let t = Instant::now();
         std::hint::black_box(scene.clone());

@@ -41,4 +41,11 @@ impl ManifoldMesh {
         self.synced_vertices = old_of_new.len();
         old_of_new
     }
+
+    /// Compacts and hands back the plain arrays: positions, faces and `old_of_new` (see
+    /// [`Self::compact`]).
+    pub fn into_arrays(mut self) -> (Vec<[f32; 3]>, Vec<[u32; 3]>, Vec<u32>) {
+        let old_of_new = self.compact();
+        (self.positions, self.faces, old_of_new)
+    }
 }

@@ -4,7 +4,7 @@
 use super::flips::improve_angles;
 use super::remap::NEW_ROW;
 use super::scene_remap::remap_scene;
-use super::ManifoldMesh;
+use super::{ManifoldMesh, TopologyError};
 use crate::splat::GaussianScene;
 
 /// Densification settings. Lengths are relative to the bounding-box diagonal (scale-free).
@@ -52,7 +52,11 @@ pub fn face_scores(mesh: &ManifoldMesh, vertex_scores: &[f32]) -> Vec<f32> {
 /// decreasing score order (ties by face index), and the new rows come in that order after the
 /// kept ones. The caller applies the returned `old_of_new` to its other per-vertex arrays.
 /// `mesh` must be compact.
-pub fn densify(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, scores: &[f32], config: &DensifyConfig) -> DensifyReport {
+pub fn densify(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, scores: &[f32], config: &DensifyConfig) -> Result<DensifyReport, TopologyError> {
+    check_rows(mesh, scene)?;
+    if scores.len() != mesh.face_rows() {
+        return Err(TopologyError::Mismatch(format!("{} face scores for {} faces", scores.len(), mesh.face_rows())));
+    }
     let mut chosen: Vec<u32> = mesh.faces().filter(|&f| scores[f as usize] > config.threshold).collect();
     chosen.sort_by(|&a, &b| scores[b as usize].total_cmp(&scores[a as usize]));
     chosen.truncate(config.max_splits);
@@ -78,7 +82,18 @@ pub fn densify(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, scores: &[f32
     let mut remapped = remap_scene(scene, &report.old_of_new, &parents);
     report.halved = halve_large(&mut remapped, &report.old_of_new, &parents, config.large_scale * extent(&mesh.positions));
     *scene = remapped;
-    report
+    Ok(report)
+}
+
+/// The mesh is compact and the scene has one row per vertex.
+pub(super) fn check_rows(mesh: &ManifoldMesh, scene: &GaussianScene) -> Result<(), TopologyError> {
+    if mesh.vertex_rows() != mesh.vertex_count() || mesh.face_rows() != mesh.face_count() {
+        return Err(TopologyError::Mismatch("the mesh has removed rows: compact() it first".into()));
+    }
+    if scene.len() != mesh.vertex_count() {
+        return Err(TopologyError::Mismatch(format!("{} Gaussians for {} mesh vertices", scene.len(), mesh.vertex_count())));
+    }
+    scene.check().map_err(|e| TopologyError::Mismatch(e.to_string()))
 }
 
 /// The scale rule on the remapped scene: each new Gaussian whose mean scale exceeds `large`

@@ -43,7 +43,7 @@ pub fn vertex_normals(mesh: &ManifoldMesh) -> Vec<[f32; 3]> {
 /// One Gaussian per vertex row of a compacted mesh: position = vertex; rotation with its z
 /// axis on the vertex normal and x towards the first 1-ring neighbour; s_x = s_y from the mean
 /// neighbour distance, s_z small; opacity high; SH DC from `colors` (linear RGB in [0, 1], one
-/// per vertex), higher SH coefficients zero.
+/// per vertex; vertices past its end get grey 0.5), higher SH coefficients zero.
 pub fn gaussians_from_mesh(mesh: &ManifoldMesh, colors: &[[f32; 3]], config: &InitConfig) -> GaussianScene {
     let normals = vertex_normals(mesh);
     let n = mesh.vertex_rows();

@@ -24,7 +24,7 @@
 //!   condition, boundary pinch, dangling vertex, normal flip, degenerate face, > 4 vertices kept).
 //!   Removed faces and vertices are tombstones; new vertices are appended rows.
 //! - Finish: [`ManifoldMesh::compact`] drops tombstones and returns `old_of_new`, the vertex
-//!   remap; [`remap_rows`] / [`remap_strided`] apply it to any per-vertex host array (new rows
+//!   remap ([`ManifoldMesh::into_arrays`] also hands back plain positions and faces); [`remap_rows`] / [`remap_strided`] apply it to any per-vertex host array (new rows
 //!   filled by the caller's closure). [`ManifoldMesh::live_faces`] gives plain face arrays.
 //! - Check: [`ManifoldMesh::problem`] (every invariant, O(V + F)),
 //!   [`ManifoldMesh::euler_characteristic`].
@@ -95,6 +95,8 @@ pub enum TopologyError {
     Open { a: u32, b: u32 },
     #[error("the mesh has {faces} faces; at least 4 are needed")]
     TooSmall { faces: usize },
+    #[error("mismatched inputs: {0}")]
+    Mismatch(String),
     #[error("{}: {source}", path.display())]
     InFile { path: PathBuf, source: Box<TopologyError> },
 }

@@ -1,7 +1,8 @@
 //! Pruning: a Gaussian picked by the 3DGS criteria merges into the 1-ring neighbour of
 //! cheapest legal collapse, C = w_g·‖pᵢ − pⱼ‖ / mean edge + w_a·‖cᵢ − cⱼ‖ (seed eq. after 8).
 
-use super::densify::extent;
+use super::densify::{check_rows, extent};
+use super::TopologyError;
 use super::gaussians::dc_colors;
 use super::mesh::{ManifoldMesh, NONE};
 use super::scene_remap::remap_scene;
@@ -48,7 +49,8 @@ pub fn should_prune(scene: &GaussianScene, i: usize, config: &PruneConfig, exten
 /// keeps its own position and parameters), compacts, and remaps `scene` (rows = the mesh's
 /// vertex rows) in place. The caller applies the returned `old_of_new` to its other per-vertex
 /// arrays. `mesh` must be compact.
-pub fn prune(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, config: &PruneConfig) -> PruneReport {
+pub fn prune(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, config: &PruneConfig) -> Result<PruneReport, TopologyError> {
+    check_rows(mesh, scene)?;
     let extent = extent(&mesh.positions);
     let mean_edge = mean_edge_length(mesh);
     let colors = dc_colors(scene);
@@ -80,7 +82,7 @@ pub fn prune(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, config: &PruneC
     }
     report.old_of_new = mesh.compact();
     *scene = remap_scene(scene, &report.old_of_new, &[]);
-    report
+    Ok(report)
 }
 
 /// Mean length of the live edges (1 for a mesh without edges, so costs stay finite).
