@@ -15,6 +15,7 @@ mod fit;
 mod init_mesh;
 mod synth;
 mod topology;
+mod train;
 use tagsplat::bench::{
     bench_mesh, bench_sort, bench_splat, bench_train, MeshBenchConfig, MeshBenchReport, SortBenchReport, SplatBenchConfig,
     SplatBenchReport, TrainBenchConfig, TrainBenchReport,
@@ -46,6 +47,8 @@ enum Command {
     /// Inspect a multi-view video dataset.
     #[command(subcommand)]
     Dataset(dataset::DatasetCommand),
+    /// Reconstruct a topology-consistent mesh sequence from a multi-view video dataset.
+    Train(train::TrainArgs),
     /// Fit Gaussians to one frame of a multi-view dataset (plain 3DGS densification).
     Fit(fit::FitArgs),
     /// Generate a synthetic dynamic scene with ground truth.
@@ -174,6 +177,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Dataset(command) => dataset::run(command),
         Command::Synth(args) => synth::run(args),
         Command::Fit(args) => fit::fit(|| context(&options), args),
+        Command::Train(args) => train::train(|| context(&options), args),
         Command::Eval(args) => eval::run(args),
         Command::Bench(Bench::Sort { n, bits, repetitions, json }) => {
             let ctx = context(&options)?;
