@@ -92,7 +92,7 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
         trainer.record_splat(&mut rec, view, &frame, lambda_gs)?;
         mesh_term.record(&mut rec, trainer.params(), trainer.grads(), trainer.camera(view), trainer.target(view), lambda_mesh, bg)?;
         rec.begin_pass("regularizers");
-        regs.record(&mut rec, trainer.params(), trainer.grads(), &w.regularizers(), previous.as_ref().map(Temporal::of))?;
+        regs.record(&mut rec, trainer.params(), trainer.grads(), &w.regularizers(trainer.gaussians()), previous.as_ref().map(Temporal::of))?;
         rec.end_pass();
         trainer.record_adam(&mut rec, &adam)?;
         add_times(&mut passes, &rec.submit_and_wait()?);
@@ -115,7 +115,8 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
         let c = &config.canonical;
         if canonical && it > c.densify_from && it <= c.densify_until.min(iterations.saturating_sub(c.densify_every)) && it % c.densify_every == 0 {
             let t0 = Instant::now();
-            report.topology_steps.push(topology_step(&mut trainer, &mut mesh_term, &mut regs, task.mesh, config, &first.camera, it)?);
+            let budget = if c.budget > 0 { c.budget as usize } else { covered_pixels(task.train) };
+            report.topology_steps.push(topology_step(&mut trainer, (&mut mesh_term, &mut regs), task.mesh, config, (&first.camera, budget), it)?);
             train_s += t0.elapsed().as_secs_f64();
         }
         progress(it, iterations);
@@ -159,7 +160,14 @@ fn frame_rates(config: &TrainConfig, extent: f64, it: u32, iterations: u32, cano
 
 /// One densify-and-prune step through the topology; every per-Gaussian array follows the one
 /// remap (parameters and optimizer moments in the trainer, the mesh, the 1-rings).
-fn topology_step(trainer: &mut Trainer, mesh_term: &mut MeshTerm, regs: &mut Regularizers, mesh: &mut ManifoldMesh, config: &TrainConfig, camera: &crate::camera::Camera, it: u32) -> Result<(u32, usize, usize, usize), TrainError> {
+fn topology_step(
+    trainer: &mut Trainer,
+    (mesh_term, regs): (&mut MeshTerm, &mut Regularizers),
+    mesh: &mut ManifoldMesh,
+    config: &TrainConfig,
+    (camera, budget): (&crate::camera::Camera, usize),
+    it: u32,
+) -> Result<(u32, usize, usize, usize), TrainError> {
     let c = &config.canonical;
     let mut scene = trainer.scene()?;
     mesh.positions = scene.positions.clone();
@@ -168,13 +176,20 @@ fn topology_step(trainer: &mut Trainer, mesh_term: &mut MeshTerm, regs: &mut Reg
     let vertex_scores: Vec<f32> = trainer.densify_stats()?.iter().map(|&[sum, seen]| if seen > 0.0 { ndc_scale * sum / seen } else { 0.0 }).collect();
     let scores = face_scores(mesh, &vertex_scores);
     // Each split adds one Gaussian.
-    let room = (c.budget as usize).saturating_sub(scene.len());
+    let room = budget.saturating_sub(scene.len());
     let densified = densify(mesh, &mut scene, &scores, &DensifyConfig { threshold: c.densify_threshold, max_splits: room, ..Default::default() })?;
     let pruned = prune(mesh, &mut scene, &PruneConfig { min_opacity: c.prune_opacity, max_scale: c.prune_scale, ..Default::default() })?;
     trainer.replace(&scene, &compose(&densified.old_of_new, &pruned.old_of_new))?;
     mesh_term.set_mesh(&scene.positions, &mesh.live_faces())?;
     regs.upload(&Neighbourhoods::from_mesh(mesh))?;
     Ok((it, densified.split_faces, pruned.pruned, scene.len()))
+}
+
+/// Pixels the subject covers (mask > 0.5) in the median training view.
+fn covered_pixels(views: &[ViewTarget]) -> usize {
+    let mut counts: Vec<usize> = views.iter().map(|v| v.target.iter().filter(|p| p[3] > 0.5).count()).collect();
+    counts.sort_unstable();
+    counts.get(counts.len() / 2).copied().unwrap_or(0)
 }
 
 /// Mean PSNR and SSIM of the Gaussian renders and PSNR of the mesh renders over `views`.
