@@ -65,6 +65,10 @@ pub fn run_train(ctx: &Arc<GpuContext>, job: &TrainJob, progress: &mut dyn FnMut
         return Err(TrainError::Input(format!("frames {}..{}: {} has frames 0..{}", frames.start, frames.end, job.data.display(), dataset.frames.len())));
     }
     let out = SequenceOutput::create(&job.out)?;
+    // A range that starts later continues frames already on disk.
+    if let Some(missing) = [0, frames.start.saturating_sub(1)].into_iter().find(|&t| t < frames.start && !out.is_complete(t)) {
+        return Err(TrainError::Input(format!("frames {}..{} need frame {missing} in {}; run from an earlier frame", frames.start, frames.end, job.out.display())));
+    }
     let mut report = TrainReport {
         device: ctx.info().name.clone(),
         data: job.data.clone(),
@@ -87,7 +91,7 @@ pub fn run_train(ctx: &Arc<GpuContext>, job: &TrainJob, progress: &mut dyn FnMut
             before_previous = Some(out.read_frame(t - 2)?.1);
         }
         if !out.is_complete(t - 1) {
-            return Err(TrainError::Input(format!("frame {t} needs frame {} in {}; run from an earlier frame", t - 1, job.out.display())));
+            return Err(TrainError::Input(format!("frame {t} needs frame {} in {}", t - 1, job.out.display())));
         }
         let (train, eval) = views(&dataset, t, &job.config)?;
         let start = extrapolate(&previous, before_previous.as_ref());
