@@ -6,6 +6,7 @@
 //!   validation.
 //! - [`sort`]: exclusive prefix scan and LSD radix sort on the GPU.
 //! - [`bench`]: benchmarks measured against bounds from the same run.
+//! - [`demo`]: the whole job on generated data, scored against its ground truth.
 //! - [`rng`]: a small deterministic generator for tests, benchmarks and synthetic data.
 //! - [`camera`]: the pinhole camera (OpenCV axes) and its `cam.json` form.
 //! - [`io`]: file formats (PLY) and atomic writes.
@@ -25,6 +26,7 @@
 
 pub mod bench;
 pub mod camera;
+pub mod demo;
 pub mod eval;
 pub mod gpu;
 pub mod init;

@@ -10,6 +10,7 @@ mod track;
 use std::sync::Arc;
 
 mod dataset;
+mod demo;
 mod eval;
 mod fit;
 mod init_mesh;
@@ -47,6 +48,9 @@ enum Command {
     /// Inspect a multi-view video dataset.
     #[command(subcommand)]
     Dataset(dataset::DatasetCommand),
+    /// Generate a synthetic sequence, reconstruct it, track its ground-truth points, and score
+    /// everything against the ground truth.
+    Demo(demo::DemoArgs),
     /// Reconstruct a topology-consistent mesh sequence from a multi-view video dataset.
     Train(train::TrainArgs),
     /// Fit Gaussians to one frame of a multi-view dataset (plain 3DGS densification).
@@ -178,6 +182,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Synth(args) => synth::run(args),
         Command::Fit(args) => fit::fit(|| context(&options), args),
         Command::Train(args) => train::train(|| context(&options), args),
+        Command::Demo(args) => demo::demo(&context(&options)?, &args),
         Command::Eval(args) => eval::run(args),
         Command::Bench(Bench::Sort { n, bits, repetitions, json }) => {
             let ctx = context(&options)?;
