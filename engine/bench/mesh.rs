@@ -14,7 +14,7 @@ use std::time::Instant;
 
 /// Bytes the forward's per-pixel passes must move at least: visibility clear (8), resolve
 /// (read 8, write id 4, barycentrics 16, colour 16, depth 4, normal 16), anti-aliasing (read
-/// id 4, depth 4, colour 16; write rgb + mask 16).
+/// id 4, depth 4, colour 16; write rgb 12, mask 4).
 const PIXEL_PASS_BYTES: f64 = 8.0 + 8.0 + 56.0 + 24.0 + 16.0;
 /// Per-pixel passes of the forward, by pass name.
 const PIXEL_PASSES: [&str; 3] = ["raster clear", "raster resolve", "raster antialias"];
@@ -93,7 +93,8 @@ pub fn bench_mesh(ctx: &Arc<GpuContext>, config: &MeshBenchConfig) -> Result<Mes
     let (res, pixels) = (config.resolution, config.resolution as usize * config.resolution as usize);
     let rasterizer = MeshRasterizer::new(ctx, &mesh, res, res)?;
     let settings = RasterSettings::scaled_to(&mesh.positions);
-    let grad_image = GpuBuffer::from_slice(ctx, "bench dL/d(colour, mask)", &vec![[1.0 / pixels as f32; 4]; pixels])?;
+    let grad_color = GpuBuffer::from_slice(ctx, "bench dL/dcolour", &vec![1.0 / pixels as f32; 3 * pixels])?;
+    let grad_mask = GpuBuffer::from_slice(ctx, "bench dL/dmask", &vec![1.0 / pixels as f32; pixels])?;
     let grad_positions = GpuBuffer::<f32>::new(ctx, "bench dL/dposition", 3 * mesh.positions.len())?;
     let grad_colors = GpuBuffer::<f32>::new(ctx, "bench dL/dvertex colour", 3 * mesh.positions.len())?;
     let (mut fwd, mut bwd, mut passes, mut large) = (Vec::new(), Vec::new(), Vec::new(), 0u64);
@@ -106,7 +107,7 @@ pub fn bench_mesh(ctx: &Arc<GpuContext>, config: &MeshBenchConfig) -> Result<Mes
             let mut rec = Recorder::new(ctx)?;
             rec.fill_buffer(&grad_positions, 0);
             rec.fill_buffer(&grad_colors, 0);
-            rasterizer.record_backward(&mut rec, &params, &grad_image, (&grad_positions, &grad_colors))?;
+            rasterizer.record_backward(&mut rec, &params, (&grad_color, &grad_mask), (&grad_positions, &grad_colors))?;
             let backward_times = rec.submit_and_wait()?;
             if round > 0 {
                 fwd.push((middle - start).as_secs_f64());

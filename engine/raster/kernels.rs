@@ -37,8 +37,8 @@ impl Kernels {
             raster_large: pipeline("raster large triangles", shaders::RASTER_RASTER_LARGE, 7, &[])?,
             resolve: pipeline("raster resolve", shaders::RASTER_RESOLVE, 9, &[])?,
             aa_pairs: pipeline("raster antialias crossings", shaders::RASTER_AA_PAIRS, 6, &[])?,
-            aa_forward: pipeline("raster antialias", shaders::RASTER_AA_FORWARD, 3, &[])?,
-            aa_backward: pipeline("raster antialias backward", shaders::RASTER_AA_BACKWARD, 7, &[])?,
+            aa_forward: pipeline("raster antialias", shaders::RASTER_AA_FORWARD, 4, &[])?,
+            aa_backward: pipeline("raster antialias backward", shaders::RASTER_AA_BACKWARD, 8, &[])?,
             interior_backward: pipeline("raster interior backward", shaders::RASTER_INTERIOR_BACKWARD, 7, &[])?,
         })
     }

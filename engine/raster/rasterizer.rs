@@ -54,8 +54,8 @@ pub(super) struct ImageBuffers {
     pub(super) rgba: GpuBuffer<[f32; 4]>,
     pub(super) depth: GpuBuffer<f32>,
     pub(super) normals: GpuBuffer<[f32; 4]>,
-    /// The anti-aliased (rgb, mask) per pixel.
-    pub(super) image: GpuBuffer<[f32; 4]>,
+    pub(super) color: GpuBuffer<f32>,
+    pub(super) mask: GpuBuffer<f32>,
     pub(super) grad_rgba: GpuBuffer<[f32; 4]>,
     /// Per 16x16 tile: large sub-triangles binned to it, and their slots (capacity per tile).
     pub(super) tile_counts: GpuBuffer<u32>,
@@ -109,7 +109,8 @@ impl ImageBuffers {
             rgba: GpuBuffer::new(ctx, "raster resolved colour", n)?,
             depth: GpuBuffer::new(ctx, "raster depth", n)?,
             normals: GpuBuffer::new(ctx, "raster normals", n)?,
-            image: GpuBuffer::new(ctx, "raster image", n)?,
+            color: GpuBuffer::new(ctx, "raster colour", 3 * n)?,
+            mask: GpuBuffer::new(ctx, "raster mask", n)?,
             grad_rgba: GpuBuffer::new(ctx, "raster resolved colour gradient", n)?,
             pairs: GpuBuffer::new(ctx, "raster anti-aliasing crossings", 2 * n)?,
             tile_counts: GpuBuffer::new(ctx, "raster tile counts", tiles)?,

@@ -15,8 +15,8 @@ pub struct VertexGradients {
 }
 
 impl MeshRasterizer {
-    /// Records the forward pass for `params` (from [`Self::params`]): afterwards the image
-    /// ([`Self::image`]), id, barycentric, depth and normal buffers hold this view.
+    /// Records the forward pass for `params` (from [`Self::params`]): afterwards the colour,
+    /// mask, id, barycentric, depth and normal buffers hold this view.
     pub fn record_forward<'a>(&'a self, rec: &mut Recorder<'a>, params: &RasterParams) -> Result<(), RasterError> {
         self.record_forward_from(rec, params, &self.mesh.positions)
     }
@@ -106,24 +106,26 @@ impl MeshRasterizer {
             im.pairs.binding(),
         ];
         rec.dispatch(&k.aa_pairs, &pairs, params, params.tiles());
-        let aa = [im.pairs.binding(), im.rgba.binding(), im.image.binding()];
+        let aa = [im.pairs.binding(), im.rgba.binding(), im.color.binding(), im.mask.binding()];
         rec.dispatch(&k.aa_forward, &aa, params, params.tiles());
         rec.end_pass();
     }
 
-    /// Records the backward pass of the last forward with the same `params`: from
-    /// dL/d(rgb, mask) of the anti-aliased image (`grad_image`, one vec4 per pixel: dL/dcolour
-    /// and dL/dmask, as the fused image loss writes them), ADDS dL/dposition and dL/dcolour
-    /// (3 floats per vertex) to `grad_positions` and `grad_colors`.
+    /// Records the backward pass of the last forward with the same `params`: from dL/dcolour
+    /// (`grad_color`, RGB per pixel, 3 floats each) and dL/dmask (`grad_mask`, one per pixel) of
+    /// the anti-aliased image, ADDS dL/dposition and dL/dcolour (3 floats per vertex) to
+    /// `grad_positions` and `grad_colors`.
     pub fn record_backward<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
         params: &RasterParams,
-        grad_image: &'a GpuBuffer<[f32; 4]>,
+        (grad_color, grad_mask): (&'a GpuBuffer<f32>, &'a GpuBuffer<f32>),
         (grad_positions, grad_colors): (&'a GpuBuffer<f32>, &'a GpuBuffer<f32>),
     ) -> Result<(), RasterError> {
         self.check_params(params)?;
-        check_len("dL/d(colour, mask) image", grad_image.len(), self.image.pixels())?;
+        let pixels = self.image.pixels();
+        check_len("dL/dcolour image", grad_color.len(), 3 * pixels)?;
+        check_len("dL/dmask image", grad_mask.len(), pixels)?;
         check_len("position gradients", grad_positions.len(), 3 * self.vertices)?;
         check_len("colour gradients", grad_colors.len(), 3 * self.vertices)?;
         let (m, im, k) = (&self.mesh, &self.image, &self.kernels);
@@ -133,7 +135,8 @@ impl MeshRasterizer {
             m.camera_positions.binding(),
             im.pairs.binding(),
             im.rgba.binding(),
-            grad_image.binding(),
+            grad_color.binding(),
+            grad_mask.binding(),
             im.grad_rgba.binding(),
             grad_positions.binding(),
         ];
@@ -163,17 +166,19 @@ impl MeshRasterizer {
     }
 
     /// Backward of [`Self::render`] with the same camera and settings, in its own submission:
-    /// returns dL/dposition and dL/dcolour per vertex from host-side dL/d(rgb, mask) per pixel.
-    pub fn gradients(&self, camera: &Camera, settings: &RasterSettings, grad_image: &[[f32; 4]]) -> Result<VertexGradients, RasterError> {
+    /// returns dL/dposition and dL/dcolour per vertex from host-side image gradients.
+    pub fn gradients(&self, camera: &Camera, settings: &RasterSettings, grad_color: &[[f32; 3]], grad_mask: &[f32]) -> Result<VertexGradients, RasterError> {
         let params = self.params(camera, settings)?;
-        check_len("dL/d(colour, mask) image", grad_image.len(), self.image.pixels())?;
-        let grad_image = GpuBuffer::from_slice(&self.ctx, "dL/d(colour, mask)", grad_image)?;
+        let pixels = self.image.pixels();
+        check_len("dL/dcolour image", grad_color.len(), pixels)?;
+        let grad_color = GpuBuffer::from_slice(&self.ctx, "dL/dcolour", bytemuck::cast_slice(grad_color))?;
+        let grad_mask = GpuBuffer::from_slice(&self.ctx, "dL/dmask", grad_mask)?;
         let grad_positions = GpuBuffer::<f32>::new(&self.ctx, "dL/dposition", 3 * self.vertices)?;
         let grad_colors = GpuBuffer::<f32>::new(&self.ctx, "dL/dvertex colour", 3 * self.vertices)?;
         let mut rec = Recorder::new(&self.ctx)?;
         rec.fill_buffer(&grad_positions, 0);
         rec.fill_buffer(&grad_colors, 0);
-        self.record_backward(&mut rec, &params, &grad_image, (&grad_positions, &grad_colors))?;
+        self.record_backward(&mut rec, &params, (&grad_color, &grad_mask), (&grad_positions, &grad_colors))?;
         rec.submit_and_wait()?;
         let unflat = |v: Vec<f32>| v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         Ok(VertexGradients { positions: unflat(grad_positions.read()?), colors: unflat(grad_colors.read()?) })
@@ -183,7 +188,7 @@ impl MeshRasterizer {
     pub fn read_frame(&self) -> Result<RasterFrame, RasterError> {
         let im = &self.image;
         let xyz = |v: Vec<[f32; 4]>| v.into_iter().map(|p| [p[0], p[1], p[2]]).collect();
-        let image = im.image.read()?;
+        let color: Vec<f32> = im.color.read()?;
         Ok(RasterFrame {
             width: im.width,
             height: im.height,
@@ -192,8 +197,8 @@ impl MeshRasterizer {
             resolved: im.rgba.read()?,
             depth: im.depth.read()?,
             normals: xyz(im.normals.read()?),
-            color: image.iter().map(|p| [p[0], p[1], p[2]]).collect(),
-            mask: image.iter().map(|p| p[3]).collect(),
+            color: color.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+            mask: im.mask.read()?,
         })
     }
 
@@ -208,10 +213,14 @@ impl MeshRasterizer {
         Ok([c[0], c[1]])
     }
 
-    /// The anti-aliased (rgb, mask) per pixel of the last forward, for a loss kernel in the same
-    /// submission (the layout [`crate::loss::ImageLoss`] takes).
-    pub fn image(&self) -> &GpuBuffer<[f32; 4]> {
-        &self.image.image
+    /// The anti-aliased colour (RGB per pixel, 3 floats) and mask of the last forward, for a
+    /// loss kernel in the same submission.
+    pub fn color_image(&self) -> &GpuBuffer<f32> {
+        &self.image.color
+    }
+
+    pub fn mask_image(&self) -> &GpuBuffer<f32> {
+        &self.image.mask
     }
 
     fn check_params(&self, params: &RasterParams) -> Result<(), RasterError> {

@@ -10,9 +10,10 @@ layout(local_size_x = 16, local_size_y = 16) in;
 layout(std430, binding = 0) readonly buffer Faces { uint faces[]; };
 layout(std430, binding = 1) readonly buffer CameraPositions { vec4 camera_positions[]; };
 layout(std430, binding = 3) readonly buffer Rgba { vec4 rgba[]; };
-layout(std430, binding = 4) readonly buffer GradImage { vec4 grad_image[]; };
-layout(std430, binding = 5) writeonly buffer GradRgba { vec4 grad_rgba[]; };
-layout(std430, binding = 6) buffer GradPositions { float grad_positions[]; };
+layout(std430, binding = 4) readonly buffer GradColor { float grad_color[]; };
+layout(std430, binding = 5) readonly buffer GradMask { float grad_mask[]; };
+layout(std430, binding = 6) writeonly buffer GradRgba { vec4 grad_rgba[]; };
+layout(std430, binding = 7) buffer GradPositions { float grad_positions[]; };
 
 #include "triangle.glsl"
 #include "blend.glsl"
@@ -22,7 +23,8 @@ layout(std430, binding = 2) readonly buffer Pairs { PairRecord pairs[]; };
 #include "pairs.glsl"
 
 vec4 output_gradient(ivec2 p) {
-    return grad_image[pixel_index(p)];
+    uint i = pixel_index(p);
+    return vec4(grad_color[3u * i], grad_color[3u * i + 1u], grad_color[3u * i + 2u], grad_mask[i]);
 }
 
 // Adds dL/d(screen position) of camera-space vertex v to its world position gradient.

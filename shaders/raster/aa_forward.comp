@@ -1,7 +1,7 @@
 #version 460
 // Anti-aliasing, forward: one invocation per pixel; gathers the blends of its four pairs
 // (crossings from aa_pairs.comp, rule in blend.glsl) onto the resolved (rgb, mask) and writes the
-// final (rgb, mask) image, the layout the fused image loss takes.
+// final colour and mask images.
 #include "raster.glsl"
 
 layout(local_size_x = 16, local_size_y = 16) in;
@@ -10,7 +10,8 @@ layout(local_size_x = 16, local_size_y = 16) in;
 
 layout(std430, binding = 0) readonly buffer Pairs { PairRecord pairs[]; };
 layout(std430, binding = 1) readonly buffer Rgba { vec4 rgba[]; };
-layout(std430, binding = 2) writeonly buffer Image { vec4 image_out[]; };
+layout(std430, binding = 2) writeonly buffer Color { float color_out[]; };
+layout(std430, binding = 3) writeonly buffer Mask { float mask_out[]; };
 
 #include "pairs.glsl"
 
@@ -30,5 +31,8 @@ void main() {
             out_p += w * (rgba[pixel_index(q)] - c_p);
         }
     }
-    image_out[i] = out_p;
+    color_out[3u * i] = out_p.r;
+    color_out[3u * i + 1u] = out_p.g;
+    color_out[3u * i + 2u] = out_p.b;
+    mask_out[i] = out_p.a;
 }
