@@ -17,12 +17,17 @@
 //! - [`loss`]: the fused image loss (L1 + SSIM) with its gradient.
 //! - [`optim`]: fused Adam with moments that survive Gaussian-set changes, schedules.
 //! - [`eval`]: image, surface and tracking metrics.
+//! - [`regularize`]: the topology regularizers on the GPU and their f64 CPU reference.
+//! - [`topology`]: the manifold mesh the Gaussians live on, its local operations and remap.
 //! - [`synth`]: synthetic dynamic scenes with ground truth (procedural body, glTF skinning).
+//! - [`init`]: the first mesh of a frame from its masks (visual hull, marching tetrahedra,
+//!   vertex colours), when no mesh is given.
 
 pub mod bench;
 pub mod camera;
 pub mod eval;
 pub mod gpu;
+pub mod init;
 pub mod io;
 pub mod loss;
 pub mod mesh;
@@ -30,7 +35,9 @@ pub mod optim;
 pub mod raster;
 pub mod rng;
 pub mod sort;
+pub mod regularize;
 pub mod splat;
+pub mod topology;
 pub mod track;
 pub mod train;
 pub mod synth;

@@ -317,6 +317,36 @@ fn tens_of_thousands_stacked_in_one_tile() {
     assert_matches_reference(&image, &reference::render(&scene, &camera, &settings), "30 000 stacked Gaussians");
 }
 
+/// The forward sizes its intersection buffers before counting; a scene that outgrows the
+/// guess (a few screen-filling Gaussians: over a thousand intersections from 12 Gaussians) is
+/// rendered again with room, and still matches the reference, count included.
+#[test]
+fn intersections_past_the_capacity_guess_render_again() {
+    let gpu = common::gpu();
+    let ctx = gpu.ctx();
+    let camera = front_camera(256, 256);
+    let settings = RenderSettings::default();
+    let mut splatter = Splatter::new(ctx).unwrap();
+    let small = one_gaussian([0.0; 3], [-3.0; 3]);
+    splatter.forward(&GaussianBuffers::from_scene(ctx, &small).unwrap(), &camera, &settings).unwrap();
+    let mut big = GaussianScene { sh_degree: 0, ..Default::default() };
+    for i in 0..12 {
+        let one = one_gaussian([0.05 * i as f32 - 0.3, 0.0, -1.0 + 0.1 * i as f32], [0.7; 3]);
+        big.positions.extend(one.positions);
+        big.log_scales.extend(one.log_scales);
+        big.rotations.extend(one.rotations);
+        big.opacity_logits.extend(one.opacity_logits);
+        big.sh.extend(one.sh);
+    }
+    let buffers = GaussianBuffers::from_scene(ctx, &big).unwrap();
+    splatter.forward(&buffers, &camera, &settings).unwrap();
+    let expected: usize = (0..big.len()).filter_map(|i| reference::project(&big, &camera, &settings, i)).map(|p| reference::tiles_touched(&p, 256, 256).len()).sum();
+    assert!(expected > 1024, "the scene must outgrow the smallest capacity ({expected} intersections)");
+    assert_eq!(splatter.intersections().unwrap(), expected);
+    let image = GpuRender { rgba: splatter.read_rgba().unwrap(), depth: splatter.read_depth().unwrap() };
+    assert_matches_reference(&image, &reference::render(&big, &camera, &settings), "12 screen-filling Gaussians");
+}
+
 #[test]
 fn ply_round_trip_renders_identically() {
     let gpu = common::gpu();

@@ -12,7 +12,10 @@ use std::sync::Arc;
 mod dataset;
 mod eval;
 mod fit;
+mod init_mesh;
 mod synth;
+mod topology;
+mod train;
 use tagsplat::bench::{
     bench_mesh, bench_sort, bench_splat, bench_train, MeshBenchConfig, MeshBenchReport, SortBenchReport, SplatBenchConfig,
     SplatBenchReport, TrainBenchConfig, TrainBenchReport,
@@ -44,6 +47,8 @@ enum Command {
     /// Inspect a multi-view video dataset.
     #[command(subcommand)]
     Dataset(dataset::DatasetCommand),
+    /// Reconstruct a topology-consistent mesh sequence from a multi-view video dataset.
+    Train(train::TrainArgs),
     /// Fit Gaussians to one frame of a multi-view dataset (plain 3DGS densification).
     Fit(fit::FitArgs),
     /// Generate a synthetic dynamic scene with ground truth.
@@ -57,10 +62,14 @@ enum Command {
     Track(track::TrackArgs),
     /// Convert a mesh sequence between a folder of frames, OBJ + PC2 and GLB.
     Convert(track::ConvertArgs),
+    /// Build a frame's first mesh from its masks (visual hull), coloured from its images.
+    InitMesh(init_mesh::InitMeshArgs),
 }
 
 #[derive(Subcommand)]
 enum Bench {
+    /// Densify and prune steps on a 200k-vertex torus, and the regularizer kernels.
+    Topology(topology::BenchTopologyArgs),
     /// BVH build time and closest-point / ray-cast throughput against brute force.
     Track(track::BenchTrackArgs),
     /// GPU radix sort of random (key, u32) pairs: pairs/s, copy bandwidth, CPU sort_unstable.
@@ -149,7 +158,9 @@ fn run(cli: Cli) -> Result<()> {
         Command::Devices => devices(options.device.as_deref()),
         Command::Track(args) => track::track(args),
         Command::Convert(args) => track::convert(args),
+        Command::InitMesh(args) => init_mesh::run(args),
         Command::Bench(Bench::Track(args)) => track::bench(args),
+        Command::Bench(Bench::Topology(args)) => topology::bench(&context(&options)?, &args),
         Command::Render(args) => render::render(&context(&options)?, &args),
         Command::RenderMesh(args) => render_mesh::render_mesh(&context(&options)?, &args),
         Command::Bench(Bench::Mesh { triangles, resolution, views, rounds, json }) => {
@@ -166,6 +177,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Dataset(command) => dataset::run(command),
         Command::Synth(args) => synth::run(args),
         Command::Fit(args) => fit::fit(|| context(&options), args),
+        Command::Train(args) => train::train(|| context(&options), args),
         Command::Eval(args) => eval::run(args),
         Command::Bench(Bench::Sort { n, bits, repetitions, json }) => {
             let ctx = context(&options)?;

@@ -1,17 +1,20 @@
 //! Benchmarks that report speed against a bound measured in the same run: the GPU copy
 //! bandwidth (a compute copy kernel and the transfer engine) and the CPU's `sort_unstable`;
 //! the splatting renderer's and the mesh rasterizer's forward and backward per view, pass by
-//! pass; and full training iterations against splatting alone.
+//! pass; full training iterations against splatting alone; and the topology steps (densify,
+//! prune) with the regularizer kernels.
 
 mod copy;
 mod mesh;
 mod sort;
 mod splat;
 mod train;
+mod topology;
 
 pub use copy::{CopyBandwidth, CopyProbe};
 pub use mesh::{bench_mesh, bumpy_sphere, MeshBenchConfig, MeshBenchReport};
 pub use sort::{bench_sort, SortBenchReport};
+pub use topology::{bench_topology, TopologyBenchConfig, TopologyBenchError, TopologyBenchReport};
 pub use splat::{bench_splat, BenchWork, random_scene, ring_cameras, SplatBenchConfig, SplatBenchReport};
 pub use train::{bench_train, TrainBenchConfig, TrainBenchReport};
 

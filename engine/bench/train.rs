@@ -60,7 +60,7 @@ pub fn bench_train(ctx: &Arc<GpuContext>, config: &TrainBenchConfig) -> Result<T
     for it in 0..c.views + config.iterations {
         let adam = AdamParams::new(&RATES, it as u32 + 1, trainer.gaussians(), trainer.sh_degree());
         let start = Instant::now();
-        let times = trainer.step(it % c.views, &settings, [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0], &adam)?;
+        let (times, _) = trainer.step(it % c.views, &settings, [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0], &adam)?;
         if it >= c.views {
             walls.push(start.elapsed().as_secs_f64());
             passes.push(super::splat::top_level_ms(&[times]));

@@ -2,6 +2,12 @@
 //! (rasterize backward → project backward) over one camera at a time. It owns every buffer the
 //! passes exchange and sizes them to the work: they grow when a scene, image or intersection
 //! count needs more, and are reused otherwise.
+//!
+//! The forward is one submission: the intersection buffers are sized before the count is known
+//! (from the most intersections per Gaussian seen so far, with head room), the sort runs over
+//! the whole capacity, and after the submission the count is checked. Had it outgrown the
+//! buffers, they grow and [`Splatter::forward`] renders again; a training step that records
+//! the forward itself ([`Splatter::record_forward`]) learns it from [`Splatter::finish_forward`].
 
 use super::buffers::GaussianBuffers;
 use super::frame::{tile_grid, FrameParams, Splat, GRAD2D_STRIDE};
@@ -22,7 +28,8 @@ pub struct Splatter {
     tile_offsets: GpuBuffer<u32>,
     scan: PrefixScan,
     grad2d: GpuBuffer<f32>,
-    /// Per intersection.
+    /// Per intersection slot: exactly the capacity (the emit kernel reads its length), at
+    /// least [`MIN_INTERSECTIONS`].
     keys: GpuBuffer<u64>,
     ids: GpuBuffer<u32>,
     sort: RadixSort<u64>,
@@ -34,7 +41,19 @@ pub struct Splatter {
     pixel_state: GpuBuffer<[u32; 2]>,
     /// The last forward's camera and settings, which its backward must reuse.
     last_frame: Option<FrameParams>,
+    /// The last forward's intersection count.
+    last_intersections: usize,
+    /// The most intersections per Gaussian seen, which sizes the buffers for a new scene.
+    intersections_per_gaussian: f64,
 }
+
+/// Smallest intersection capacity (so the key buffer is never the 16-byte stand-in of an
+/// empty one, whose length the emit kernel would misread).
+const MIN_INTERSECTIONS: usize = 1024;
+/// Intersections per Gaussian assumed before any forward has counted them.
+const FIRST_GUESS_PER_GAUSSIAN: f64 = 4.0;
+/// Head room over the most intersections seen.
+const CAPACITY_MARGIN: f64 = 1.25;
 
 /// Replaces `buffer` with a larger one when it holds fewer than `len` elements (with 50% head
 /// room, so slowly growing counts do not reallocate every time).
@@ -55,14 +74,16 @@ impl Splatter {
             tile_offsets: GpuBuffer::new(ctx, "splat tile offsets", 1)?,
             scan: PrefixScan::new(ctx, 1)?,
             grad2d: GpuBuffer::new(ctx, "splat 2D gradients", 0)?,
-            keys: GpuBuffer::new(ctx, "splat intersection keys", 0)?,
-            ids: GpuBuffer::new(ctx, "splat intersection ids", 0)?,
-            sort: RadixSort::new(ctx, 0)?,
+            keys: GpuBuffer::new(ctx, "splat intersection keys", MIN_INTERSECTIONS)?,
+            ids: GpuBuffer::new(ctx, "splat intersection ids", MIN_INTERSECTIONS)?,
+            sort: RadixSort::new(ctx, MIN_INTERSECTIONS)?,
             tile_ranges: GpuBuffer::new(ctx, "splat tile ranges", 0)?,
             rgba: GpuBuffer::new(ctx, "splat colour and alpha", 0)?,
             depth: GpuBuffer::new(ctx, "splat depth", 0)?,
             pixel_state: GpuBuffer::new(ctx, "splat pixel state", 0)?,
             last_frame: None,
+            last_intersections: 0,
+            intersections_per_gaussian: FIRST_GUESS_PER_GAUSSIAN,
         })
     }
 
@@ -84,58 +105,93 @@ impl Splatter {
         ensure(&self.ctx, &mut self.pixel_state, frame.pixels())
     }
 
-    fn ensure_intersections(&mut self, intersections: usize) -> GpuResult<()> {
-        ensure(&self.ctx, &mut self.keys, intersections)?;
-        ensure(&self.ctx, &mut self.ids, intersections)?;
-        if self.sort.capacity() < intersections {
-            self.sort = RadixSort::new(&self.ctx, self.keys.len())?;
+    /// Intersection buffers of exactly `capacity` slots (at least [`MIN_INTERSECTIONS`]).
+    fn resize_intersections(&mut self, capacity: usize) -> GpuResult<()> {
+        let capacity = capacity.max(MIN_INTERSECTIONS);
+        if self.keys.len() != capacity {
+            self.keys = GpuBuffer::new(&self.ctx, "splat intersection keys", capacity)?;
+            self.ids = GpuBuffer::new(&self.ctx, "splat intersection ids", capacity)?;
+        }
+        if self.sort.capacity() < capacity {
+            self.sort = RadixSort::new(&self.ctx, capacity)?;
         }
         Ok(())
     }
 
-    /// Renders `scene` from `camera`. The outputs stay on the GPU ([`Self::rgba`],
-    /// [`Self::depth`]) until the next forward; the returned times name every pass.
+    /// Renders `scene` from `camera` in one submission (two when the intersections outgrow
+    /// the buffers). The outputs stay on the GPU ([`Self::rgba`], [`Self::depth`]) until the
+    /// next forward; the returned times name every pass.
     pub fn forward(&mut self, scene: &GaussianBuffers, camera: &Camera, settings: &RenderSettings) -> Result<PassTimes, SplatError> {
+        loop {
+            let frame = self.prepare_forward(scene, camera, settings)?;
+            let mut rec = Recorder::new(&self.ctx)?;
+            self.record_forward(&mut rec, scene, &frame)?;
+            let times = rec.submit_and_wait()?;
+            if self.finish_forward(frame)? {
+                return Ok(times);
+            }
+        }
+    }
+
+    /// Sizes every buffer for rendering `scene` from `camera` and returns the frame to record
+    /// with [`Self::record_forward`]. The intersection capacity only grows, so views with fewer
+    /// intersections reuse it.
+    pub fn prepare_forward(&mut self, scene: &GaussianBuffers, camera: &Camera, settings: &RenderSettings) -> Result<FrameParams, SplatError> {
         settings.check()?;
         let frame = FrameParams::new(camera, settings, scene.len(), scene.sh_degree());
-        let n = scene.len();
-        self.ensure_scene(n)?;
+        self.ensure_scene(scene.len())?;
         self.ensure_image(&frame)?;
+        let wanted = (scene.len() as f64 * self.intersections_per_gaussian * CAPACITY_MARGIN) as usize;
+        if wanted > self.keys.len() {
+            self.resize_intersections(wanted)?;
+        }
         self.last_frame = None;
+        Ok(frame)
+    }
 
-        // Submission 1: project and count tiles, scan the counts; the total sizes the rest.
-        let mut rec = Recorder::new(&self.ctx)?;
-        rec.begin_pass("project");
-        rec.fill_buffer(&self.tile_offsets, 0);
-        self.kernels.project(&mut rec, &frame, scene, &self.splats, &self.tile_offsets)?;
-        rec.end_pass();
-        rec.begin_pass("bin");
-        self.scan.record(&mut rec, &self.tile_offsets, n + 1)?;
-        rec.end_pass();
-        let mut times = rec.submit_and_wait()?;
-        let intersections = self.tile_offsets.read_range(n, 1)?[0] as usize;
-        self.ensure_intersections(intersections)?;
-
-        // Submission 2: emit and sort the intersections, find tile runs, rasterize.
+    /// Records the whole forward of `frame` (from [`Self::prepare_forward`]): project, count
+    /// and scan tiles, emit and sort the intersections, find tile runs, rasterize.
+    pub fn record_forward<'a>(&'a self, rec: &mut Recorder<'a>, scene: &'a GaussianBuffers, frame: &FrameParams) -> Result<(), SplatError> {
         let (tiles_x, tiles_y) = tile_grid(frame.width(), frame.height());
         let tile_bits = u32::BITS - (tiles_x * tiles_y).saturating_sub(1).leading_zeros();
-        let mut rec = Recorder::new(&self.ctx)?;
+        rec.begin_pass("project");
+        rec.fill_buffer(&self.tile_offsets, 0);
+        self.kernels.project(rec, frame, scene, &self.splats, &self.tile_offsets)?;
+        rec.end_pass();
         rec.begin_pass("bin");
-        self.kernels.emit_intersections(&mut rec, &frame, &self.splats, &self.tile_offsets, &self.keys, &self.ids)?;
+        self.scan.record(rec, &self.tile_offsets, scene.len() + 1)?;
+        // Unfilled slots keep all-ones keys: they sort last and name no tile.
+        rec.fill_buffer(&self.keys, u32::MAX);
+        self.kernels.emit_intersections(rec, frame, &self.splats, &self.tile_offsets, &self.keys, &self.ids)?;
         rec.end_pass();
         rec.begin_pass("sort");
-        self.sort.record(&mut rec, &self.keys, &self.ids, intersections, 32 + tile_bits)?;
+        self.sort.record(rec, &self.keys, &self.ids, self.keys.len(), 32 + tile_bits)?;
         rec.end_pass();
         rec.begin_pass("bin");
         rec.fill_buffer(&self.tile_ranges, 0);
-        self.kernels.tile_ranges(&mut rec, &self.keys, intersections, &self.tile_ranges)?;
+        self.kernels.tile_ranges(rec, frame, &self.keys, &self.tile_ranges)?;
         rec.end_pass();
         rec.begin_pass("rasterize");
-        self.kernels.rasterize(&mut rec, &frame, &self.raster_inputs(), &self.raster_outputs());
+        self.kernels.rasterize(rec, frame, &self.raster_inputs(), &self.raster_outputs());
         rec.end_pass();
-        times.passes.extend(rec.submit_and_wait()?.passes);
+        Ok(())
+    }
+
+    /// After the submission with [`Self::record_forward`] completed: reads the intersection
+    /// count and returns whether every intersection fit. When not, the render (and whatever
+    /// was computed from it) lacked those past the capacity, and the buffers have grown so the
+    /// next forward fits.
+    pub fn finish_forward(&mut self, frame: FrameParams) -> Result<bool, SplatError> {
+        let n = frame.gaussians();
+        let count = self.tile_offsets.read_range(n, 1)?[0] as usize;
         self.last_frame = Some(frame);
-        Ok(times)
+        self.last_intersections = count;
+        self.intersections_per_gaussian = self.intersections_per_gaussian.max(count as f64 / n.max(1) as f64);
+        if count <= self.keys.len() {
+            return Ok(true);
+        }
+        self.resize_intersections((count as f64 * CAPACITY_MARGIN) as usize)?;
+        Ok(false)
     }
 
     /// Adds the gradients of the last forward's outputs to `grads` (shaped like `scene`; zero it
@@ -167,6 +223,20 @@ impl Splatter {
         densify_stats: &'a GpuBuffer<[f32; 2]>,
     ) -> Result<(), SplatError> {
         let frame = self.last_frame.ok_or(SplatError::NoForward)?;
+        self.record_backward_of(rec, &frame, scene, image_grads, grads, densify_stats)
+    }
+
+    /// The backward of a forward recorded in the same submission (its frame is not finished
+    /// yet, see [`Self::record_forward`]).
+    pub fn record_backward_of<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        frame: &FrameParams,
+        scene: &'a GaussianBuffers,
+        image_grads: (&'a GpuBuffer<[f32; 4]>, &'a GpuBuffer<f32>),
+        grads: &'a GaussianBuffers,
+        densify_stats: &'a GpuBuffer<[f32; 2]>,
+    ) -> Result<(), SplatError> {
         let (grad_rgba, grad_depth) = image_grads;
         let n = scene.len();
         let shapes = [
@@ -178,14 +248,14 @@ impl Splatter {
             ("depth gradients", grad_depth.len().min(frame.pixels()), frame.pixels()),
         ];
         if let Some((what, len, expected)) = shapes.into_iter().find(|(_, len, expected)| len != expected) {
-            return Err(SplatError::Shape(format!("{what}: {len} where the last forward needs {expected}")));
+            return Err(SplatError::Shape(format!("{what}: {len} where the forward needs {expected}")));
         }
         rec.begin_pass("rasterize backward");
         rec.fill_buffer(&self.grad2d, 0);
-        self.kernels.rasterize_backward(rec, &frame, (&self.raster_inputs(), &self.raster_outputs()), image_grads, &self.grad2d);
+        self.kernels.rasterize_backward(rec, frame, (&self.raster_inputs(), &self.raster_outputs()), image_grads, &self.grad2d);
         rec.end_pass();
         rec.begin_pass("project backward");
-        self.kernels.project_backward(rec, &frame, scene, &self.grad2d, grads, densify_stats)?;
+        self.kernels.project_backward(rec, frame, scene, &self.grad2d, grads, densify_stats)?;
         rec.end_pass();
         Ok(())
     }
@@ -225,8 +295,8 @@ impl Splatter {
 
     /// The last forward's number of (tile, Gaussian) intersections.
     pub fn intersections(&self) -> Result<usize, SplatError> {
-        let frame = self.frame()?;
-        Ok(self.tile_offsets.read_range(frame.gaussians(), 1)?[0] as usize)
+        self.frame()?;
+        Ok(self.last_intersections)
     }
 }
 

@@ -19,6 +19,7 @@ const TILE_WORKGROUP: u32 = super::TILE_SIZE * super::TILE_SIZE;
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct RangeParams {
     intersections: u32,
+    tile_count: u32,
 }
 
 pub(crate) struct Kernels {
@@ -77,10 +78,12 @@ impl Kernels {
         rec.dispatch_1d(&self.emit_intersections, &bindings, frame, groups(frame.gaussians()))
     }
 
-    /// Each tile's run in the sorted keys; `ranges` must be zeroed first.
-    pub(crate) fn tile_ranges<'a>(&'a self, rec: &mut Recorder<'a>, keys: &'a GpuBuffer<u64>, intersections: usize, ranges: &'a GpuBuffer<[u32; 2]>) -> GpuResult<()> {
-        let params = RangeParams { intersections: intersections as u32 };
-        rec.dispatch_1d(&self.tile_ranges, &[keys.binding(), ranges.binding()], &params, groups(intersections))
+    /// Each tile's run in the sorted keys (all `keys.len()` slots, unfilled ones included);
+    /// `ranges` must be zeroed first.
+    pub(crate) fn tile_ranges<'a>(&'a self, rec: &mut Recorder<'a>, frame: &FrameParams, keys: &'a GpuBuffer<u64>, ranges: &'a GpuBuffer<[u32; 2]>) -> GpuResult<()> {
+        let (tiles_x, tiles_y) = frame.tiles();
+        let params = RangeParams { intersections: keys.len() as u32, tile_count: tiles_x * tiles_y };
+        rec.dispatch_1d(&self.tile_ranges, &[keys.binding(), ranges.binding()], &params, groups(keys.len()))
     }
 
     pub(crate) fn rasterize<'a>(&'a self, rec: &mut Recorder<'a>, frame: &FrameParams, inputs: &RasterInputs<'a>, outputs: &RasterOutputs<'a>) {

@@ -157,13 +157,7 @@ pub enum ConfigError {
 impl FitConfig {
     /// Reads and checks a TOML config; missing keys take their defaults.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|error| ConfigError::Read { path: path.to_owned(), error })?;
-        let config: Self = toml::from_str(&text).map_err(|error| ConfigError::Parse { path: path.to_owned(), error: Box::new(error) })?;
-        config.check().map_err(|e| match e {
-            ConfigError::Value { key, problem, .. } => ConfigError::Value { path: Some(path.to_owned()), key, problem },
-            other => other,
-        })?;
-        Ok(config)
+        load_toml(path, Self::check)
     }
 
     /// The defaults as TOML, for `--print-config`.
@@ -173,7 +167,6 @@ impl FitConfig {
 
     /// Every value in its range; the first that is not, by key.
     pub fn check(&self) -> Result<(), ConfigError> {
-        let bad = |key: &'static str, problem: String| Err(ConfigError::Value { path: None, key, problem });
         let positive = [
             ("iterations", self.iterations as f32),
             ("sh_increase_every", self.sh_increase_every as f32),
@@ -198,27 +191,56 @@ impl FitConfig {
             ("learning_rates.sh_rest", self.learning_rates.sh_rest),
             ("densify.prune_opacity", self.densify.prune_opacity),
         ];
-        // Phrased as positive so NaN fails too.
-        if let Some((key, v)) = positive.into_iter().find(|(_, v)| !(*v > 0.0 && v.is_finite())) {
-            return bad(key, format!("must be positive and finite (got {v})"));
-        }
-        if let Some((key, v)) = non_negative.into_iter().find(|(_, v)| !(*v >= 0.0 && v.is_finite())) {
-            return bad(key, format!("must be zero or positive and finite (got {v})"));
-        }
-        if self.sh_degree > crate::splat::MAX_SH_DEGREE {
-            return bad("sh_degree", format!("must be at most {} (got {})", crate::splat::MAX_SH_DEGREE, self.sh_degree));
-        }
-        if !self.background.iter().all(|c| (0.0..=1.0).contains(c)) {
-            return bad("background", format!("must be three values in [0, 1] (got {:?})", self.background));
-        }
+        check_ranges(&positive, &non_negative)?;
+        check_appearance(self.sh_degree, self.background)?;
         if !(self.densify.prune_opacity < 1.0) {
-            return bad("densify.prune_opacity", format!("must be below 1 (got {})", self.densify.prune_opacity));
+            return value_error("densify.prune_opacity", format!("must be below 1 (got {})", self.densify.prune_opacity));
         }
         if self.densify.from > self.densify.until {
-            return bad("densify.from", format!("({}) must not be after densify.until ({})", self.densify.from, self.densify.until));
+            return value_error("densify.from", format!("({}) must not be after densify.until ({})", self.densify.from, self.densify.until));
         }
         Ok(())
     }
+}
+
+/// An out-of-range value of `key` (the file is added by [`load_toml`]).
+pub(crate) fn value_error<T>(key: &'static str, problem: String) -> Result<T, ConfigError> {
+    Err(ConfigError::Value { path: None, key, problem })
+}
+
+/// The first key of `positive` whose value is not positive and finite, or of `non_negative`
+/// not zero or positive and finite, as an error naming it.
+pub(crate) fn check_ranges(positive: &[(&'static str, f32)], non_negative: &[(&'static str, f32)]) -> Result<(), ConfigError> {
+    // Phrased as positive so NaN fails too.
+    if let Some(&(key, v)) = positive.iter().find(|(_, v)| !(*v > 0.0 && v.is_finite())) {
+        return value_error(key, format!("must be positive and finite (got {v})"));
+    }
+    if let Some(&(key, v)) = non_negative.iter().find(|(_, v)| !(*v >= 0.0 && v.is_finite())) {
+        return value_error(key, format!("must be zero or positive and finite (got {v})"));
+    }
+    Ok(())
+}
+
+/// `sh_degree` at most the renderer's, `background` three values in [0, 1].
+pub(crate) fn check_appearance(sh_degree: u32, background: [f32; 3]) -> Result<(), ConfigError> {
+    if sh_degree > crate::splat::MAX_SH_DEGREE {
+        return value_error("sh_degree", format!("must be at most {} (got {sh_degree})", crate::splat::MAX_SH_DEGREE));
+    }
+    if !background.iter().all(|c| (0.0..=1.0).contains(c)) {
+        return value_error("background", format!("must be three values in [0, 1] (got {background:?})"));
+    }
+    Ok(())
+}
+
+/// Reads a TOML config of type `T` and runs `check`, naming the file in every error.
+pub(crate) fn load_toml<T: serde::de::DeserializeOwned>(path: &Path, check: impl FnOnce(&T) -> Result<(), ConfigError>) -> Result<T, ConfigError> {
+    let text = std::fs::read_to_string(path).map_err(|error| ConfigError::Read { path: path.to_owned(), error })?;
+    let config: T = toml::from_str(&text).map_err(|error| ConfigError::Parse { path: path.to_owned(), error: Box::new(error) })?;
+    check(&config).map_err(|e| match e {
+        ConfigError::Value { key, problem, .. } => ConfigError::Value { path: Some(path.to_owned()), key, problem },
+        other => other,
+    })?;
+    Ok(config)
 }
 
 #[cfg(test)]

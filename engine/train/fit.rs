@@ -1,6 +1,6 @@
 //! The single-frame fit loop.
 
-use super::config::FitConfig;
+use super::config::{FitConfig, LearningRateConfig};
 use super::densify::{densify_and_prune, DensifyRules};
 use super::report::{CurvePoint, DensifyEvent, FitReport};
 use super::step::Trainer;
@@ -64,7 +64,7 @@ pub fn fit(
     let mut order: Vec<usize> = Vec::new();
     let mut passes: BTreeMap<String, f64> = BTreeMap::new();
     let (mut train_s, mut loss_log, mut curve, mut densify_log) = (0.0, Vec::new(), Vec::new(), Vec::new());
-    let (mut last_loss, mut stopped, mut interval_start, mut done) = (None, None, 1, 0);
+    let (mut last_loss, mut stopped, mut interval_start, mut done, mut truncated_steps) = (None, None, 1, 0, 0);
     for it in 1..=config.iterations {
         let step_start = Instant::now();
         if order.is_empty() {
@@ -72,8 +72,10 @@ pub fn fit(
         }
         let view = order.pop().unwrap_or(0);
         settings.sh_degree = config.sh_degree.min((it - 1) / config.sh_increase_every);
-        let adam = AdamParams::new(&learning_rates(config, extent, it), it, trainer.gaussians(), trainer.sh_degree());
-        add_times(&mut passes, &trainer.step(view, &settings, lambda, &adam)?);
+        let adam = AdamParams::new(&learning_rates(&config.learning_rates, extent, it, config.iterations), it, trainer.gaussians(), trainer.sh_degree());
+        let (times, complete) = trainer.step(view, &settings, lambda, &adam)?;
+        add_times(&mut passes, &times);
+        truncated_steps += (!complete) as u32;
         train_s += step_start.elapsed().as_secs_f64();
         done = it;
 
@@ -123,6 +125,7 @@ pub fn fit(
         loss: loss_log,
         curve,
         densify: densify_log,
+        truncated_steps,
         stopped,
     };
     let names = eval.iter().map(|v| v.name.clone());
@@ -147,10 +150,10 @@ fn densify(trainer: &mut Trainer, config: &FitConfig, extent: f64, camera: &Came
     Ok(DensifyEvent { iteration: it, counts, gaussians: scene.len() })
 }
 
-/// The learning rates of iteration `it`: positions scaled by the extent and decaying.
-fn learning_rates(config: &FitConfig, extent: f64, it: u32) -> LearningRates {
-    let r = &config.learning_rates;
-    let positions = exponential_decay(r.positions as f64 * extent, r.positions_final as f64 * extent, it as u64, config.iterations as u64);
+/// The learning rates of iteration `it` of `iterations`: positions scaled by the extent and
+/// decaying.
+pub(crate) fn learning_rates(r: &LearningRateConfig, extent: f64, it: u32, iterations: u32) -> LearningRates {
+    let positions = exponential_decay(r.positions as f64 * extent, r.positions_final as f64 * extent, it as u64, iterations as u64);
     LearningRates { positions: positions as f32, log_scales: r.log_scales, rotations: r.rotations, opacity_logits: r.opacity_logits, sh_dc: r.sh_dc, sh_rest: r.sh_rest }
 }
 
@@ -176,7 +179,7 @@ fn evaluate(trainer: &mut Trainer, views: &[ViewTarget], settings: &RenderSettin
     Ok((psnr_sum / n, ssim_sum / n, renders))
 }
 
-fn shuffled(n: usize, rng: &mut SplitMix64) -> Vec<usize> {
+pub(crate) fn shuffled(n: usize, rng: &mut SplitMix64) -> Vec<usize> {
     let mut order: Vec<usize> = (0..n).collect();
     for i in (1..n).rev() {
         order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
@@ -184,7 +187,7 @@ fn shuffled(n: usize, rng: &mut SplitMix64) -> Vec<usize> {
     order
 }
 
-fn add_times(total: &mut BTreeMap<String, f64>, times: &PassTimes) {
+pub(crate) fn add_times(total: &mut BTreeMap<String, f64>, times: &PassTimes) {
     for pass in times.passes.iter().filter(|p| p.depth == 0) {
         *total.entry(pass.name.clone()).or_default() += pass.ms;
     }

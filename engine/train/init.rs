@@ -59,6 +59,9 @@ pub(crate) fn logit(p: f32) -> f32 {
     (p / (1.0 - p)).ln()
 }
 
+/// Points and their colours (linear RGB in [0, 1]).
+pub type ColoredPoints = (Vec<[f32; 3]>, Vec<[f32; 3]>);
+
 /// One view for sampling: its camera, mask (> 0.5 inside) and colour image (RGB, row-major).
 pub struct MaskedView<'a> {
     pub camera: &'a Camera,
@@ -70,7 +73,7 @@ pub struct MaskedView<'a> {
 /// projections: uniform samples in a box around the point nearest to every optical axis, kept
 /// when every view that sees them has them inside its mask (and at least half the views see
 /// them). Fails, naming the cause, when the masks do not intersect in space.
-pub fn points_inside_masks(views: &[MaskedView], count: usize, seed: u64) -> Result<(Vec<[f32; 3]>, Vec<[f32; 3]>), TrainError> {
+pub fn points_inside_masks(views: &[MaskedView], count: usize, seed: u64) -> Result<ColoredPoints, TrainError> {
     if views.is_empty() {
         return Err(TrainError::Input("no views with masks to initialise from".into()));
     }
@@ -114,9 +117,7 @@ fn color_if_inside(views: &[MaskedView], p: DVec3) -> Option<[f32; 3]> {
             return None;
         }
         seen += 1;
-        for k in 0..3 {
-            sum[k] += v.rgb[i][k];
-        }
+        sum = [0, 1, 2].map(|k| sum[k] + v.rgb[i][k]);
     }
     (2 * seen >= views.len() && seen > 0).then(|| sum.map(|s| s / seen as f32))
 }

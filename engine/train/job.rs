@@ -54,8 +54,11 @@ pub fn initial_gaussians(views: &[ViewTarget], init: Option<&Path>, config: &Fit
     Ok(gaussians_at_points(&points, colors.as_deref(), config.sh_degree))
 }
 
+/// Points, with colours (linear RGB in [0, 1]) when the file has them.
+type PointsAndColors = (Vec<[f32; 3]>, Option<Vec<[f32; 3]>>);
+
 /// Vertex positions (and colours when present) of a PLY point cloud or mesh, or an OBJ mesh.
-fn read_points(path: &Path) -> Result<(Vec<[f32; 3]>, Option<Vec<[f32; 3]>>), TrainError> {
+fn read_points(path: &Path) -> Result<PointsAndColors, TrainError> {
     let bad = |problem: String| TrainError::Input(format!("{}: {problem}", path.display()));
     let is_obj = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     let (points, colors) = if is_obj {

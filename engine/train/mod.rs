@@ -1,12 +1,16 @@
-//! Training. For now one frame of static multi-view (`fit`): forward → fused loss → backward
-//! → fused Adam per iteration with no host round trip but scheduled statistics, the plain
-//! topology-free 3DGS densification, held-out evaluation and a speed-against-error curve.
+//! Training: one frame of static multi-view (`fit`: forward → fused loss → backward → fused
+//! Adam in one submission per iteration, the plain topology-free 3DGS densification, held-out
+//! evaluation and a speed-against-error curve), and the reconstruction [`pipeline`] built on
+//! the same step.
 
 pub mod config;
 pub mod densify;
 mod fit;
 pub mod init;
 mod job;
+mod mesh_term;
+pub mod output;
+pub mod pipeline;
 pub mod report;
 mod step;
 pub mod temporal;
@@ -33,6 +37,12 @@ pub enum TrainError {
     Gpu(#[from] crate::gpu::GpuError),
     #[error(transparent)]
     Eval(#[from] crate::eval::EvalError),
+    #[error(transparent)]
+    Raster(#[from] crate::raster::RasterError),
+    #[error(transparent)]
+    Regularize(#[from] crate::regularize::RegularizeError),
+    #[error(transparent)]
+    Topology(#[from] crate::topology::TopologyError),
     #[error("{0}")]
     Input(String),
     #[error("cannot write {}: {error}", path.display())]

@@ -51,6 +51,9 @@ pub struct FitReport {
     pub loss: Vec<(u32, f32)>,
     pub curve: Vec<CurvePoint>,
     pub densify: Vec<DensifyEvent>,
+    /// Steps whose intersections outgrew the splatter's buffers (rendered without the excess;
+    /// the buffers then grew).
+    pub truncated_steps: u32,
     /// Why the run stopped before its last iteration (a non-finite loss), if it did.
     pub stopped: Option<String>,
 }

@@ -1,6 +1,6 @@
-//! One training step on the GPU, and the state it carries between steps: forward (two
-//! submissions: the intersection count sizes the sort), then loss, backward and Adam in one
-//! submission. Nothing is read back unless the caller asks.
+//! One training step on the GPU, and the state it carries between steps: forward, loss,
+//! backward and Adam in one submission. After it, one counter is read (the intersections, which
+//! size the next step's buffers); nothing else unless the caller asks.
 
 use super::views::ViewTarget;
 use super::TrainError;
@@ -8,7 +8,7 @@ use crate::camera::Camera;
 use crate::gpu::{GpuBuffer, GpuContext, PassTimes, Recorder};
 use crate::loss::{ImageLoss, LossParams, LossTerms};
 use crate::optim::{Adam, AdamParams};
-use crate::splat::{GaussianBuffers, GaussianScene, RenderSettings, Splatter};
+use crate::splat::{FrameParams, GaussianBuffers, GaussianScene, RenderSettings, Splatter};
 use std::sync::Arc;
 
 /// Everything on the GPU that has one row per Gaussian.
@@ -60,11 +60,11 @@ impl Trainer {
         let mut loss = ImageLoss::new(ctx)?;
         loss.reserve(max_pixels)?;
         let state = GaussianState::new(ctx, scene)?;
-        let trainer = Self {
+        let mut trainer = Self {
             ctx: ctx.clone(),
             splatter: Splatter::new(ctx)?,
             loss,
-            cameras: views.iter().map(|v| v.camera.clone()).collect(),
+            cameras: views.iter().map(|v| v.camera).collect(),
             targets: views.iter().map(|v| GpuBuffer::from_slice(ctx, &format!("target {}", v.name), &v.target)).collect::<Result<_, _>>()?,
             grad_rgba: GpuBuffer::new(ctx, "loss gradient", max_pixels)?,
             grad_depth: GpuBuffer::new(ctx, "depth gradient (unused)", max_pixels)?,
@@ -76,7 +76,17 @@ impl Trainer {
         rec.fill_buffer(&trainer.grad_depth, 0);
         rec.fill_buffer(&trainer.terms, 0);
         rec.submit_and_wait()?;
+        trainer.size_for_views()?;
         Ok(trainer)
+    }
+
+    /// Renders every view once, so the splatter's intersection buffers fit them all.
+    fn size_for_views(&mut self) -> Result<(), TrainError> {
+        let settings = RenderSettings::default();
+        for camera in &self.cameras {
+            self.splatter.forward(&self.state.params, camera, &settings)?;
+        }
+        Ok(())
     }
 
     pub fn gaussians(&self) -> usize {
@@ -87,24 +97,73 @@ impl Trainer {
         self.state.params.sh_degree()
     }
 
-    /// forward → loss (λ per rgba channel) → backward → Adam on training view `view`.
-    pub fn step(&mut self, view: usize, settings: &RenderSettings, lambda: [f32; 4], adam: &AdamParams) -> Result<PassTimes, TrainError> {
-        let camera = &self.cameras[view];
-        let state = &self.state;
-        let mut times = self.splatter.forward(&state.params, camera, settings)?;
-        let splatter = &self.splatter;
+    /// forward → loss (λ per rgba channel) → backward → Adam on training view `view`, in one
+    /// submission. Returns the pass times and whether every intersection fit the splatter's
+    /// buffers (see [`Self::finish_step`]).
+    pub fn step(&mut self, view: usize, settings: &RenderSettings, lambda: [f32; 4], adam: &AdamParams) -> Result<(PassTimes, bool), TrainError> {
+        let frame = self.prepare_step(view, settings)?;
         let mut rec = Recorder::new(&self.ctx)?;
+        self.record_splat(&mut rec, view, &frame, lambda)?;
+        self.record_adam(&mut rec, adam)?;
+        let times = rec.submit_and_wait()?;
+        let complete = self.finish_step(frame)?;
+        Ok((times, complete))
+    }
+
+    /// Sizes the splatter for training view `view`; the frame goes to the record calls of
+    /// this step and then to [`Self::finish_step`]. A step with more terms than the splatting
+    /// loss records them between [`Self::record_splat`] and [`Self::record_adam`], adding
+    /// their gradients to [`Self::grads`].
+    pub fn prepare_step(&mut self, view: usize, settings: &RenderSettings) -> Result<FrameParams, TrainError> {
+        Ok(self.splatter.prepare_forward(&self.state.params, &self.cameras[view], settings)?)
+    }
+
+    /// Records zeroing the gradients, the splatting forward, its loss against the view's
+    /// target (λ per rgba channel) and its backward.
+    pub fn record_splat<'a>(&'a self, rec: &mut Recorder<'a>, view: usize, frame: &FrameParams, lambda: [f32; 4]) -> Result<(), TrainError> {
+        let (state, splatter, camera) = (&self.state, &self.splatter, &self.cameras[view]);
+        splatter.record_forward(rec, &state.params, frame)?;
         rec.begin_pass("loss");
-        state.grads.record_zero(&mut rec);
+        state.grads.record_zero(rec);
         let params = LossParams::new(camera.width, camera.height, lambda, false);
-        self.loss.record(&mut rec, &params, splatter.rgba(), &self.targets[view], None, &self.terms, &self.grad_rgba)?;
+        self.loss.record(rec, &params, splatter.rgba(), &self.targets[view], None, &self.terms, &self.grad_rgba)?;
         rec.end_pass();
-        splatter.record_backward(&mut rec, &state.params, (&self.grad_rgba, &self.grad_depth), &state.grads, &state.densify_stats)?;
+        splatter.record_backward_of(rec, frame, &state.params, (&self.grad_rgba, &self.grad_depth), &state.grads, &state.densify_stats)?;
+        Ok(())
+    }
+
+    /// Records the Adam step along the gradients recorded so far.
+    pub fn record_adam<'a>(&'a self, rec: &mut Recorder<'a>, adam: &AdamParams) -> Result<(), TrainError> {
         rec.begin_pass("adam");
-        self.adam.record_step(&mut rec, &state.params, &state.grads, adam)?;
+        self.adam.record_step(rec, &self.state.params, &self.state.grads, adam)?;
         rec.end_pass();
-        times.passes.extend(rec.submit_and_wait()?.passes);
-        Ok(times)
+        Ok(())
+    }
+
+    /// After the step's submission completed: whether every intersection fit the splatter's
+    /// buffers. When not, the step rendered without those past the capacity (its gradient is
+    /// slightly off) and the buffers have grown for the next.
+    pub fn finish_step(&mut self, frame: FrameParams) -> Result<bool, TrainError> {
+        Ok(self.splatter.finish_forward(frame)?)
+    }
+
+    /// The Gaussian parameters on the GPU.
+    pub fn params(&self) -> &GaussianBuffers {
+        &self.state.params
+    }
+
+    /// Their gradients, zeroed by [`Self::record_splat`] and added to by every term after it.
+    pub fn grads(&self) -> &GaussianBuffers {
+        &self.state.grads
+    }
+
+    /// Training view `view`'s target (rgb over the background, mask), on the GPU.
+    pub fn target(&self, view: usize) -> &GpuBuffer<[f32; 4]> {
+        &self.targets[view]
+    }
+
+    pub fn camera(&self, view: usize) -> &Camera {
+        &self.cameras[view]
     }
 
     /// The loss terms summed since the last call (which restarts the sum).
@@ -149,7 +208,7 @@ impl Trainer {
         scene.check().map_err(crate::splat::SplatError::from)?;
         self.adam.remap(old_of_new)?;
         self.state = GaussianState::new(&self.ctx, scene)?;
-        Ok(())
+        self.size_for_views()
     }
 
     /// Renders the current (or checkpointed) Gaussians from `camera`: RGB per pixel in [0, 1].

@@ -30,7 +30,7 @@ pub fn load_targets(dataset: &Dataset, frame: usize, cameras: &[usize], backgrou
         let mask = if use_masks { Some(dataset.mask(frame, index)?) } else { None };
         targets.push(ViewTarget {
             name: dataset.camera_names[view.camera].clone(),
-            camera: dataset.cameras[view.camera].clone(),
+            camera: dataset.cameras[view.camera],
             target: composite(&image, mask.as_deref(), background),
         });
     }

@@ -1,7 +1,10 @@
 #version 460
 // Binning: one invocation per Gaussian writes a (key, Gaussian) pair for every tile it touches,
 // from its scanned offset. Key = tile << 32 | depth bits: depths are positive floats, whose bits
-// order like the numbers, so sorting the keys sorts by tile, then front to back.
+// order like the numbers, so sorting the keys sorts by tile, then front to back. The buffers
+// hold a capacity the host chose before the count was known: pairs past it are dropped (the
+// host sees the count, grows the buffers and renders again), and slots no pair fills keep the
+// all-ones key the host filled in, which sorts last and names no tile.
 #include "footprint.glsl"
 #include "../common/grid.glsl"
 
@@ -22,7 +25,7 @@ void main() {
     uint depth_bits = floatBitsToUint(s.depth);
     for (uint ty = s.tile_rect.z; ty < s.tile_rect.w; ty++) {
         for (uint tx = s.tile_rect.x; tx < s.tile_rect.y; tx++) {
-            if (touches_tile(s, uvec2(tx, ty))) {
+            if (touches_tile(s, uvec2(tx, ty)) && at < keys.length()) {
                 keys[at] = uvec2(depth_bits, ty * frame.size.z + tx);
                 gaussian_ids[at] = i;
                 at++;

@@ -1,12 +1,14 @@
 #version 460
 // Binning: one invocation per sorted intersection marks where its tile's run starts and ends.
-// Tiles without intersections keep the (0, 0) the host filled in.
+// Tiles without intersections keep the (0, 0) the host filled in. Unfilled slots past the
+// intersections carry an all-ones key: tile 0xFFFFFFFF, past every real tile, sorted last.
 #include "../common/grid.glsl"
 
 layout(local_size_x_id = 0) in;
 
 layout(push_constant) uniform RangeParams {
-    uint intersections;
+    uint intersections;  // slots, filled or not
+    uint tile_count;
 } params;
 
 layout(std430, binding = 0) readonly buffer Keys { uvec2 keys[]; };   // (depth bits, tile)
@@ -18,6 +20,9 @@ void main() {
         return;
     }
     uint tile = keys[i].y;
+    if (tile >= params.tile_count) {
+        return;
+    }
     if (i == 0u || keys[i - 1u].y != tile) {
         tile_ranges[tile].x = i;
     }

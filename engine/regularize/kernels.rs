@@ -1,0 +1,162 @@
+//! The two regularizer passes (shaders/regularize/): `vertex` (per Gaussian: L_2d, Laplacian
+//! offsets, normal term) and `gather` (per Gaussian: every position/rotation gradient that
+//! lands on its rows, temporal terms), recorded into the caller's [`Recorder`].
+
+use super::{Losses, Neighbourhoods, RegularizeError, Weights, LOSS_SLOTS};
+use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder};
+use crate::shaders;
+use crate::splat::GaussianBuffers;
+use bytemuck::{Pod, Zeroable};
+use std::sync::Arc;
+
+const WORKGROUP: u32 = 128;
+
+/// Push constants of both passes (shaders/regularize/common.glsl `Push`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Push {
+    count: u32,
+    temporal: u32,
+    inv_count: f32,
+    omega_scale: f32,
+    weights: [f32; 6],
+}
+
+/// The previous frame's positions (3 floats per Gaussian) and rotations, for the temporal
+/// terms.
+#[derive(Clone, Copy)]
+pub struct Temporal<'a> {
+    pub positions: &'a GpuBuffer<f32>,
+    pub rotations: &'a GpuBuffer<[f32; 4]>,
+}
+
+impl<'a> Temporal<'a> {
+    pub fn of(previous: &'a GaussianBuffers) -> Self {
+        Self { positions: &previous.positions, rotations: &previous.rotations }
+    }
+}
+
+/// Pipelines, the uploaded neighbourhoods, per-Gaussian scratch and the loss buffer.
+pub struct Regularizers {
+    ctx: Arc<GpuContext>,
+    vertex: ComputePipeline,
+    gather: ComputePipeline,
+    ranges: GpuBuffer<[u32; 2]>,
+    ring: GpuBuffer<u32>,
+    deltas: GpuBuffer<[f32; 4]>,
+    normal_grads: GpuBuffer<[f32; 4]>,
+    losses: GpuBuffer<f32>,
+    count: usize,
+    mean_edge_length: f32,
+}
+
+impl Regularizers {
+    /// Pipelines and empty neighbourhoods; [`Self::upload`] before recording.
+    pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
+        let pipeline = |name, spirv, bindings| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes: size_of::<Push>() as u32, specialization: &[WORKGROUP] })
+        };
+        Ok(Self {
+            ctx: ctx.clone(),
+            vertex: pipeline("regularize vertex", shaders::REGULARIZE_VERTEX, 10)?,
+            gather: pipeline("regularize gather", shaders::REGULARIZE_GATHER, 11)?,
+            ranges: GpuBuffer::new(ctx, "regularize ranges", 0)?,
+            ring: GpuBuffer::new(ctx, "regularize ring", 0)?,
+            deltas: GpuBuffer::new(ctx, "regularize deltas", 0)?,
+            normal_grads: GpuBuffer::new(ctx, "regularize normal gradients", 0)?,
+            losses: GpuBuffer::new(ctx, "regularize losses", LOSS_SLOTS)?,
+            count: 0,
+            mean_edge_length: 1.0,
+        })
+    }
+
+    /// Uploads the 1-rings (after every topology change) and sizes the scratch buffers.
+    pub fn upload(&mut self, nb: &Neighbourhoods) -> GpuResult<()> {
+        self.ranges = GpuBuffer::from_slice(&self.ctx, "regularize ranges", &nb.ranges)?;
+        self.ring = GpuBuffer::from_slice(&self.ctx, "regularize ring", &nb.ring)?;
+        self.deltas = GpuBuffer::new(&self.ctx, "regularize deltas", nb.len())?;
+        self.normal_grads = GpuBuffer::new(&self.ctx, "regularize normal gradients", nb.len())?;
+        self.count = nb.len();
+        self.mean_edge_length = nb.mean_edge_length;
+        Ok(())
+    }
+
+    /// Records both passes: zeroes the loss buffer, then ADDS the weighted gradients of every
+    /// term into `grads` (positions, log-scales, rotations) and writes the unweighted losses to
+    /// [`Self::losses`]. Temporal terms run only with `previous`. Nothing is read back.
+    pub fn record<'a>(&'a self, rec: &mut Recorder<'a>, params: &'a GaussianBuffers, grads: &'a GaussianBuffers, weights: &Weights, previous: Option<Temporal<'a>>) -> Result<(), RegularizeError> {
+        self.check_shapes(params, grads, previous)?;
+        let push = Push {
+            count: self.count as u32,
+            temporal: previous.is_some() as u32,
+            inv_count: 1.0 / self.count.max(1) as f32,
+            omega_scale: weights.lambda_w / self.mean_edge_length,
+            weights: [weights.scale_2d, weights.laplacian, weights.normal, weights.edge_length, weights.rigidity, weights.rotation],
+        };
+        let groups = self.count.div_ceil(WORKGROUP as usize) as u64;
+        rec.fill_buffer(&self.losses, 0);
+        let vertex = [
+            params.positions.binding(),
+            params.log_scales.binding(),
+            params.rotations.binding(),
+            self.ranges.binding(),
+            self.ring.binding(),
+            grads.log_scales.binding(),
+            grads.rotations.binding(),
+            self.deltas.binding(),
+            self.normal_grads.binding(),
+            self.losses.binding(),
+        ];
+        rec.dispatch_1d(&self.vertex, &vertex, &push, groups)?;
+        // Without a previous frame the kernel never reads these; bind the current ones.
+        let prev = previous.unwrap_or(Temporal { positions: &params.positions, rotations: &params.rotations });
+        let gather = [
+            params.positions.binding(),
+            params.rotations.binding(),
+            prev.positions.binding(),
+            prev.rotations.binding(),
+            self.ranges.binding(),
+            self.ring.binding(),
+            self.deltas.binding(),
+            self.normal_grads.binding(),
+            grads.positions.binding(),
+            grads.rotations.binding(),
+            self.losses.binding(),
+        ];
+        rec.dispatch_1d(&self.gather, &gather, &push, groups)?;
+        Ok(())
+    }
+
+    fn check_shapes(&self, params: &GaussianBuffers, grads: &GaussianBuffers, previous: Option<Temporal<'_>>) -> Result<(), RegularizeError> {
+        let n = self.count;
+        let mut shapes = vec![("parameters", params.len()), ("gradients", grads.len())];
+        if let Some(p) = previous {
+            shapes.push(("previous positions", p.positions.len() / 3));
+            shapes.push(("previous rotations", p.rotations.len()));
+        }
+        match shapes.iter().find(|(_, len)| *len != n) {
+            Some((what, len)) => Err(RegularizeError::Shape(format!("{len} {what} for {n} uploaded neighbourhoods"))),
+            None => Ok(()),
+        }
+    }
+
+    /// The GPU buffer of the unweighted losses (slots in the order of [`Losses`]).
+    pub fn losses(&self) -> &GpuBuffer<f32> {
+        &self.losses
+    }
+
+    /// Reads the losses back (after the recorder was submitted).
+    pub fn read_losses(&self) -> GpuResult<Losses<f32>> {
+        let v = self.losses.read()?;
+        Ok(Losses::from_slots([v[0], v[1], v[2], v[3], v[4], v[5]]))
+    }
+
+    /// Gaussians covered by the uploaded neighbourhoods.
+    pub fn len(&self) -> usize {
+        self.count
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+}

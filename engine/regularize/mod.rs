@@ -1,0 +1,76 @@
+//! The topology regularizers (seed §3.2–3.3, MISSION.md "Losses") as GPU kernels with
+//! analytic gradients, and their f64 CPU [`mod@reference`].
+//!
+//! # The terms (n Gaussians, N(i) the 1-ring of i with m_i members, primes: frame t − 1)
+//! Parameters as stored: position μ, log-scale s, quaternion q = (w, x, y, z), q̂ = q / |q|.
+//! - `scale_2d` = Σᵢ exp(s_{i,z}) (the scale along the Gaussian's own z axis, eq. 4).
+//! - `laplacian` = (1/n) Σᵢ ‖δᵢ‖², δᵢ = μᵢ − (1/mᵢ) Σ_{j∈N(i)} μⱼ (eq. 5).
+//! - `normal` = Σᵢ ‖R(q̂ᵢ) e_z − Nᵢ/‖Nᵢ‖‖, Nᵢ = Σ over faces (i, b, c) of (b − i) × (c − i):
+//!   the area-weighted vertex normal from the current positions (eq. 6).
+//! - `edge_length` = Σ over edges |lᵢⱼ − l'ᵢⱼ| (eq. 9).
+//! - `rigidity` = Σᵢ Σ_{j∈N(i)} ωᵢⱼ ‖(μ'ⱼ − μ'ᵢ) − ΔRᵢ (μⱼ − μᵢ)‖, ΔRᵢ = R(q̂'ᵢ) R(q̂ᵢ)ᵀ
+//!   (eq. 10–11).
+//! - `rotation` = Σᵢ Σ_{j∈N(i)} ωᵢⱼ ‖q̂ⱼ ⊗ q̂'ⱼ⁻¹ − q̂ᵢ ⊗ q̂'ᵢ⁻¹‖ (eq. 12).
+//! - ωᵢⱼ = exp(−λ_w · l'ᵢⱼ / l̄), l̄ the mean edge length when the neighbourhoods were built:
+//!   λ_w is dimensionless (scale-free), default 1 (an average edge weighs e⁻¹).
+//!
+//! A norm at zero passes no gradient. Losses are reported unweighted; gradients are weighted
+//! and ADDED to the caller's gradient buffers (positions, log-scales, rotations).
+
+mod kernels;
+mod neighbourhoods;
+pub mod reference;
+
+pub use kernels::{Regularizers, Temporal};
+pub use neighbourhoods::{Neighbourhoods, BOUNDARY_BIT};
+
+/// Loss weights (defaults: MISSION.md table) and the temporal weight falloff λ_w.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Weights {
+    pub scale_2d: f32,
+    pub laplacian: f32,
+    pub normal: f32,
+    pub edge_length: f32,
+    pub rigidity: f32,
+    pub rotation: f32,
+    /// Falloff of ωᵢⱼ per mean edge length.
+    pub lambda_w: f32,
+}
+
+impl Default for Weights {
+    fn default() -> Self {
+        Self { scale_2d: 1.0, laplacian: 5.0, normal: 1.0, edge_length: 4.0, rigidity: 4.0, rotation: 20.0, lambda_w: 1.0 }
+    }
+}
+
+/// Unweighted value of every term (temporal ones 0 without a previous frame).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Losses<T> {
+    pub scale_2d: T,
+    pub laplacian: T,
+    pub normal: T,
+    pub edge_length: T,
+    pub rigidity: T,
+    pub rotation: T,
+}
+
+/// Number of loss slots in the GPU loss buffer, in the order of [`Losses`].
+pub const LOSS_SLOTS: usize = 6;
+
+impl<T: Copy> Losses<T> {
+    pub fn from_slots(s: [T; LOSS_SLOTS]) -> Self {
+        Self { scale_2d: s[0], laplacian: s[1], normal: s[2], edge_length: s[3], rigidity: s[4], rotation: s[5] }
+    }
+
+    pub fn slots(&self) -> [T; LOSS_SLOTS] {
+        [self.scale_2d, self.laplacian, self.normal, self.edge_length, self.rigidity, self.rotation]
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RegularizeError {
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
+    #[error("mismatched buffers: {0}")]
+    Shape(String),
+}

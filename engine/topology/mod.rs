@@ -1,0 +1,102 @@
+//! Gaussian topology: the Gaussians are the vertices of a manifold triangle mesh, and every
+//! change of the Gaussian set keeps that mesh manifold (MISSION.md, "Gaussian topology").
+//!
+//! # The structure
+//! [`ManifoldMesh`] keeps `positions: Vec<[f32; 3]>` (public, one row per vertex index) beside
+//! an implicit half-edge connectivity: face `f` owns half-edges `3f..3f + 3`, half-edge `3f + k`
+//! runs from corner `k` to corner `k + 1`; [`next`]/[`prev`] are arithmetic, twins are stored
+//! ([`NONE`] on the boundary), and every vertex stores one outgoing half-edge. Faces are
+//! counter-clockwise seen from outside (CONVENTIONS.md).
+//!
+//! - Build: [`ManifoldMesh::new`]`(positions, faces)` for consistently oriented faces, with a
+//!   [`TopologyError`] naming the first non-manifold edge or vertex; [`orient_faces`] makes the
+//!   orientation consistent first; [`weld`] merges duplicate positions; [`import`] does all of
+//!   it for a [`TriMesh`] read from PLY/OBJ and reports each repair.
+//! - Walk: [`ManifoldMesh::faces`], [`ManifoldMesh::vertices`], [`ManifoldMesh::edges`] (one
+//!   half-edge per edge), [`ManifoldMesh::outgoing`] and [`ManifoldMesh::ring`] (1-rings,
+//!   counter-clockwise), [`ManifoldMesh::is_boundary_vertex`], [`ManifoldMesh::is_boundary_edge`],
+//!   [`ManifoldMesh::find_edge`], [`ManifoldMesh::origin`]/[`ManifoldMesh::dest`]/[`ManifoldMesh::twin`].
+//! - Edit (each keeps the mesh manifold; legality checks return refusal reasons):
+//!   [`ManifoldMesh::split_edge`] (new vertex at a given point), [`ManifoldMesh::split_face`]
+//!   (1→3) (both refuse with [`SplitRefusal`] a point that would make a degenerate or folded
+//!   triangle), [`ManifoldMesh::flip_edge`] / [`ManifoldMesh::can_flip`] ([`FlipRefusal`]),
+//!   [`ManifoldMesh::collapse_edge`] / [`ManifoldMesh::can_collapse`] ([`CollapseRefusal`]: link
+//!   condition, boundary pinch, dangling vertex, normal flip, degenerate face, > 4 vertices kept).
+//!   Removed faces and vertices are tombstones; new vertices are appended rows.
+//! - Finish: [`ManifoldMesh::compact`] drops tombstones and returns `old_of_new`, the vertex
+//!   remap ([`ManifoldMesh::into_arrays`] also hands back plain positions and faces); [`remap_rows`] / [`remap_strided`] apply it to any per-vertex host array (new rows
+//!   filled by the caller's closure). [`ManifoldMesh::live_faces`] gives plain face arrays.
+//! - Check: [`ManifoldMesh::problem`] (every invariant, O(V + F)),
+//!   [`ManifoldMesh::euler_characteristic`].
+//!
+//! # Gaussians on the mesh
+//! - [`gaussians_from_mesh`]: one Gaussian per vertex (z axis on the area-weighted
+//!   [`vertex_normals`], s_x = s_y from 1-ring distances, s_z small, opacity high, SH DC from
+//!   vertex colours).
+//! - [`densify`]: faces whose [`face_scores`] pass a threshold split 1→3 at the centroid (new
+//!   Gaussian = average of its corners, [`average_quaternion`]; scale rule), then
+//!   [`improve_angles`] flips edges that raise the minimum angle.
+//! - [`prune`]: Gaussians meeting [`should_prune`] merge into the 1-ring neighbour of cheapest
+//!   legal collapse, C = w_g·‖pᵢ − pⱼ‖ / mean edge + w_a·‖cᵢ − cⱼ‖; refusals are counted.
+//! - Both compact the mesh, remap the [`GaussianScene`](crate::splat::GaussianScene) with
+//!   [`remap_scene`] and return `old_of_new`: the caller applies that same array to every other
+//!   per-vertex array it keeps (optimizer moments: new rows zero; gradient statistics;
+//!   keypoint bindings) with [`remap_rows`] / [`remap_strided`], then re-uploads the 1-rings
+//!   (`regularize::Neighbourhoods::from_mesh`).
+
+mod check;
+mod gaussians;
+mod compact;
+mod densify;
+mod flips;
+mod geometry;
+mod mesh;
+mod import;
+mod ops;
+mod orient;
+mod prune;
+mod remap;
+mod scene_remap;
+pub mod shapes;
+mod weld;
+
+pub use gaussians::{dc_colors, gaussian_normal, gaussians_from_mesh, vertex_normals, InitConfig, SH_C0};
+pub use densify::{densify, face_scores, DensifyConfig, DensifyReport};
+pub use flips::improve_angles;
+pub use scene_remap::{average_quaternion, remap_scene};
+pub use prune::{mean_edge_length, prune, should_prune, PruneConfig, PruneReport};
+pub use import::{import, ImportReport, Imported};
+pub use mesh::{face_of, next, prev, ManifoldMesh, Outgoing, NONE};
+pub use ops::{CollapseRefusal, FlipRefusal, SplitRefusal};
+pub use orient::orient_faces;
+pub use remap::{compose, remap_rows, remap_strided, NEW_ROW};
+pub use weld::{weld, Welded};
+
+use crate::mesh::TriMesh;
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum TopologyError {
+    #[error("face {face} {corners:?} indexes past the {vertices} vertices")]
+    IndexOutOfRange { face: u32, corners: [u32; 3], vertices: usize },
+    #[error("face {face} {corners:?} repeats a vertex")]
+    DegenerateFace { face: u32, corners: [u32; 3] },
+    #[error("non-manifold edge {a}–{b}: faces {faces:?} (more than two faces, or two faces running it the same way)")]
+    NonManifoldEdge { a: u32, b: u32, faces: Vec<u32> },
+    #[error("the surface is not orientable (face {face} cannot agree with its neighbours)")]
+    NonOrientable { face: u32 },
+    #[error("non-manifold vertex {vertex}: its faces form more than one fan (pinched)")]
+    PinchedVertex { vertex: u32 },
+    #[error("vertex {vertex} is used by no face")]
+    UnusedVertex { vertex: u32 },
+    #[error("vertex {vertex} has a non-finite position")]
+    NonFinite { vertex: u32 },
+    #[error("the mesh is open (edge {a}–{b} has one face) where a closed one is needed")]
+    Open { a: u32, b: u32 },
+    #[error("the mesh has {faces} faces; at least 4 are needed")]
+    TooSmall { faces: usize },
+    #[error("mismatched inputs: {0}")]
+    Mismatch(String),
+    #[error("{}: {source}", path.display())]
+    InFile { path: PathBuf, source: Box<TopologyError> },
+}

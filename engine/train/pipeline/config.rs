@@ -1,0 +1,224 @@
+//! The reconstruction pipeline's configuration: one TOML file, every key optional with a
+//! documented default (`tagsplat train --print-config`), errors naming the file and key.
+
+use crate::train::config::{check_appearance, check_ranges, load_toml, value_error, ConfigError, LearningRateConfig};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrainConfig {
+    /// SH degree per Gaussian (its colour's view dependence); the active degree rises by one
+    /// every `sh_increase_every` canonical iterations.
+    pub sh_degree: u32,
+    pub sh_increase_every: u32,
+    /// Colour behind the subject; targets are composited over it with their masks.
+    pub background: [f32; 3],
+    pub seed: u64,
+    pub canonical: CanonicalConfig,
+    pub temporal: TemporalConfig,
+    pub loss: PipelineWeights,
+    pub learning_rates: LearningRateConfig,
+    pub init: InitMeshConfig,
+    pub report: PipelineReportConfig,
+}
+
+/// Frame 0: the Gaussians on the initial mesh, topology-preserving densification and pruning.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CanonicalConfig {
+    pub iterations: u32,
+    pub densify_from: u32,
+    pub densify_until: u32,
+    pub densify_every: u32,
+    /// A face splits when the mean view-space gradient of its corners (NDC units, as 3DGS's
+    /// 2e-4) passes this.
+    pub densify_threshold: f32,
+    /// Most Gaussians densification may reach; 0: the covered pixels of the median training
+    /// view (one Gaussian per pixel the subject covers: model only what the images resolve).
+    pub budget: u32,
+    pub prune_opacity: f32,
+    /// Largest scale, as a fraction of the mesh's bounding-box diagonal, beyond which a
+    /// Gaussian is merged away.
+    pub prune_scale: f32,
+}
+
+/// Frames 1..T: topology frozen, frame t − 1 extrapolated at constant velocity.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TemporalConfig {
+    pub iterations: u32,
+    /// Keep colour, opacity and scale of frame 0 (only positions and rotations move).
+    pub freeze_appearance: bool,
+}
+
+/// Loss weights (MISSION.md's table) and the temporal falloff λ_w (per mean edge length).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PipelineWeights {
+    pub gaussian_color: f32,
+    pub gaussian_mask: f32,
+    pub mesh_color: f32,
+    pub mesh_mask: f32,
+    pub scale_2d: f32,
+    pub laplacian: f32,
+    pub normal: f32,
+    pub edge_length: f32,
+    pub rigidity: f32,
+    pub rotation: f32,
+    pub lambda_w: f32,
+}
+
+/// The initial mesh when none is given (built from the masks).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InitMeshConfig {
+    /// Target vertex count; 0: an edge length of `edge_pixels` pixels of the typical view.
+    pub vertices: u32,
+    pub edge_pixels: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PipelineReportConfig {
+    /// Losses are read back (and checked for NaN) this often.
+    pub stats_every: u32,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        Self {
+            sh_degree: 1,
+            sh_increase_every: 500,
+            background: [0.0; 3],
+            seed: 0,
+            canonical: CanonicalConfig::default(),
+            temporal: TemporalConfig::default(),
+            loss: PipelineWeights::default(),
+            learning_rates: LearningRateConfig::default(),
+            init: InitMeshConfig::default(),
+            report: PipelineReportConfig::default(),
+        }
+    }
+}
+
+impl Default for CanonicalConfig {
+    fn default() -> Self {
+        Self { iterations: 1000, densify_from: 200, densify_until: 700, densify_every: 100, densify_threshold: 2e-4, budget: 0, prune_opacity: 0.005, prune_scale: 0.1 }
+    }
+}
+
+impl Default for TemporalConfig {
+    fn default() -> Self {
+        Self { iterations: 300, freeze_appearance: true }
+    }
+}
+
+impl Default for PipelineWeights {
+    fn default() -> Self {
+        Self { gaussian_color: 1.0, gaussian_mask: 3.0, mesh_color: 1.0, mesh_mask: 3.0, scale_2d: 1.0, laplacian: 5.0, normal: 1.0, edge_length: 4.0, rigidity: 4.0, rotation: 20.0, lambda_w: 1.0 }
+    }
+}
+
+impl Default for InitMeshConfig {
+    fn default() -> Self {
+        Self { vertices: 0, edge_pixels: 3.0 }
+    }
+}
+
+impl Default for PipelineReportConfig {
+    fn default() -> Self {
+        Self { stats_every: 50 }
+    }
+}
+
+impl PipelineWeights {
+    /// The regularizer weights in the kernels' form for `gaussians` Gaussians. The paper writes
+    /// L_2d, normal consistency, edge length, rigidity and rotation as sums, but its weights come
+    /// from code that averages them (Luiten et al.): applied as sums they grow with the Gaussian
+    /// count and, against image losses that are means over pixels, freeze the surface (measured:
+    /// a temporal frame moved 0.0006 instead of 0.03 scene units). So every sum is divided by the
+    /// count; the Laplacian is a mean already.
+    pub fn regularizers(&self, gaussians: usize) -> crate::regularize::Weights {
+        let per = 1.0 / gaussians.max(1) as f32;
+        crate::regularize::Weights {
+            scale_2d: self.scale_2d * per,
+            laplacian: self.laplacian,
+            normal: self.normal * per,
+            edge_length: self.edge_length * per,
+            rigidity: self.rigidity * per,
+            rotation: self.rotation * per,
+            lambda_w: self.lambda_w,
+        }
+    }
+}
+
+impl TrainConfig {
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        load_toml(path, Self::check)
+    }
+
+    /// The defaults as TOML, for `--print-config`.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).unwrap_or_else(|e| format!("# cannot print the config: {e}"))
+    }
+
+    /// Every value in its range; the first that is not, by key.
+    pub fn check(&self) -> Result<(), ConfigError> {
+        let (c, l, r) = (&self.canonical, &self.loss, &self.learning_rates);
+        let positive = [
+            ("sh_increase_every", self.sh_increase_every as f32),
+            ("canonical.densify_every", c.densify_every as f32),
+            ("canonical.densify_threshold", c.densify_threshold),
+            ("canonical.prune_scale", c.prune_scale),
+            ("learning_rates.positions", r.positions),
+            ("learning_rates.positions_final", r.positions_final),
+            ("init.edge_pixels", self.init.edge_pixels as f32),
+            ("report.stats_every", self.report.stats_every as f32),
+        ];
+        let non_negative = [
+            ("canonical.prune_opacity", c.prune_opacity),
+            ("loss.gaussian_color", l.gaussian_color),
+            ("loss.gaussian_mask", l.gaussian_mask),
+            ("loss.mesh_color", l.mesh_color),
+            ("loss.mesh_mask", l.mesh_mask),
+            ("loss.scale_2d", l.scale_2d),
+            ("loss.laplacian", l.laplacian),
+            ("loss.normal", l.normal),
+            ("loss.edge_length", l.edge_length),
+            ("loss.rigidity", l.rigidity),
+            ("loss.rotation", l.rotation),
+            ("loss.lambda_w", l.lambda_w),
+            ("learning_rates.log_scales", r.log_scales),
+            ("learning_rates.rotations", r.rotations),
+            ("learning_rates.opacity_logits", r.opacity_logits),
+            ("learning_rates.sh_dc", r.sh_dc),
+            ("learning_rates.sh_rest", r.sh_rest),
+        ];
+        check_ranges(&positive, &non_negative)?;
+        check_appearance(self.sh_degree, self.background)?;
+        if !(c.prune_opacity < 1.0) {
+            return value_error("canonical.prune_opacity", format!("must be below 1 (got {})", c.prune_opacity));
+        }
+        if c.densify_from > c.densify_until {
+            return value_error("canonical.densify_from", format!("({}) must not be after canonical.densify_until ({})", c.densify_from, c.densify_until));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_round_trip_and_errors_name_keys() {
+        let config = TrainConfig::default();
+        config.check().unwrap();
+        assert_eq!(toml::from_str::<TrainConfig>(&config.to_toml()).unwrap(), config);
+        let unknown = toml::from_str::<TrainConfig>("[temporal]\niters = 3\n").unwrap_err().to_string();
+        assert!(unknown.contains("iters"), "{unknown}");
+        let config: TrainConfig = toml::from_str("[loss]\nrigidity = -4\n").unwrap();
+        assert!(config.check().unwrap_err().to_string().contains("loss.rigidity"));
+    }
+}

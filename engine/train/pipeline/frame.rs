@@ -1,0 +1,207 @@
+//! One frame's optimisation: every term of the paper in one submission per iteration —
+//! Gaussian colour and mask losses, the mesh (the Gaussians as vertices, the topology as faces)
+//! rendered and scored for colour and mask, the regularizers (temporal ones against the
+//! previous frame) — then Adam. Frame 0 also densifies and prunes through the topology.
+
+use super::config::TrainConfig;
+use crate::eval::{psnr, ssim};
+use crate::gpu::{GpuContext, Recorder};
+use crate::optim::{AdamParams, LearningRates};
+use crate::regularize::{Losses, Neighbourhoods, Regularizers, Temporal};
+use crate::rng::SplitMix64;
+use crate::splat::{GaussianBuffers, GaussianScene, RenderSettings};
+use crate::topology::{compose, densify, face_scores, prune, DensifyConfig, ManifoldMesh, PruneConfig};
+use crate::train::fit::{add_times, learning_rates, scene_extent, shuffled};
+use crate::train::mesh_term::MeshTerm;
+use crate::train::{Trainer, TrainError, ViewTarget};
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// What a frame's optimisation reports.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FrameReport {
+    pub frame: usize,
+    pub iterations: u32,
+    /// Optimisation wall time (evaluation excluded), seconds.
+    pub wall_s: f64,
+    pub gaussians: usize,
+    /// Held-out (or training, see the run report) PSNR and SSIM of the Gaussian and mesh renders.
+    pub psnr_gs: f64,
+    pub ssim_gs: f64,
+    pub psnr_mesh: f64,
+    /// Mean weighted losses of the last statistics interval.
+    pub loss_gs: f32,
+    pub loss_mesh: f32,
+    /// Unweighted regularizer values of the last statistics check.
+    pub regularizers: [f32; 6],
+    /// Mean GPU ms per iteration, by pass.
+    pub passes_ms: BTreeMap<String, f64>,
+    /// (iteration, faces split, Gaussians pruned, Gaussians after) per topology step.
+    pub topology_steps: Vec<(u32, usize, usize, usize)>,
+    pub truncated_steps: u32,
+}
+
+/// A frame to optimise: its views, where it starts, and what it keeps fixed.
+pub struct FrameTask<'a> {
+    pub frame: usize,
+    pub train: &'a [ViewTarget],
+    pub eval: &'a [ViewTarget],
+    pub start: GaussianScene,
+    /// The topology (positions are overwritten by the Gaussians'); frame 0 changes it.
+    pub mesh: &'a mut ManifoldMesh,
+    /// Frame t − 1's Gaussians for the temporal terms (None on frame 0).
+    pub previous: Option<&'a GaussianScene>,
+}
+
+/// The optimised Gaussians (or, after a non-finite loss, the error naming it).
+pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConfig, progress: &mut dyn FnMut(u32, u32)) -> Result<(GaussianScene, FrameReport), TrainError> {
+    let canonical = task.previous.is_none();
+    let iterations = if canonical { config.canonical.iterations } else { config.temporal.iterations };
+    let (w, bg) = (&config.loss, config.background);
+    let lambda_gs = [w.gaussian_color / 3.0, w.gaussian_color / 3.0, w.gaussian_color / 3.0, w.gaussian_mask];
+    let lambda_mesh = [w.mesh_color / 3.0, w.mesh_color / 3.0, w.mesh_color / 3.0, w.mesh_mask];
+    let extent = scene_extent(&task.train.iter().map(|v| &v.camera).collect::<Vec<_>>());
+    let first = task.train.first().ok_or_else(|| TrainError::Input(format!("frame {}: no training views", task.frame)))?;
+    let mut settings = RenderSettings { background: bg, near: (extent * 1e-3) as f32, far: (extent * 1e3) as f32, sh_degree: config.sh_degree, mask_mode: false };
+
+    let mut trainer = Trainer::new(ctx, &task.start, task.train)?;
+    task.mesh.positions = task.start.positions.clone();
+    let mut mesh_term = MeshTerm::new(ctx, &task.start.positions, &task.mesh.live_faces(), first.camera.width, first.camera.height)?;
+    let mut regs = Regularizers::new(ctx)?;
+    regs.upload(&Neighbourhoods::from_mesh(task.mesh))?;
+    let previous = task.previous.map(|p| GaussianBuffers::from_scene(ctx, p)).transpose()?;
+
+    let mut rng = SplitMix64::new(config.seed ^ task.frame as u64);
+    let (mut order, mut passes, mut report) = (Vec::new(), BTreeMap::new(), empty_report(task.frame));
+    let mut interval_start = 1;
+    let mut train_s = 0.0;
+    for it in 1..=iterations {
+        let t0 = Instant::now();
+        if order.is_empty() {
+            order = shuffled(task.train.len(), &mut rng);
+        }
+        let view = order.pop().unwrap_or(0);
+        if canonical {
+            settings.sh_degree = config.sh_degree.min((it - 1) / config.sh_increase_every);
+        }
+        let rates = frame_rates(config, extent, it, iterations, canonical);
+        let adam = AdamParams::new(&rates, it, trainer.gaussians(), trainer.sh_degree());
+        let frame = trainer.prepare_step(view, &settings)?;
+        let mut rec = Recorder::new(ctx)?;
+        trainer.record_splat(&mut rec, view, &frame, lambda_gs)?;
+        mesh_term.record(&mut rec, trainer.params(), trainer.grads(), trainer.camera(view), trainer.target(view), lambda_mesh, bg)?;
+        rec.begin_pass("regularizers");
+        regs.record(&mut rec, trainer.params(), trainer.grads(), &w.regularizers(trainer.gaussians()), previous.as_ref().map(Temporal::of))?;
+        rec.end_pass();
+        trainer.record_adam(&mut rec, &adam)?;
+        add_times(&mut passes, &rec.submit_and_wait()?);
+        report.truncated_steps += (!trainer.finish_step(frame)?) as u32;
+        train_s += t0.elapsed().as_secs_f64();
+
+        if it % config.report.stats_every == 0 || it == iterations {
+            let steps = (it - interval_start + 1) as f32;
+            let (gs, mesh) = (trainer.take_terms()?.total(lambda_gs) / steps, mesh_term.take_terms()?.total(lambda_mesh) / steps);
+            let regularizers: Losses<f32> = regs.read_losses()?;
+            if !(gs.is_finite() && mesh.is_finite() && regularizers.slots().iter().all(|v| v.is_finite())) {
+                return Err(TrainError::Input(format!(
+                    "frame {}: the loss went non-finite between iterations {interval_start} and {it} (Gaussian {gs}, mesh {mesh}, regularizers {:?}); the finished frames are kept",
+                    task.frame,
+                    regularizers.slots()
+                )));
+            }
+            (report.loss_gs, report.loss_mesh, report.regularizers, interval_start) = (gs, mesh, regularizers.slots(), it + 1);
+        }
+        let c = &config.canonical;
+        if canonical && it > c.densify_from && it <= c.densify_until.min(iterations.saturating_sub(c.densify_every)) && it % c.densify_every == 0 {
+            let t0 = Instant::now();
+            let budget = if c.budget > 0 { c.budget as usize } else { covered_pixels(task.train) };
+            report.topology_steps.push(topology_step(&mut trainer, (&mut mesh_term, &mut regs), task.mesh, config, (&first.camera, budget), it)?);
+            train_s += t0.elapsed().as_secs_f64();
+        }
+        progress(it, iterations);
+    }
+    for ms in passes.values_mut() {
+        *ms /= iterations.max(1) as f64;
+    }
+    let scene = trainer.scene()?;
+    task.mesh.positions = scene.positions.clone();
+    (report.iterations, report.wall_s, report.gaussians, report.passes_ms) = (iterations, train_s, scene.len(), passes);
+    (report.psnr_gs, report.ssim_gs, report.psnr_mesh) = evaluate(&mut trainer, &mesh_term, task.eval, &settings)?;
+    Ok((scene, report))
+}
+
+fn empty_report(frame: usize) -> FrameReport {
+    FrameReport {
+        frame,
+        iterations: 0,
+        wall_s: 0.0,
+        gaussians: 0,
+        psnr_gs: 0.0,
+        ssim_gs: 0.0,
+        psnr_mesh: 0.0,
+        loss_gs: 0.0,
+        loss_mesh: 0.0,
+        regularizers: [0.0; 6],
+        passes_ms: BTreeMap::new(),
+        topology_steps: Vec::new(),
+        truncated_steps: 0,
+    }
+}
+
+/// The learning rates of iteration `it`; later frames may keep their appearance.
+fn frame_rates(config: &TrainConfig, extent: f64, it: u32, iterations: u32, canonical: bool) -> LearningRates {
+    let rates = learning_rates(&config.learning_rates, extent, it, iterations);
+    if canonical || !config.temporal.freeze_appearance {
+        return rates;
+    }
+    LearningRates { log_scales: 0.0, opacity_logits: 0.0, sh_dc: 0.0, sh_rest: 0.0, ..rates }
+}
+
+/// One densify-and-prune step through the topology; every per-Gaussian array follows the one
+/// remap (parameters and optimizer moments in the trainer, the mesh, the 1-rings).
+fn topology_step(
+    trainer: &mut Trainer,
+    (mesh_term, regs): (&mut MeshTerm, &mut Regularizers),
+    mesh: &mut ManifoldMesh,
+    config: &TrainConfig,
+    (camera, budget): (&crate::camera::Camera, usize),
+    it: u32,
+) -> Result<(u32, usize, usize, usize), TrainError> {
+    let c = &config.canonical;
+    let mut scene = trainer.scene()?;
+    mesh.positions = scene.positions.clone();
+    // The statistic is in pixels; the threshold, as 3DGS's, in NDC units (a pixel is 2 / size).
+    let ndc_scale = 0.5 * camera.width.max(camera.height) as f32;
+    let vertex_scores: Vec<f32> = trainer.densify_stats()?.iter().map(|&[sum, seen]| if seen > 0.0 { ndc_scale * sum / seen } else { 0.0 }).collect();
+    let scores = face_scores(mesh, &vertex_scores);
+    // Each split adds one Gaussian.
+    let room = budget.saturating_sub(scene.len());
+    let densified = densify(mesh, &mut scene, &scores, &DensifyConfig { threshold: c.densify_threshold, max_splits: room, ..Default::default() })?;
+    let pruned = prune(mesh, &mut scene, &PruneConfig { min_opacity: c.prune_opacity, max_scale: c.prune_scale, ..Default::default() })?;
+    trainer.replace(&scene, &compose(&densified.old_of_new, &pruned.old_of_new))?;
+    mesh_term.set_mesh(&scene.positions, &mesh.live_faces())?;
+    regs.upload(&Neighbourhoods::from_mesh(mesh))?;
+    Ok((it, densified.split_faces, pruned.pruned, scene.len()))
+}
+
+/// Pixels the subject covers (mask > 0.5) in the median training view.
+fn covered_pixels(views: &[ViewTarget]) -> usize {
+    let mut counts: Vec<usize> = views.iter().map(|v| v.target.iter().filter(|p| p[3] > 0.5).count()).collect();
+    counts.sort_unstable();
+    counts.get(counts.len() / 2).copied().unwrap_or(0)
+}
+
+/// Mean PSNR and SSIM of the Gaussian renders and PSNR of the mesh renders over `views`.
+fn evaluate(trainer: &mut Trainer, mesh_term: &MeshTerm, views: &[ViewTarget], settings: &RenderSettings) -> Result<(f64, f64, f64), TrainError> {
+    let (mut gs, mut gs_ssim, mut mesh) = (0.0, 0.0, 0.0);
+    for v in views {
+        let target = v.rgb();
+        let render = trainer.render(&v.camera, settings, false)?;
+        gs += psnr(&render, &target)?.min(100.0);
+        gs_ssim += ssim(&render, &target, v.camera.width as usize, v.camera.height as usize, 3)?;
+        mesh += psnr(&mesh_term.render(trainer.params(), &v.camera, settings.background)?, &target)?.min(100.0);
+    }
+    let n = views.len().max(1) as f64;
+    Ok((gs / n, gs_ssim / n, mesh / n))
+}

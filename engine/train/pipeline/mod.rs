@@ -1,0 +1,12 @@
+//! The reconstruction pipeline (`tagsplat train`): multi-view video in, a topology-consistent
+//! mesh sequence and per-frame Gaussians out. The canonical stage fits frame 0 with the
+//! Gaussians on a manifold mesh (densified and pruned through the topology); the temporal stage
+//! moves that mesh through every later frame with its topology frozen.
+
+pub mod config;
+mod frame;
+mod run;
+
+pub use config::TrainConfig;
+pub use frame::{optimize_frame, FrameReport, FrameTask};
+pub use run::{run_train, TrainJob, TrainProgress, TrainReport};

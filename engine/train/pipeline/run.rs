@@ -1,0 +1,178 @@
+//! The whole reconstruction: the initial mesh (given or built from the masks), the canonical
+//! frame, then every later frame from its predecessor; each frame written as it finishes, so
+//! running the same job again resumes after the last complete frame.
+
+use super::config::TrainConfig;
+use super::frame::{optimize_frame, FrameReport, FrameTask};
+use crate::gpu::GpuContext;
+use crate::init::{init_mesh, InitOptions};
+use crate::io::dataset::Dataset;
+use crate::io::write_atomically;
+use crate::mesh::TriMesh;
+use crate::splat::GaussianScene;
+use crate::topology::{gaussians_from_mesh, import, InitConfig, ManifoldMesh};
+use crate::train::output::{dc_vertex_colors, SequenceOutput};
+use crate::train::temporal::extrapolate;
+use crate::train::{load_targets, TrainError, ViewTarget};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+pub struct TrainJob {
+    pub data: PathBuf,
+    pub out: PathBuf,
+    /// The frame-0 mesh (PLY or OBJ); without one it is built from the masks.
+    pub mesh: Option<PathBuf>,
+    pub config: TrainConfig,
+    /// Frames to produce (default: all). Frames before the range must be complete already.
+    pub frames: Option<Range<usize>>,
+}
+
+/// Where the run is, for a progress display.
+#[derive(Clone, Copy, Debug)]
+pub struct TrainProgress {
+    pub frame: usize,
+    /// One past the last frame of the run.
+    pub frames_end: usize,
+    pub iteration: u32,
+    pub iterations: u32,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct TrainReport {
+    pub device: String,
+    pub data: PathBuf,
+    pub total_wall_s: f64,
+    /// What the PSNR/SSIM figures are measured on: "held-out" views or "training" views.
+    pub eval_views: &'static str,
+    /// Frames already complete on disk when this run started.
+    pub resumed_frames: Vec<usize>,
+    pub frames: Vec<FrameReport>,
+    pub vertices: usize,
+    pub faces: usize,
+    /// The files written: per-frame folders and the sequence exports.
+    pub outputs: Vec<PathBuf>,
+}
+
+/// Runs (or resumes) `job`; `OUT/report.json` is rewritten after every frame.
+pub fn run_train(ctx: &Arc<GpuContext>, job: &TrainJob, progress: &mut dyn FnMut(TrainProgress)) -> Result<TrainReport, TrainError> {
+    job.config.check()?;
+    let started = Instant::now();
+    let dataset = Dataset::load(&job.data)?;
+    let frames = job.frames.clone().unwrap_or(0..dataset.frames.len());
+    if frames.is_empty() || frames.end > dataset.frames.len() {
+        return Err(TrainError::Input(format!("frames {}..{}: {} has frames 0..{}", frames.start, frames.end, job.data.display(), dataset.frames.len())));
+    }
+    let out = SequenceOutput::create(&job.out)?;
+    // A range that starts later continues frames already on disk.
+    if let Some(missing) = [0, frames.start.saturating_sub(1)].into_iter().find(|&t| t < frames.start && !out.is_complete(t)) {
+        return Err(TrainError::Input(format!("frames {}..{} need frame {missing} in {}; run from an earlier frame", frames.start, frames.end, job.out.display())));
+    }
+    let mut report = TrainReport {
+        device: ctx.info().name.clone(),
+        data: job.data.clone(),
+        total_wall_s: 0.0,
+        eval_views: if dataset.test.is_empty() { "training" } else { "held-out" },
+        resumed_frames: (0..frames.end).filter(|&t| out.is_complete(t)).collect(),
+        frames: Vec::new(),
+        vertices: 0,
+        faces: 0,
+        outputs: vec![job.out.join("meshes"), job.out.join("gaussians")],
+    };
+    let (mut mesh, mut previous) = canonical_start(ctx, &dataset, job, &out, &mut report, progress)?;
+    let mut before_previous: Option<GaussianScene> = None;
+    for t in 1.max(frames.start)..frames.end {
+        if out.is_complete(t) {
+            before_previous = Some(std::mem::replace(&mut previous, out.read_frame(t)?.1));
+            continue;
+        }
+        if before_previous.is_none() && t >= 2 && out.is_complete(t - 2) {
+            before_previous = Some(out.read_frame(t - 2)?.1);
+        }
+        if !out.is_complete(t - 1) {
+            return Err(TrainError::Input(format!("frame {t} needs frame {} in {}", t - 1, job.out.display())));
+        }
+        let (train, eval) = views(&dataset, t, &job.config)?;
+        let start = extrapolate(&previous, before_previous.as_ref());
+        let task = FrameTask { frame: t, train: &train, eval: &eval, start, mesh: &mut mesh, previous: Some(&previous) };
+        let (scene, frame_report) = optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| progress(TrainProgress { frame: t, frames_end: frames.end, iteration, iterations }))?;
+        write_frame(&out, t, &mesh, &scene)?;
+        before_previous = Some(std::mem::replace(&mut previous, scene));
+        report.frames.push(frame_report);
+        finish_report(&mut report, &mesh, started, &job.out)?;
+    }
+    if (0..dataset.frames.len()).all(|t| out.is_complete(t)) {
+        report.outputs.extend(out.export(0..dataset.frames.len(), fps(&dataset))?);
+    }
+    finish_report(&mut report, &mesh, started, &job.out)?;
+    Ok(report)
+}
+
+/// Frame 0: read back when complete, else optimised from the initial mesh and written.
+fn canonical_start(ctx: &Arc<GpuContext>, dataset: &Dataset, job: &TrainJob, out: &SequenceOutput, report: &mut TrainReport, progress: &mut dyn FnMut(TrainProgress)) -> Result<(ManifoldMesh, GaussianScene), TrainError> {
+    if out.is_complete(0) {
+        let (mesh, scene) = out.read_frame(0)?;
+        let topology = ManifoldMesh::new(mesh.positions, mesh.faces).map_err(|e| TrainError::Input(format!("{}: {e}", out.mesh_path(0).display())))?;
+        return Ok((topology, scene));
+    }
+    let (mut mesh, colors) = initial_mesh(dataset, job)?;
+    let init = InitConfig { sh_degree: job.config.sh_degree, ..Default::default() };
+    let start = gaussians_from_mesh(&mesh, &colors, &init);
+    let (train, eval) = views(dataset, 0, &job.config)?;
+    let frames = job.frames.clone().unwrap_or(0..dataset.frames.len());
+    let task = FrameTask { frame: 0, train: &train, eval: &eval, start, mesh: &mut mesh, previous: None };
+    let (scene, frame_report) = optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| progress(TrainProgress { frame: 0, frames_end: frames.end, iteration, iterations }))?;
+    write_frame(out, 0, &mesh, &scene)?;
+    report.frames.push(frame_report);
+    Ok((mesh, scene))
+}
+
+/// The frame-0 mesh, imported as a manifold (welded, oriented; errors name the file), with
+/// vertex colours in [0, 1] (grey where it has none).
+fn initial_mesh(dataset: &Dataset, job: &TrainJob) -> Result<(ManifoldMesh, Vec<[f32; 3]>), TrainError> {
+    let (mesh, path) = match &job.mesh {
+        Some(path) => {
+            let is_obj = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+            let mesh = if is_obj { TriMesh::read_obj(path) } else { TriMesh::read_ply(path) };
+            (mesh.map_err(|e| TrainError::Input(e.to_string()))?, path.clone())
+        }
+        None => {
+            let vertices = (job.config.init.vertices > 0).then_some(job.config.init.vertices as usize);
+            let options = InitOptions { vertices, edge_pixels: job.config.init.edge_pixels, ..Default::default() };
+            let built = init_mesh(dataset, 0, &options).map_err(|e| TrainError::Input(format!("initial mesh from the masks: {e}")))?;
+            (built.mesh, dataset.root.join("(mesh from masks)"))
+        }
+    };
+    let imported = import(&mesh, &path, true).map_err(|e| TrainError::Input(e.to_string()))?;
+    let colors = imported.old_of_new.iter().map(|&old| mesh.colors.as_ref().map_or([0.5; 3], |c| c[old as usize].map(|v| v as f32 / 255.0))).collect();
+    Ok((imported.mesh, colors))
+}
+
+/// Training and evaluation targets of frame `t` (evaluation on held-out cameras, or the
+/// training ones when there are none).
+fn views(dataset: &Dataset, t: usize, config: &TrainConfig) -> Result<(Vec<ViewTarget>, Vec<ViewTarget>), TrainError> {
+    let train = load_targets(dataset, t, &dataset.train, config.background, true)?;
+    let eval = if dataset.test.is_empty() { load_targets(dataset, t, &dataset.train, config.background, true)? } else { load_targets(dataset, t, &dataset.test, config.background, true)? };
+    Ok((train, eval))
+}
+
+fn write_frame(out: &SequenceOutput, t: usize, mesh: &ManifoldMesh, scene: &GaussianScene) -> Result<(), TrainError> {
+    let tri = TriMesh { positions: scene.positions.clone(), faces: mesh.live_faces(), colors: Some(dc_vertex_colors(scene)) };
+    out.write_frame(t, &tri, scene)
+}
+
+fn finish_report(report: &mut TrainReport, mesh: &ManifoldMesh, started: Instant, out: &Path) -> Result<(), TrainError> {
+    report.total_wall_s = started.elapsed().as_secs_f64();
+    report.vertices = mesh.positions.len();
+    report.faces = mesh.live_faces().len();
+    let path = out.join("report.json");
+    write_atomically(&path, |w| serde_json::to_writer_pretty(w, report).map_err(std::io::Error::other)).map_err(|error| TrainError::Io { path, error })
+}
+
+/// Frames per second of the dataset's clock (10 when it has none).
+fn fps(dataset: &Dataset) -> f64 {
+    let n = dataset.frames.len();
+    let span = dataset.frames[n - 1].time - dataset.frames[0].time;
+    if n > 1 && span > 0.0 { (n - 1) as f64 / span } else { 10.0 }
+}

@@ -1,0 +1,90 @@
+//! `tagsplat train`: the reconstruction pipeline over a dataset, resumable.
+
+use anyhow::{bail, Context, Result};
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+use std::sync::Arc;
+use tagsplat::gpu::GpuContext;
+use tagsplat::train::pipeline::{run_train, TrainConfig, TrainJob, TrainProgress, TrainReport};
+
+#[derive(clap::Args)]
+pub struct TrainArgs {
+    /// Dataset folder (own layout, Panoptic or nerfstudio).
+    #[arg(long, required_unless_present = "print_config")]
+    data: Option<PathBuf>,
+    /// Output folder: meshes/, gaussians/, sequence.obj + .pc2, sequence.glb, report.json.
+    /// Running again with the same folder resumes after the last complete frame.
+    #[arg(long, required_unless_present = "print_config")]
+    out: Option<PathBuf>,
+    /// Frame-0 mesh (PLY or OBJ); without it the mesh is built from the masks.
+    #[arg(long)]
+    mesh: Option<PathBuf>,
+    /// TOML config; keys left out take their defaults (see --print-config).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Frames A..B (B excluded); frames before A must be complete in --out.
+    #[arg(long, value_parser = parse_range)]
+    frames: Option<std::ops::Range<usize>>,
+    /// Print the default config as TOML and exit.
+    #[arg(long)]
+    print_config: bool,
+}
+
+fn parse_range(text: &str) -> Result<std::ops::Range<usize>, String> {
+    let (a, b) = text.split_once("..").ok_or_else(|| format!("'{text}' is not A..B"))?;
+    let parse = |s: &str| s.trim().parse::<usize>().map_err(|e| format!("'{s}' in '{text}': {e}"));
+    let (a, b) = (parse(a)?, parse(b)?);
+    if a >= b {
+        return Err(format!("'{text}' is empty (A must be below B)"));
+    }
+    Ok(a..b)
+}
+
+pub fn train(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: TrainArgs) -> Result<()> {
+    let config = match &args.config {
+        Some(path) => TrainConfig::load(path)?,
+        None => TrainConfig::default(),
+    };
+    if args.print_config {
+        print!("{}", config.to_toml());
+        return Ok(());
+    }
+    let (Some(data), Some(out)) = (args.data, args.out) else { bail!("--data and --out are required") };
+    let job = TrainJob { data, out, mesh: args.mesh, config, frames: args.frames };
+    let report = run_with_progress(&context()?, &job)?;
+    print_report(&report);
+    Ok(())
+}
+
+/// Runs the job with a bar per frame and one overall.
+pub fn run_with_progress(ctx: &Arc<GpuContext>, job: &TrainJob) -> Result<TrainReport> {
+    let bars = MultiProgress::new();
+    let style = |template| ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar());
+    let overall = bars.add(ProgressBar::new(0).with_style(style("frames {bar:30} {pos}/{len}  {elapsed}")));
+    let frame_bar = bars.add(ProgressBar::new(0).with_style(style("frame {msg:>4} {bar:30} {pos}/{len} it  {per_sec}")));
+    let mut progress = |p: TrainProgress| {
+        overall.set_length(p.frames_end as u64);
+        overall.set_position(p.frame as u64);
+        frame_bar.set_message(p.frame.to_string());
+        frame_bar.set_length(p.iterations as u64);
+        frame_bar.set_position(p.iteration as u64);
+    };
+    let report = run_train(ctx, job, &mut progress).with_context(|| format!("train {} → {}", job.data.display(), job.out.display()))?;
+    frame_bar.finish_and_clear();
+    overall.finish_and_clear();
+    Ok(report)
+}
+
+pub fn print_report(r: &TrainReport) {
+    println!("{} frames in {:.1} s on {} ({} vertices, {} faces; {} evaluation views)", r.frames.len(), r.total_wall_s, r.device, r.vertices, r.faces, r.eval_views);
+    if !r.resumed_frames.is_empty() {
+        println!("resumed: frames {:?} were complete", r.resumed_frames);
+    }
+    println!("frame  iters  seconds  Gaussians  PSNR gs  PSNR mesh");
+    for f in &r.frames {
+        println!("{:>5}  {:>5}  {:>7.1}  {:>9}  {:>7.2}  {:>9.2}", f.frame, f.iterations, f.wall_s, f.gaussians, f.psnr_gs, f.psnr_mesh);
+    }
+    for path in &r.outputs {
+        println!("wrote {}", path.display());
+    }
+}
