@@ -27,6 +27,13 @@ impl MeshRasterizer {
     pub fn record_forward_from<'a>(&'a self, rec: &mut Recorder<'a>, params: &RasterParams, positions: &'a GpuBuffer<f32>) -> Result<(), RasterError> {
         self.check_params(params)?;
         check_len("vertex positions", positions.len(), 3 * self.vertices)?;
+        self.record_visibility(rec, params, positions)?;
+        self.record_shading(rec, params);
+        Ok(())
+    }
+
+    /// Clear, transform, outline flags and both raster paths: the visibility buffer.
+    fn record_visibility<'a>(&'a self, rec: &mut Recorder<'a>, params: &RasterParams, positions: &'a GpuBuffer<f32>) -> Result<(), RasterError> {
         let (m, im, k) = (&self.mesh, &self.image, &self.kernels);
         rec.begin_pass("raster clear");
         rec.fill_buffer(&im.visibility, u32::MAX);
@@ -69,6 +76,12 @@ impl MeshRasterizer {
         ];
         rec.dispatch(&k.raster_large, &large, params, params.tiles());
         rec.end_pass();
+        Ok(())
+    }
+
+    /// Resolve and anti-aliasing: the images.
+    fn record_shading<'a>(&'a self, rec: &mut Recorder<'a>, params: &RasterParams) {
+        let (m, im, k) = (&self.mesh, &self.image, &self.kernels);
         rec.begin_pass("raster resolve");
         let resolve = [
             im.visibility.binding(),
@@ -96,7 +109,6 @@ impl MeshRasterizer {
         let aa = [im.pairs.binding(), im.rgba.binding(), im.color.binding(), im.mask.binding()];
         rec.dispatch(&k.aa_forward, &aa, params, params.tiles());
         rec.end_pass();
-        Ok(())
     }
 
     /// Records the backward pass of the last forward with the same `params`: from dL/dcolour

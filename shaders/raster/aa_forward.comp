@@ -1,6 +1,6 @@
 #version 460
 // Anti-aliasing, forward: one invocation per pixel; gathers the blends of its four pairs
-// (crossings from aa_pairs.comp, rule in aa.glsl) onto the resolved (rgb, mask) and writes the
+// (crossings from aa_pairs.comp, rule in blend.glsl) onto the resolved (rgb, mask) and writes the
 // final colour and mask images.
 #include "raster.glsl"
 

@@ -1,5 +1,5 @@
 // The four stored pairs around a pixel, for the blend and its backward. Expects a `pairs`
-// buffer of PairRecord (aa.glsl).
+// buffer of PairRecord (blend.glsl).
 #ifndef RASTER_PAIRS_GLSL
 #define RASTER_PAIRS_GLSL
 
