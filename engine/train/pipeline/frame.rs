@@ -151,7 +151,12 @@ fn empty_report(frame: usize) -> FrameReport {
 
 /// The learning rates of iteration `it`; later frames may keep their appearance.
 fn frame_rates(config: &TrainConfig, extent: f64, it: u32, iterations: u32, canonical: bool) -> LearningRates {
-    let rates = learning_rates(&config.learning_rates, extent, it, iterations);
+    let scaled = crate::train::config::LearningRateConfig {
+        positions: config.learning_rates.positions * config.position_lr_scale,
+        positions_final: config.learning_rates.positions_final * config.position_lr_scale,
+        ..config.learning_rates.clone()
+    };
+    let rates = learning_rates(&scaled, extent, it, iterations);
     if canonical || !config.temporal.freeze_appearance {
         return rates;
     }
