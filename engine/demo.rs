@@ -1,6 +1,7 @@
-//! `tagsplat demo`: the whole job on generated data with known ground truth — generate a
-//! deforming subject seen by a camera ring, reconstruct its mesh sequence, track its
-//! ground-truth surface points through the result, and score everything against the truth.
+//! The whole job on generated data with known ground truth. `tagsplat demo` generates a
+//! deforming subject seen by a camera ring, reconstructs its mesh sequence, tracks its
+//! ground-truth surface points through the result and scores everything against the truth;
+//! `tagsplat ablate` does the same for the paper's ablations of one dataset.
 
 use crate::eval::{evaluate_folders, FolderOptions, FolderReport};
 use crate::gpu::GpuContext;
@@ -13,7 +14,7 @@ use crate::train::pipeline::{run_train, TrainConfig, TrainJob, TrainProgress, Tr
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// The demo's size: small enough for minutes on a 2-core CPU through lavapipe.
+/// The demo's size: small enough for a minute on a 2-core CPU through lavapipe.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct DemoOptions {
     pub views: usize,
@@ -29,24 +30,32 @@ impl Default for DemoOptions {
     }
 }
 
-/// The demo's scores against the ground truth, relative where the paper is.
+/// A reconstruction scored against its ground truth, relative where the paper is.
 #[derive(Clone, Debug, serde::Serialize)]
-pub struct DemoReport {
-    pub options: DemoOptions,
-    pub data: PathBuf,
-    pub out: PathBuf,
-    /// Means over frames of the held-out PSNR of Gaussian and mesh renders, dB.
+pub struct Scores {
+    /// Means over frames of the evaluation-view PSNR of Gaussian and mesh renders, dB.
     pub psnr_gs: f64,
     pub psnr_mesh: f64,
     /// Chamfer (mean nearest-neighbour distance) and EMD as fractions of the ground truth's
     /// bounding-box diagonal, means over frames.
     pub chamfer_per_diagonal: f64,
     pub emd_per_diagonal: f64,
-    /// Tracking RMSE as a fraction of the subject's height (its bounding-box extent along y).
+    /// Tracking MSE (squared scene units) and RMSE as a fraction of the subject's height (its
+    /// ground-truth frame-0 extent along y).
+    pub tracking_mse: f64,
     pub tracking_rmse_per_height: f64,
     pub tracked_points: usize,
-    pub train: TrainReport,
+    pub seconds: f64,
     pub eval: FolderReport,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct DemoReport {
+    pub options: DemoOptions,
+    pub data: PathBuf,
+    pub out: PathBuf,
+    pub scores: Scores,
+    pub train: TrainReport,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -75,34 +84,90 @@ pub fn run_demo(ctx: &Arc<GpuContext>, dir: &Path, options: &DemoOptions, progre
     config.canonical.iterations = options.canonical_iterations;
     config.canonical.densify_until = options.canonical_iterations * 3 / 4;
     config.temporal.iterations = options.temporal_iterations;
-    let train = run_train(ctx, &TrainJob { data: data.clone(), out: out.clone(), mesh: None, config, frames: None }, progress)?;
+    let (train, scores) = train_and_score(ctx, &data, &out, config, progress)?;
+    let report = DemoReport { options: options.clone(), data, out, scores, train };
+    write_json(&dir.join("demo.json"), &report)?;
+    Ok(report)
+}
 
+/// Reconstructs `data` into `out` (resuming what is there), tracks the ground-truth points
+/// (`data/points.csv`) into `out/trajectories.csv`, and scores the result against `data`.
+pub fn train_and_score(ctx: &Arc<GpuContext>, data: &Path, out: &Path, config: TrainConfig, progress: &mut dyn FnMut(TrainProgress)) -> Result<(TrainReport, Scores), DemoError> {
+    let started = std::time::Instant::now();
+    let train = run_train(ctx, &TrainJob { data: data.to_owned(), out: out.to_owned(), mesh: None, config, frames: None }, progress)?;
     let sequence = MeshSequence::read(&out.join("meshes"))?;
     let queries = Queries::Points(read_points(&data.join("points.csv"))?);
+    // Bind within 5% of the extent: the reconstruction is not the ground-truth surface.
     let tracked = track(&sequence.faces, &sequence.frames, &queries, 0.05)?;
     write_tracks_csv(&out.join("trajectories.csv"), &tracked.points)?;
-    let eval = evaluate_folders(&out, &data, &FolderOptions { chamfer_samples: 20_000, emd_samples: 500, seed: 0 })?;
-
+    let eval = evaluate_folders(out, data, &FolderOptions { chamfer_samples: 20_000, emd_samples: 500, seed: 0 })?;
     let truth = MeshSequence::read(&data.join("meshes"))?;
     let (diagonal, height) = extent(&truth.frames[0]);
     let frames = train.frames.len().max(1) as f64;
-    let report = DemoReport {
-        options: options.clone(),
-        data,
-        out,
+    let tracking = eval.tracking.as_ref();
+    let scores = Scores {
         psnr_gs: train.frames.iter().map(|f| f.psnr_gs).sum::<f64>() / frames,
         psnr_mesh: train.frames.iter().map(|f| f.psnr_mesh).sum::<f64>() / frames,
         chamfer_per_diagonal: eval.chamfer_mean.unwrap_or(f64::NAN) / diagonal,
         emd_per_diagonal: eval.emd_mean.unwrap_or(f64::NAN) / diagonal,
-        tracking_rmse_per_height: eval.tracking.as_ref().map_or(f64::NAN, |t| t.rmse) / height,
+        tracking_mse: tracking.map_or(f64::NAN, |t| t.mse),
+        tracking_rmse_per_height: tracking.map_or(f64::NAN, |t| t.rmse) / height,
         tracked_points: tracked.points.len(),
-        train,
+        seconds: started.elapsed().as_secs_f64(),
         eval,
     };
-    let path = dir.join("demo.json");
-    crate::io::write_atomically(&path, |w| serde_json::to_writer_pretty(w, &report).map_err(std::io::Error::other))
-        .map_err(|error| crate::train::TrainError::Io { path, error })?;
-    Ok(report)
+    Ok((train, scores))
+}
+
+/// One ablation: a name and what it switches off.
+pub struct Ablation {
+    pub name: &'static str,
+    pub apply: fn(&mut TrainConfig),
+}
+
+/// The paper's ablations (its tables 3 and 4): canonical terms and the topology-preserving
+/// densification, then the temporal terms.
+pub fn paper_ablations() -> Vec<Ablation> {
+    vec![
+        Ablation { name: "full model", apply: |_| {} },
+        Ablation { name: "w/o mesh loss", apply: |c| (c.loss.mesh_color, c.loss.mesh_mask) = (0.0, 0.0) },
+        Ablation { name: "w/o normal loss", apply: |c| c.loss.normal = 0.0 },
+        Ablation { name: "w/o smoothness loss", apply: |c| c.loss.laplacian = 0.0 },
+        Ablation { name: "w/o topology D&P", apply: |c| c.canonical.densify_from = c.canonical.densify_until },
+        Ablation { name: "w/o length loss", apply: |c| c.loss.edge_length = 0.0 },
+        Ablation { name: "w/o rigid loss", apply: |c| c.loss.rigidity = 0.0 },
+        Ablation { name: "w/o rotation loss", apply: |c| c.loss.rotation = 0.0 },
+    ]
+}
+
+/// Runs every ablation of `base` on `data` into `out/<n>_<name>/` and writes `out/ablation.md`
+/// and `out/ablation.json`; returns the rows.
+pub fn run_ablations(ctx: &Arc<GpuContext>, data: &Path, out: &Path, base: &TrainConfig, progress: &mut dyn FnMut(&str, TrainProgress)) -> Result<Vec<(String, Scores)>, DemoError> {
+    let mut rows = Vec::new();
+    for (i, ablation) in paper_ablations().iter().enumerate() {
+        let mut config = base.clone();
+        (ablation.apply)(&mut config);
+        let dir = out.join(format!("{i}_{}", ablation.name.replace(['/', ' ', '&'], "_")));
+        let (_, scores) = train_and_score(ctx, data, &dir, config, &mut |p| progress(ablation.name, p))?;
+        rows.push((ablation.name.to_string(), scores));
+    }
+    let mut table = String::from("| variant | PSNR gs (dB) | PSNR mesh (dB) | Chamfer / diagonal | EMD / diagonal | tracking MSE | tracking RMSE / height | seconds |\n|---|---|---|---|---|---|---|---|\n");
+    for (name, s) in &rows {
+        table += &format!(
+            "| {name} | {:.2} | {:.2} | {:.5} | {:.5} | {:.3e} | {:.5} | {:.0} |\n",
+            s.psnr_gs, s.psnr_mesh, s.chamfer_per_diagonal, s.emd_per_diagonal, s.tracking_mse, s.tracking_rmse_per_height, s.seconds
+        );
+    }
+    let path = out.join("ablation.md");
+    crate::io::write_atomically(&path, |w| std::io::Write::write_all(w, table.as_bytes())).map_err(|error| crate::train::TrainError::Io { path, error })?;
+    let json: Vec<_> = rows.iter().map(|(name, s)| serde_json::json!({ "variant": name, "scores": s })).collect();
+    write_json(&out.join("ablation.json"), &json)?;
+    Ok(rows)
+}
+
+fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), DemoError> {
+    crate::io::write_atomically(path, |w| serde_json::to_writer_pretty(w, value).map_err(std::io::Error::other))
+        .map_err(|error| crate::train::TrainError::Io { path: path.to_owned(), error }.into())
 }
 
 /// Bounding-box diagonal and height (y extent) of a point set.

@@ -31,11 +31,44 @@ pub fn demo(ctx: &Arc<GpuContext>, args: &DemoArgs) -> Result<()> {
     bar.finish_and_clear();
     super::train::print_report(&r.train);
     println!();
-    println!("against the ground truth ({} frames, {} views at {}², {} tracked points):", options.frames, options.views, options.resolution, r.tracked_points);
-    println!("  held-out PSNR       Gaussians {:.2} dB, mesh {:.2} dB (mean over frames)", r.psnr_gs, r.psnr_mesh);
-    println!("  Chamfer / diagonal  {:.5}  (mean nearest-neighbour distance, 20 000 samples per mesh)", r.chamfer_per_diagonal);
-    println!("  EMD / diagonal      {:.5}  (exact, 500 samples per mesh)", r.emd_per_diagonal);
-    println!("  tracking RMSE       {:.5} of the subject's height", r.tracking_rmse_per_height);
+    println!("against the ground truth ({} frames, {} views at {}², {} tracked points):", options.frames, options.views, options.resolution, r.scores.tracked_points);
+    let s = &r.scores;
+    println!("  held-out PSNR       Gaussians {:.2} dB, mesh {:.2} dB (mean over frames)", s.psnr_gs, s.psnr_mesh);
+    println!("  Chamfer / diagonal  {:.5}  (mean nearest-neighbour distance, 20 000 samples per mesh)", s.chamfer_per_diagonal);
+    println!("  EMD / diagonal      {:.5}  (exact, 500 samples per mesh)", s.emd_per_diagonal);
+    println!("  tracking RMSE       {:.5} of the subject's height (MSE {:.3e} scene units²)", s.tracking_rmse_per_height, s.tracking_mse);
     println!("wrote {}, {}, {}", r.data.display(), r.out.display(), args.out.join("demo.json").display());
+    Ok(())
+}
+
+#[derive(clap::Args)]
+pub struct AblateArgs {
+    /// Dataset with ground truth (meshes/, points.csv, trajectories.csv: `tagsplat synth`).
+    #[arg(long)]
+    data: PathBuf,
+    /// Output folder: one reconstruction per variant, ablation.md and ablation.json.
+    #[arg(long)]
+    out: PathBuf,
+    /// Base TOML config (see `tagsplat train --print-config`).
+    #[arg(long)]
+    config: Option<PathBuf>,
+}
+
+pub fn ablate(ctx: &Arc<GpuContext>, args: &AblateArgs) -> Result<()> {
+    let base = match &args.config {
+        Some(path) => tagsplat::train::pipeline::TrainConfig::load(path)?,
+        None => tagsplat::train::pipeline::TrainConfig::default(),
+    };
+    let bar = ProgressBar::new(0);
+    bar.set_style(ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} it").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    let mut progress = |name: &str, p: tagsplat::train::pipeline::TrainProgress| {
+        bar.set_message(format!("{name}: frame {}/{}", p.frame, p.frames_end));
+        bar.set_length(p.iterations as u64);
+        bar.set_position(p.iteration as u64);
+    };
+    tagsplat::demo::run_ablations(ctx, &args.data, &args.out, &base, &mut progress).with_context(|| format!("ablations of {}", args.data.display()))?;
+    bar.finish_and_clear();
+    print!("{}", std::fs::read_to_string(args.out.join("ablation.md"))?);
+    println!("wrote {}", args.out.join("ablation.md").display());
     Ok(())
 }

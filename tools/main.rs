@@ -51,6 +51,9 @@ enum Command {
     /// Generate a synthetic sequence, reconstruct it, track its ground-truth points, and score
     /// everything against the ground truth.
     Demo(demo::DemoArgs),
+    /// The paper's ablations on a dataset with ground truth: one reconstruction per variant and
+    /// a table of their scores.
+    Ablate(demo::AblateArgs),
     /// Reconstruct a topology-consistent mesh sequence from a multi-view video dataset.
     Train(train::TrainArgs),
     /// Fit Gaussians to one frame of a multi-view dataset (plain 3DGS densification).
@@ -183,6 +186,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Fit(args) => fit::fit(|| context(&options), args),
         Command::Train(args) => train::train(|| context(&options), args),
         Command::Demo(args) => demo::demo(&context(&options)?, &args),
+        Command::Ablate(args) => demo::ablate(&context(&options)?, &args),
         Command::Eval(args) => eval::run(args),
         Command::Bench(Bench::Sort { n, bits, repetitions, json }) => {
             let ctx = context(&options)?;
