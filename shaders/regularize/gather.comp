@@ -38,7 +38,7 @@ uint ring_count(uint i) {
 
 // ΔR_i = R'_i R_iᵀ (primes: previous frame).
 mat3 delta_rotation(uint i) {
-    return rotation_matrix(unit_quat(prev_rotations[i])) * transpose(rotation_matrix(unit_quat(rotations[i])));
+    return rotation_of(unit_quat(prev_rotations[i])) * transpose(rotation_of(unit_quat(rotations[i])));
 }
 
 void main() {
@@ -63,8 +63,8 @@ void main() {
         if (pc.temporal != 0u) {
             vec3 pp = prev_position(v);
             vec4 q = unit_quat(rotations[v]), q_prev = unit_quat(prev_rotations[v]);
-            mat3 r_prev = rotation_matrix(q_prev);
-            mat3 dr = r_prev * transpose(rotation_matrix(q));
+            mat3 r_prev = rotation_of(q_prev);
+            mat3 dr = r_prev * transpose(rotation_of(q));
             vec4 rel = quat_mul(q, quat_conj(q_prev));
             mat3 g_rot = mat3(0.0);
             vec4 g_rel = vec4(0.0);
@@ -103,7 +103,7 @@ void main() {
                     g_rel += 2.0 * pc.w_rotation * omega * diff / dl;
                 }
             }
-            gq = rotation_matrix_backward(q, g_rot) + quat_mul(g_rel, q_prev);
+            gq = rotation_backward(q, g_rot) + quat_mul(g_rel, q_prev);
         }
         grad_positions[3u * v] += gp.x;
         grad_positions[3u * v + 1u] += gp.y;

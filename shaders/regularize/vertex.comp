@@ -49,11 +49,11 @@ void main() {
         if (len > 0.0) {
             vec3 n_mesh = area / len;
             vec4 q = unit_quat(rotations[i]);
-            vec3 r = rotation_matrix(q)[2] - n_mesh;
+            vec3 r = rotation_of(q)[2] - n_mesh;
             normal = length(r);
             if (normal > 0.0) {
                 vec3 u = pc.w_normal * r / normal;
-                vec4 g_unit = rotation_matrix_backward(q, mat3(vec3(0.0), vec3(0.0), u));
+                vec4 g_unit = rotation_backward(q, mat3(vec3(0.0), vec3(0.0), u));
                 grad_rotations[i] += normalize_backward(rotations[i], g_unit);
                 g.xyz = -(u - n_mesh * dot(n_mesh, u)) / len;
             }

@@ -6,6 +6,7 @@
 
 #include "frame.glsl"
 #include "sh.glsl"
+#include "../common/quaternion.glsl"
 
 layout(std430, binding = 0) readonly buffer Positions { float positions[]; };      // 3 per Gaussian
 layout(std430, binding = 1) readonly buffer LogScales { float log_scales[]; };     // 3 per Gaussian
@@ -28,27 +29,6 @@ vec3 sh_coefficient(uint i, uint k) {
 
 bool all_finite(vec4 v) {
     return !any(isnan(v)) && !any(isinf(v));
-}
-
-// Rotation of a unit quaternion (w, x, y, z).
-mat3 rotation_of(vec4 q) {
-    float w = q.x, x = q.y, y = q.z, z = q.w;
-    // Columns of R.
-    return mat3(vec3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)),
-                vec3(2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x)),
-                vec3(2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y)));
-}
-
-// Gradient of the unit quaternion from the gradient of its rotation (row i, column j at g[j][i]).
-vec4 rotation_backward(vec4 q, mat3 g) {
-    float w = q.x, x = q.y, y = q.z, z = q.w;
-    float g00 = g[0][0], g01 = g[1][0], g02 = g[2][0];
-    float g10 = g[0][1], g11 = g[1][1], g12 = g[2][1];
-    float g20 = g[0][2], g21 = g[1][2], g22 = g[2][2];
-    return vec4(2.0 * (z * (g10 - g01) + y * (g02 - g20) + x * (g21 - g12)),
-                2.0 * (y * (g01 + g10) + z * (g02 + g20) + w * (g21 - g12)) - 4.0 * x * (g11 + g22),
-                2.0 * (x * (g01 + g10) + w * (g02 - g20) + z * (g12 + g21)) - 4.0 * y * (g00 + g22),
-                2.0 * (w * (g10 - g01) + x * (g02 + g20) + y * (g12 + g21)) - 4.0 * z * (g00 + g11));
 }
 
 // Everything the projection of one Gaussian computes, kept for its backward.
