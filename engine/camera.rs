@@ -150,6 +150,23 @@ fn rigid_inverse(m: DMat4) -> DMat4 {
     DMat4::from_cols(rotation_t.x_axis.extend(0.0), rotation_t.y_axis.extend(0.0), rotation_t.z_axis.extend(0.0), translation.extend(1.0))
 }
 
+/// The point with the least summed squared distance to every ray (origin, unit direction):
+/// where an inward-looking rig's rays meet. None for fewer than two rays, or rays within about
+/// a degree of parallel.
+pub fn nearest_point_to_rays(rays: impl IntoIterator<Item = (DVec3, DVec3)>) -> Option<DVec3> {
+    let (mut a, mut b, mut count) = (DMat3::ZERO, DVec3::ZERO, 0);
+    for (origin, dir) in rays {
+        // Σ (I − d dᵀ)(x − o) = 0.
+        let m = DMat3::IDENTITY - DMat3::from_cols(dir * dir.x, dir * dir.y, dir * dir.z);
+        a += m;
+        b += m * origin;
+        count += 1;
+    }
+    // det(A) ~ sin² of the angle between rays; 1e-4 relative keeps angles above about 1°.
+    let scale = (a.x_axis.x + a.y_axis.y + a.z_axis.z) / 3.0;
+    (count >= 2 && a.determinant() > 1e-4 * scale.powi(3)).then(|| a.inverse() * b)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

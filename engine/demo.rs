@@ -102,7 +102,8 @@ pub fn train_and_score(ctx: &Arc<GpuContext>, data: &Path, out: &Path, config: T
     write_tracks_csv(&out.join("trajectories.csv"), &tracked.points)?;
     let eval = evaluate_folders(out, data, &FolderOptions { chamfer_samples: 20_000, emd_samples: 500, seed: 0 })?;
     let truth = MeshSequence::read(&data.join("meshes"))?;
-    let (diagonal, height) = extent(&truth.frames[0]);
+    let (lo, hi) = crate::mesh::bounding_box(&truth.frames[0]).unwrap_or_default();
+    let (diagonal, height) = (lo.distance(hi).max(f64::MIN_POSITIVE), (hi.y - lo.y).max(f64::MIN_POSITIVE));
     let frames = train.frames.len().max(1) as f64;
     let tracking = eval.tracking.as_ref();
     let scores = Scores {
@@ -168,17 +169,4 @@ pub fn run_ablations(ctx: &Arc<GpuContext>, data: &Path, out: &Path, base: &Trai
 fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), DemoError> {
     crate::io::write_atomically(path, |w| serde_json::to_writer_pretty(w, value).map_err(std::io::Error::other))
         .map_err(|error| crate::train::TrainError::Io { path: path.to_owned(), error }.into())
-}
-
-/// Bounding-box diagonal and height (y extent) of a point set.
-fn extent(points: &[[f32; 3]]) -> (f64, f64) {
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in points {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k] as f64);
-            hi[k] = hi[k].max(p[k] as f64);
-        }
-    }
-    let d: Vec<f64> = (0..3).map(|k| (hi[k] - lo[k]).max(0.0)).collect();
-    ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(f64::MIN_POSITIVE), d[1].max(f64::MIN_POSITIVE))
 }

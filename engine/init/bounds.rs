@@ -6,7 +6,7 @@
 //! until it stops shrinking.
 
 use super::field::ViewField;
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 
 /// An axis-aligned box.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,8 +59,7 @@ pub fn hull_bounds(views: &[ViewField], tolerance: usize) -> Result<Aabb, Bounds
 /// Least-squares meeting point of the rays through each non-empty silhouette's centroid;
 /// `None` when fewer than two such rays exist or they are nearly parallel.
 pub fn locate_subject(views: &[ViewField]) -> Option<DVec3> {
-    let (mut a, mut b, mut rays) = (DMat3::ZERO, DVec3::ZERO, 0);
-    for v in views {
+    let rays = views.iter().filter_map(|v| {
         let d = &v.distance;
         let (mut sum, mut count) = ((0.0, 0.0), 0usize);
         for (p, _) in d.values.iter().enumerate().filter(|(_, &x)| x > 0.0) {
@@ -68,19 +67,9 @@ pub fn locate_subject(views: &[ViewField]) -> Option<DVec3> {
             sum.1 += (p / d.width) as f64 + 0.5;
             count += 1;
         }
-        if count == 0 {
-            continue;
-        }
-        let (o, dir) = v.camera.pixel_ray(sum.0 / count as f64, sum.1 / count as f64);
-        // Σ (I − d dᵀ)(x − o) = 0: the point nearest every ray.
-        let m = DMat3::IDENTITY - DMat3::from_cols(dir * dir.x, dir * dir.y, dir * dir.z);
-        a += m;
-        b += m * o;
-        rays += 1;
-    }
-    // det(A) ~ sin² of the angle between rays; 1e-4 relative keeps angles above about 1°.
-    let scale = (a.x_axis.x + a.y_axis.y + a.z_axis.z) / 3.0;
-    (rays >= 2 && a.determinant() > 1e-4 * scale.powi(3)).then(|| a.inverse() * b)
+        (count > 0).then(|| v.camera.pixel_ray(sum.0 / count as f64, sum.1 / count as f64))
+    });
+    crate::camera::nearest_point_to_rays(rays)
 }
 
 /// A summed-area table of a view's silhouette (signed distance > 0).

@@ -42,6 +42,15 @@ impl LossTerms {
         out
     }
 
+    /// Reads the terms summed in `buffer` and zeroes it, so the next sum starts afresh.
+    pub fn take(buffer: &GpuBuffer<f32>) -> GpuResult<Self> {
+        let terms = Self::from_floats(&buffer.read()?);
+        let mut rec = Recorder::new(buffer.context())?;
+        rec.fill_buffer(buffer, 0);
+        rec.submit_and_wait()?;
+        Ok(terms)
+    }
+
     /// `Σ_c λ_c (0.8 l1_c + 0.2 dssim_c)`.
     pub fn total(&self, channel_weights: [f32; 4]) -> f32 {
         (0..4).map(|c| channel_weights[c] * (LOSS_SHARE_L1 * self.l1[c] + LOSS_SHARE_SSIM * self.dssim[c])).sum()

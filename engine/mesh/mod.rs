@@ -1,7 +1,10 @@
 //! Triangle meshes as plain arrays: positions, counter-clockwise faces (seen from outside),
 //! optional vertex colours. File formats live beside the type (`read_ply`, `write_ply`).
 
+mod bounds;
 pub mod obj;
+
+pub use bounds::{bounding_box, bounding_diagonal};
 
 use crate::io::ply::{write_ply, ColumnOut, ElementOut, Ply, PlyError};
 use std::path::{Path, PathBuf};

@@ -27,15 +27,7 @@ impl RasterSettings {
     /// A near plane at 10⁻³ of the extent (bounding-box diagonal) of `positions`, so the
     /// setting scales with the scene; 10⁻³ for an empty or single-point mesh.
     pub fn scaled_to(positions: &[[f32; 3]]) -> Self {
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
-        for p in positions {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        let extent = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f32>().sqrt();
+        let extent = crate::mesh::bounding_diagonal(positions) as f32;
         let extent = if extent.is_finite() && extent > 0.0 { extent } else { 1.0 };
         Self { near: 1e-3 * extent, count_writes: false }
     }

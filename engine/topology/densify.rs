@@ -80,7 +80,7 @@ pub fn densify(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, scores: &[f32
     report.flips = improve_angles(mesh, &touched);
     report.old_of_new = mesh.compact();
     let mut remapped = remap_scene(scene, &report.old_of_new, &parents);
-    report.halved = halve_large(&mut remapped, &report.old_of_new, &parents, config.large_scale * extent(&mesh.positions));
+    report.halved = halve_large(&mut remapped, &report.old_of_new, &parents, config.large_scale * crate::mesh::bounding_diagonal(&mesh.positions) as f32);
     *scene = remapped;
     Ok(report)
 }
@@ -115,16 +115,4 @@ fn halve_large(scene: &mut GaussianScene, old_of_new: &[u32], parents: &[[u32; 3
         scene.log_scales[row].iter_mut().for_each(|s| *s -= std::f32::consts::LN_2);
     }
     halve.iter().filter(|&&h| h).count()
-}
-
-/// Bounding-box diagonal.
-pub(super) fn extent(positions: &[[f32; 3]]) -> f32 {
-    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for p in positions {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    (0..3).map(|k| (hi[k] - lo[k]).max(0.0).powi(2)).sum::<f32>().sqrt()
 }

@@ -42,7 +42,7 @@ fn import_arrays(mesh: &TriMesh, require_closed: bool) -> Result<Imported, Topol
     if let Some(f) = mesh.faces.iter().position(|face| face.iter().any(|&v| v as usize >= n)) {
         return Err(TopologyError::IndexOutOfRange { face: f as u32, corners: mesh.faces[f], vertices: n });
     }
-    let welded = weld(&mesh.positions, &mesh.faces, WELD_TOLERANCE * diagonal(&mesh.positions));
+    let welded = weld(&mesh.positions, &mesh.faces, WELD_TOLERANCE * crate::mesh::bounding_diagonal(&mesh.positions) as f32);
     let mut used = vec![false; welded.positions.len()];
     welded.faces.iter().flatten().for_each(|&v| used[v as usize] = true);
     let kept: Vec<u32> = (0..used.len() as u32).filter(|&v| used[v as usize]).collect();
@@ -67,16 +67,4 @@ fn import_arrays(mesh: &TriMesh, require_closed: bool) -> Result<Imported, Topol
         flipped_faces,
     };
     Ok(Imported { mesh: built, report, old_of_new: compose(&welded.old_of_new, &kept) })
-}
-
-fn diagonal(positions: &[[f32; 3]]) -> f32 {
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for p in positions {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    (0..3).map(|k| (hi[k] - lo[k]).max(0.0).powi(2)).sum::<f32>().sqrt()
 }

@@ -1,7 +1,7 @@
 //! Pruning: a Gaussian picked by the 3DGS criteria merges into the 1-ring neighbour of
 //! cheapest legal collapse, C = w_g·‖pᵢ − pⱼ‖ / mean edge + w_a·‖cᵢ − cⱼ‖ (seed eq. after 8).
 
-use super::densify::{check_rows, extent};
+use super::densify::check_rows;
 use super::TopologyError;
 use super::gaussians::dc_colors;
 use super::mesh::{ManifoldMesh, NONE};
@@ -51,7 +51,7 @@ pub fn should_prune(scene: &GaussianScene, i: usize, config: &PruneConfig, exten
 /// arrays. `mesh` must be compact.
 pub fn prune(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, config: &PruneConfig) -> Result<PruneReport, TopologyError> {
     check_rows(mesh, scene)?;
-    let extent = extent(&mesh.positions);
+    let extent = crate::mesh::bounding_diagonal(&mesh.positions) as f32;
     let mean_edge = mean_edge_length(mesh);
     let colors = dc_colors(scene);
     let mut report = PruneReport::default();

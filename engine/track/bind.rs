@@ -53,23 +53,6 @@ pub fn bind_ray(bvh: &SurfaceBvh, origin: DVec3, dir: DVec3) -> Result<Binding, 
     Ok(Binding { face: hit.face, barycentric: hit.barycentric, distance: 0.0 })
 }
 
-/// Length of the diagonal of the bounding box of `positions` (0 for none): the scale that
-/// relative distance tolerances multiply.
-pub fn extent(positions: &[[f32; 3]]) -> f64 {
-    let mut min = DVec3::INFINITY;
-    let mut max = DVec3::NEG_INFINITY;
-    for p in positions {
-        let p = DVec3::from(p.map(f64::from));
-        min = min.min(p);
-        max = max.max(p);
-    }
-    if positions.is_empty() {
-        0.0
-    } else {
-        min.distance(max)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -99,9 +82,4 @@ mod tests {
         assert_eq!(bind_ray(&bvh, DVec3::new(0.5, 0.5, -1.0), DVec3::new(0.0, 0.0, f64::NAN)), Err(Unbound::NonFinite));
     }
 
-    #[test]
-    fn extent_is_the_bounding_box_diagonal() {
-        assert_eq!(extent(&[]), 0.0);
-        assert!((extent(&[[0.0, 0.0, 0.0], [1.0, 2.0, 2.0], [0.5, 0.5, 0.5]]) - 3.0).abs() < 1e-15);
-    }
 }

@@ -1,6 +1,7 @@
 //! One tracking run: bind the queries on frame 0, follow them through every frame.
 
-use super::bind::{bind_point, bind_ray, extent, Binding, Unbound};
+use super::bind::{bind_point, bind_ray, Binding, Unbound};
+use crate::mesh::bounding_diagonal;
 use super::bvh::SurfaceBvh;
 use super::output::{TrackReport, TrackedPoint, UnboundPoint};
 use super::trajectory::trajectories;
@@ -23,7 +24,7 @@ pub enum Queries {
 pub fn track(faces: &[[u32; 3]], frames: &[Vec<[f32; 3]>], queries: &Queries, max_distance_relative: f64) -> Result<TrackReport, TrackError> {
     let frame0 = frames.first().ok_or(TrackError::EmptyMesh)?;
     let bvh = SurfaceBvh::build(frame0, faces)?;
-    let max_distance = max_distance_relative * extent(frame0);
+    let max_distance = max_distance_relative * bounding_diagonal(frame0);
     let results: Vec<(&str, Result<Binding, Unbound>)> = match queries {
         Queries::Points(points) => points
             .iter()

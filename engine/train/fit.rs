@@ -166,7 +166,7 @@ pub(crate) fn scene_extent(cameras: &[&Camera]) -> f64 {
 }
 
 /// Mean PSNR and SSIM over `views` (RGB), and each view's render.
-fn evaluate(trainer: &mut Trainer, views: &[ViewTarget], settings: &RenderSettings, last_good: bool) -> Result<(f64, f64, Vec<Image>), TrainError> {
+pub(crate) fn evaluate(trainer: &mut Trainer, views: &[ViewTarget], settings: &RenderSettings, last_good: bool) -> Result<(f64, f64, Vec<Image>), TrainError> {
     let (mut psnr_sum, mut ssim_sum, mut renders) = (0.0, 0.0, Vec::new());
     for v in views {
         let render = trainer.render(&v.camera, settings, last_good)?;

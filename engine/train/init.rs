@@ -1,7 +1,7 @@
 //! Initial Gaussians for a fit: at given points, or sampled inside every view's mask.
 
 use super::TrainError;
-use crate::camera::Camera;
+use crate::camera::{nearest_point_to_rays, Camera};
 use crate::rng::SplitMix64;
 use crate::splat::{sh_coefficients, GaussianScene};
 use glam::DVec3;
@@ -24,7 +24,7 @@ pub fn gaussians_at_points(points: &[[f32; 3]], colors: Option<&[[f32; 3]]>, sh_
         return scene;
     }
     let tree: ImmutableKdTree<f32, u32, 3, 32> = ImmutableKdTree::new_from_slice(points);
-    let extent = bounds_diagonal(points).max(f32::MIN_POSITIVE);
+    let extent = (crate::mesh::bounding_diagonal(points) as f32).max(f32::MIN_POSITIVE);
     let neighbour_count = std::num::NonZero::new(4.min(points.len())).unwrap_or(std::num::NonZero::<usize>::MIN);
     for (i, p) in points.iter().enumerate() {
         let neighbours = tree.nearest_n::<SquaredEuclidean>(p, neighbour_count);
@@ -41,17 +41,6 @@ pub fn gaussians_at_points(points: &[[f32; 3]], colors: Option<&[[f32; 3]]>, sh_
         scene.sh.extend(std::iter::repeat_n(0.0, 3 * (coefficients - 1)));
     }
     scene
-}
-
-fn bounds_diagonal(points: &[[f32; 3]]) -> f32 {
-    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for p in points {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    (0..3).map(|k| (hi[k] - lo[k]).max(0.0).powi(2)).sum::<f32>().sqrt()
 }
 
 #[inline]
@@ -78,7 +67,9 @@ pub fn points_inside_masks(views: &[MaskedView], count: usize, seed: u64) -> Res
         return Err(TrainError::Input("no views with masks to initialise from".into()));
     }
     let cameras: Vec<&Camera> = views.iter().map(|v| v.camera).collect();
-    let centre = nearest_point_to_axes(&cameras);
+    // Where the optical axes meet (an inward-looking rig), else the mean camera centre.
+    let mean = cameras.iter().map(|c| c.center()).sum::<DVec3>() / cameras.len() as f64;
+    let centre = nearest_point_to_rays(cameras.iter().map(|c| c.pixel_ray(c.cx, c.cy))).unwrap_or(mean);
     let radius = cameras.iter().map(|c| c.center().distance(centre)).fold(0.0, f64::max);
     let mut rng = SplitMix64::new(seed);
     let (mut points, mut colors) = (Vec::with_capacity(count), Vec::with_capacity(count));
@@ -120,24 +111,6 @@ fn color_if_inside(views: &[MaskedView], p: DVec3) -> Option<[f32; 3]> {
         sum = [0, 1, 2].map(|k| sum[k] + v.rgb[i][k]);
     }
     (2 * seen >= views.len() && seen > 0).then(|| sum.map(|s| s / seen as f32))
-}
-
-/// The point with the least summed squared distance to every camera's optical axis (the
-/// subject of an inward-looking rig); the mean camera centre when the axes are parallel.
-fn nearest_point_to_axes(cameras: &[&Camera]) -> DVec3 {
-    let mut a = glam::DMat3::ZERO;
-    let mut b = DVec3::ZERO;
-    for c in cameras {
-        let (origin, dir) = c.pixel_ray(c.cx, c.cy);
-        let projector = glam::DMat3::IDENTITY - glam::DMat3::from_cols(dir * dir.x, dir * dir.y, dir * dir.z);
-        a += projector;
-        b += projector * origin;
-    }
-    let mean = cameras.iter().map(|c| c.center()).sum::<DVec3>() / cameras.len() as f64;
-    if a.determinant().abs() < 1e-9 {
-        return mean;
-    }
-    a.inverse() * b
 }
 
 #[cfg(test)]

@@ -139,11 +139,7 @@ impl MeshTerm {
 
     /// The loss terms summed since the last call (which restarts the sum).
     pub fn take_terms(&self) -> Result<LossTerms, TrainError> {
-        let terms = LossTerms::from_floats(&self.terms.read()?);
-        let mut rec = Recorder::new(&self.ctx)?;
-        rec.fill_buffer(&self.terms, 0);
-        rec.submit_and_wait()?;
-        Ok(terms)
+        Ok(LossTerms::take(&self.terms)?)
     }
 
     /// The mesh render of `params` from `camera` (RGB over `background`, clamped to [0, 1]).

@@ -168,11 +168,7 @@ impl Trainer {
 
     /// The loss terms summed since the last call (which restarts the sum).
     pub fn take_terms(&self) -> Result<LossTerms, TrainError> {
-        let terms = LossTerms::from_floats(&self.terms.read()?);
-        let mut rec = Recorder::new(&self.ctx)?;
-        rec.fill_buffer(&self.terms, 0);
-        rec.submit_and_wait()?;
-        Ok(terms)
+        Ok(LossTerms::take(&self.terms)?)
     }
 
     /// Keeps a GPU copy of the current parameters, what [`Self::last_good_scene`] returns.
@@ -207,8 +203,10 @@ impl Trainer {
     pub fn replace(&mut self, scene: &GaussianScene, old_of_new: &[u32]) -> Result<(), TrainError> {
         scene.check().map_err(crate::splat::SplatError::from)?;
         self.adam.remap(old_of_new)?;
+        // The splatter's capacity follows the Gaussian count (intersections per Gaussian), so
+        // the views need not be rendered again here.
         self.state = GaussianState::new(&self.ctx, scene)?;
-        self.size_for_views()
+        Ok(())
     }
 
     /// Renders the current (or checkpointed) Gaussians from `camera`: RGB per pixel in [0, 1].

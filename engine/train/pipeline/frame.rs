@@ -4,14 +4,14 @@
 //! previous frame) — then Adam. Frame 0 also densifies and prunes through the topology.
 
 use super::config::TrainConfig;
-use crate::eval::{psnr, ssim};
+use crate::eval::psnr;
 use crate::gpu::{GpuContext, Recorder};
 use crate::optim::{AdamParams, LearningRates};
 use crate::regularize::{Losses, Neighbourhoods, Regularizers, Temporal};
 use crate::rng::SplitMix64;
 use crate::splat::{GaussianBuffers, GaussianScene, RenderSettings};
 use crate::topology::{compose, densify, face_scores, prune, DensifyConfig, ManifoldMesh, PruneConfig};
-use crate::train::fit::{add_times, learning_rates, scene_extent, shuffled};
+use crate::train::fit::{self, add_times, learning_rates, scene_extent, shuffled};
 use crate::train::mesh_term::MeshTerm;
 use crate::train::{Trainer, TrainError, ViewTarget};
 use std::collections::BTreeMap;
@@ -199,14 +199,10 @@ fn covered_pixels(views: &[ViewTarget]) -> usize {
 
 /// Mean PSNR and SSIM of the Gaussian renders and PSNR of the mesh renders over `views`.
 fn evaluate(trainer: &mut Trainer, mesh_term: &MeshTerm, views: &[ViewTarget], settings: &RenderSettings) -> Result<(f64, f64, f64), TrainError> {
-    let (mut gs, mut gs_ssim, mut mesh) = (0.0, 0.0, 0.0);
+    let (gs, gs_ssim, _) = fit::evaluate(trainer, views, settings, false)?;
+    let mut mesh = 0.0;
     for v in views {
-        let target = v.rgb();
-        let render = trainer.render(&v.camera, settings, false)?;
-        gs += psnr(&render, &target)?.min(100.0);
-        gs_ssim += ssim(&render, &target, v.camera.width as usize, v.camera.height as usize, 3)?;
-        mesh += psnr(&mesh_term.render(trainer.params(), &v.camera, settings.background)?, &target)?.min(100.0);
+        mesh += psnr(&mesh_term.render(trainer.params(), &v.camera, settings.background)?, &v.rgb())?.min(100.0);
     }
-    let n = views.len().max(1) as f64;
-    Ok((gs / n, gs_ssim / n, mesh / n))
+    Ok((gs, gs_ssim, mesh / views.len().max(1) as f64))
 }
