@@ -1,11 +1,12 @@
 //! Stable LSD radix sort of (key, u32 value) pairs, 8 bits per pass, sorting only the low
 //! `bits` of each key. Each pass: per-tile digit counts, an exclusive scan of those counts
 //! (digit-major, so it yields every (digit, tile) its output start), and a stable scatter.
-//! Passes ping-pong between the caller's buffers and scratch buffers owned by the sorter.
+//! Passes ping-pong between the caller's buffers and scratch buffers owned by the sorter; on
+//! CPU devices the scratch holds key-value records (see shaders/sort/radix_lanes_common.glsl).
 
 use super::scan::PrefixScan;
 use super::{RadixTuning, RadixVariant};
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes, PipelineDesc, Recorder};
+use crate::gpu::{BufferBinding, ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes, PipelineDesc, Recorder};
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -48,24 +49,39 @@ struct RadixParams {
     tile_count: u32,
 }
 
+/// The variant's kernels and scratch memory.
+enum Passes<K: RadixKey> {
+    /// Keys and values ping-pong between the caller's buffers and a scratch copy.
+    Subgroups { histogram: ComputePipeline, scatter: ComputePipeline, scratch_keys: GpuBuffer<K>, scratch_values: GpuBuffer<u32> },
+    /// The first pass turns the caller's pairs into records, the last turns them back, the
+    /// passes between ping-pong records. Kernels are indexed by [`lanes_kernels`].
+    Lanes { histograms: [ComputePipeline; 2], scatters: [ComputePipeline; 3], run_counts: GpuBuffer<u32>, records: [GpuBuffer<u32>; 2] },
+}
+
 pub struct RadixSort<K: RadixKey> {
     tuning: RadixTuning,
-    histogram: ComputePipeline,
-    scatter: ComputePipeline,
+    passes: Passes<K>,
     scan: PrefixScan,
     capacity: usize,
     tile_counts: GpuBuffer<u32>,
-    /// Digit counts per invocation run ([`RadixVariant::Lanes`] only).
-    run_counts: Option<GpuBuffer<u32>>,
-    scratch_keys: GpuBuffer<K>,
-    scratch_values: GpuBuffer<u32>,
 }
 
 impl<K: RadixKey> RadixSort<K> {
+    /// 32-bit words of one record of the CPU variant: the key's words and the value, padded
+    /// to whole 64-bit words.
+    const RECORD_WORDS: usize = 2 * K::WORDS as usize;
+
     /// A sorter for up to `capacity` pairs, tuned for the device. Scratch memory: one more
-    /// copy of keys and values, plus 256 counts per tile (and per run on CPU devices).
+    /// copy of keys and values, plus 256 counts per tile; on CPU devices two copies as records
+    /// and 256 counts per run, unless records that large exceed a buffer's range, when the
+    /// GPU variant runs instead.
     pub fn new(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<Self> {
-        Self::with_tuning(ctx, capacity, RadixTuning::for_device(ctx))
+        let mut tuning = RadixTuning::for_device(ctx);
+        let record_bytes = (capacity * Self::RECORD_WORDS * 4) as u64;
+        if tuning.variant() == RadixVariant::Lanes && record_bytes > ctx.limits().max_storage_buffer_range {
+            tuning = RadixTuning::subgroups(ctx);
+        }
+        Self::with_tuning(ctx, capacity, tuning)
     }
 
     /// A sorter with an explicit tuning, e.g. [`RadixTuning::subgroups`] on a CPU device.
@@ -80,37 +96,56 @@ impl<K: RadixKey> RadixSort<K> {
                 limit_name: "maxComputeSharedMemorySize",
             });
         }
-        // Scratch first: an impossible capacity fails here, before any size arithmetic.
-        let scratch_keys = GpuBuffer::new(ctx, "radix scratch keys", capacity)?;
-        let scratch_values = GpuBuffer::new(ctx, "radix scratch values", capacity)?;
         let tiles = capacity.div_ceil(tuning.tile_len());
-        let specialization = [tuning.workgroup_size(), limits.subgroup_size, tuning.keys_per_thread(), K::WORDS];
-        let pipeline = |name, spirv, bindings| {
-            let push_constant_bytes = size_of::<RadixParams>() as u32;
-            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes, specialization: &specialization })
-        };
-        let (histogram, scatter, run_counts) = match tuning.variant() {
-            RadixVariant::Subgroups => (
-                pipeline("radix_histogram", shaders::SORT_RADIX_HISTOGRAM, 2)?,
-                pipeline("radix_scatter", shaders::SORT_RADIX_SCATTER, 5)?,
-                None,
-            ),
-            RadixVariant::Lanes => (
-                pipeline("radix_histogram_lanes", shaders::SORT_RADIX_HISTOGRAM_LANES, 3)?,
-                pipeline("radix_scatter_lanes", shaders::SORT_RADIX_SCATTER_LANES, 6)?,
-                Some(GpuBuffer::new(ctx, "radix run counts", tiles * tuning.workgroup_size() as usize * RADIX)?),
-            ),
+        let passes = match tuning.variant() {
+            RadixVariant::Subgroups => Self::subgroup_passes(ctx, capacity, tuning)?,
+            RadixVariant::Lanes => Self::lanes_passes(ctx, capacity, tuning)?,
         };
         Ok(Self {
             tuning,
-            histogram,
-            scatter,
+            passes,
             scan: PrefixScan::new(ctx, tiles * RADIX)?,
             capacity,
             tile_counts: GpuBuffer::new(ctx, "radix tile counts", tiles * RADIX)?,
-            run_counts,
+        })
+    }
+
+    /// A sort kernel; `records` (does the pass read records, write records) are specialization
+    /// constants 4 and 5, which only the CPU variant reads.
+    fn pipeline(ctx: &Arc<GpuContext>, tuning: RadixTuning, name: &'static str, spirv: &[u8], bindings: u32, records: [u32; 2]) -> GpuResult<ComputePipeline> {
+        let specialization = [tuning.workgroup_size(), ctx.limits().subgroup_size, tuning.keys_per_thread(), K::WORDS, records[0], records[1]];
+        let push_constant_bytes = size_of::<RadixParams>() as u32;
+        ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes, specialization: &specialization })
+    }
+
+    fn subgroup_passes(ctx: &Arc<GpuContext>, capacity: usize, tuning: RadixTuning) -> GpuResult<Passes<K>> {
+        // Scratch first: an impossible capacity fails here, before any pipeline is built.
+        let scratch_keys = GpuBuffer::new(ctx, "radix scratch keys", capacity)?;
+        let scratch_values = GpuBuffer::new(ctx, "radix scratch values", capacity)?;
+        Ok(Passes::Subgroups {
+            histogram: Self::pipeline(ctx, tuning, "radix_histogram", shaders::SORT_RADIX_HISTOGRAM, 2, [0, 0])?,
+            scatter: Self::pipeline(ctx, tuning, "radix_scatter", shaders::SORT_RADIX_SCATTER, 5, [0, 0])?,
             scratch_keys,
             scratch_values,
+        })
+    }
+
+    fn lanes_passes(ctx: &Arc<GpuContext>, capacity: usize, tuning: RadixTuning) -> GpuResult<Passes<K>> {
+        let record_words = capacity.checked_mul(Self::RECORD_WORDS).ok_or(GpuError::LimitExceeded {
+            what: "radix sort records".into(),
+            count: capacity as u64,
+            limit: usize::MAX as u64 / Self::RECORD_WORDS as u64,
+            limit_name: "address space",
+        })?;
+        let records = [GpuBuffer::new(ctx, "radix records A", record_words)?, GpuBuffer::new(ctx, "radix records B", record_words)?];
+        let runs = capacity.div_ceil(tuning.tile_len()) * tuning.workgroup_size() as usize;
+        let histogram = |records_in| Self::pipeline(ctx, tuning, "radix_histogram_lanes", shaders::SORT_RADIX_HISTOGRAM_LANES, 4, [records_in, 0]);
+        let scatter = |records_in, records_out| Self::pipeline(ctx, tuning, "radix_scatter_lanes", shaders::SORT_RADIX_SCATTER_LANES, 6, [records_in, records_out]);
+        Ok(Passes::Lanes {
+            histograms: [histogram(0)?, histogram(1)?],
+            scatters: [scatter(0, 1)?, scatter(1, 1)?, scatter(1, 0)?],
+            run_counts: GpuBuffer::new(ctx, "radix run counts", runs * RADIX)?,
+            records,
         })
     }
 
@@ -118,7 +153,7 @@ impl<K: RadixKey> RadixSort<K> {
         self.capacity
     }
 
-    /// Number of passes for `bits` significant bits.
+    /// Number of 8-bit digit passes for `bits` significant bits.
     pub fn passes(bits: u32) -> u32 {
         bits.min(K::BITS).div_ceil(RADIX_BITS)
     }
@@ -138,42 +173,59 @@ impl<K: RadixKey> RadixSort<K> {
             return Ok(());
         }
         let tile_count = len.div_ceil(self.tuning.tile_len());
-        let buffers = [(keys, values), (&self.scratch_keys, &self.scratch_values)];
         recorder.begin_pass("radix sort");
-        for pass in 0..passes {
-            let (keys_in, values_in) = buffers[(pass % 2) as usize];
-            let (keys_out, values_out) = buffers[((pass + 1) % 2) as usize];
-            let low = pass * RADIX_BITS;
-            let params = RadixParams {
-                len: len as u32,
-                word: low / 32,
-                shift: low % 32,
-                digit_bits: (bits - low).min(RADIX_BITS),
-                tile_count: tile_count as u32,
-            };
-            let counts_len = tile_count << params.digit_bits;
-            // The Lanes kernels also read and write the per-run counts, after the tile counts.
-            let runs = self.run_counts.as_ref().map(|r| r.binding());
-            let counts = self.tile_counts.binding();
-            let histogram_bindings: Vec<_> = [keys_in.binding(), counts].into_iter().chain(runs).collect();
-            let scatter_bindings: Vec<_> = [keys_in.binding(), values_in.binding(), counts]
-                .into_iter()
-                .chain(runs)
-                .chain([keys_out.binding(), values_out.binding()])
-                .collect();
-            recorder.begin_pass("radix histogram");
-            recorder.dispatch_1d(&self.histogram, &histogram_bindings, &params, tile_count as u64)?;
-            recorder.end_pass();
-            self.scan.record(recorder, &self.tile_counts, counts_len)?;
-            recorder.begin_pass("radix scatter");
-            recorder.dispatch_1d(&self.scatter, &scatter_bindings, &params, tile_count as u64)?;
-            recorder.end_pass();
+        match &self.passes {
+            Passes::Subgroups { histogram, scatter, scratch_keys, scratch_values } => {
+                let buffers = [(keys.binding(), values.binding()), (scratch_keys.binding(), scratch_values.binding())];
+                for pass in 0..passes {
+                    let (input, output) = (buffers[(pass % 2) as usize], buffers[((pass + 1) % 2) as usize]);
+                    let params = Self::pass_params(len, tile_count, bits, pass);
+                    let counts = self.tile_counts.binding();
+                    let histogram_io = [input.0, counts];
+                    let scatter_io = [input.0, input.1, counts, output.0, output.1];
+                    self.record_pass(recorder, [(histogram, &histogram_io), (scatter, &scatter_io)], &params)?;
+                }
+                if passes % 2 == 1 {
+                    // An odd pass count leaves the result in scratch: bring it home.
+                    recorder.copy_buffer(scratch_keys, keys, len);
+                    recorder.copy_buffer(scratch_values, values, len);
+                }
+            }
+            Passes::Lanes { histograms, scatters, run_counts, records } => {
+                // A pass over zero bits moves the records home unchanged when one pass sorts.
+                let passes = passes.max(2);
+                for pass in 0..passes {
+                    let (first, last) = (pass == 0, pass + 1 == passes);
+                    let input = if first { [keys.binding(), values.binding()] } else { [records[(pass as usize + 1) % 2].binding(); 2] };
+                    let output = if last { [keys.binding(), values.binding()] } else { [records[pass as usize % 2].binding(); 2] };
+                    let (counts, runs) = (self.tile_counts.binding(), run_counts.binding());
+                    let histogram_io = [input[0], input[1], counts, runs];
+                    let scatter_io = [input[0], input[1], counts, runs, output[0], output[1]];
+                    let (histogram, scatter) = lanes_kernels(first, last);
+                    let params = Self::pass_params(len, tile_count, bits, pass);
+                    self.record_pass(recorder, [(&histograms[histogram], &histogram_io), (&scatters[scatter], &scatter_io)], &params)?;
+                }
+            }
         }
-        if passes % 2 == 1 {
-            // An odd pass count leaves the result in scratch: bring it home.
-            recorder.copy_buffer(&self.scratch_keys, keys, len);
-            recorder.copy_buffer(&self.scratch_values, values, len);
-        }
+        recorder.end_pass();
+        Ok(())
+    }
+
+    fn pass_params(len: usize, tile_count: usize, bits: u32, pass: u32) -> RadixParams {
+        let low = pass * RADIX_BITS;
+        RadixParams { len: len as u32, word: low / 32, shift: low % 32, digit_bits: bits.saturating_sub(low).min(RADIX_BITS), tile_count: tile_count as u32 }
+    }
+
+    /// One pass: the histogram, the scan of its tile counts, the scatter, each kernel with
+    /// its bindings.
+    fn record_pass<'a>(&'a self, recorder: &mut Recorder<'a>, [histogram, scatter]: [(&'a ComputePipeline, &[BufferBinding<'a>]); 2], params: &RadixParams) -> GpuResult<()> {
+        let tile_count = params.tile_count as u64;
+        recorder.begin_pass("radix histogram");
+        recorder.dispatch_1d(histogram.0, histogram.1, params, tile_count)?;
+        recorder.end_pass();
+        self.scan.record(recorder, &self.tile_counts, (params.tile_count as usize) << params.digit_bits)?;
+        recorder.begin_pass("radix scatter");
+        recorder.dispatch_1d(scatter.0, scatter.1, params, tile_count)?;
         recorder.end_pass();
         Ok(())
     }
@@ -183,5 +235,17 @@ impl<K: RadixKey> RadixSort<K> {
         let mut recorder = Recorder::new(keys.context())?;
         self.record(&mut recorder, keys, values, len, bits)?;
         recorder.submit_and_wait()
+    }
+}
+
+/// Indices into `Passes::Lanes` of a pass's histogram (reads pairs, reads records) and scatter
+/// (pairs to records, records to records, records to pairs); the CPU variant always runs two
+/// passes or more.
+#[inline]
+fn lanes_kernels(first: bool, last: bool) -> (usize, usize) {
+    match (first, last) {
+        (true, _) => (0, 0),
+        (false, false) => (1, 1),
+        (false, true) => (1, 2),
     }
 }

@@ -11,7 +11,8 @@ layout(constant_id = 0) const uint WORKGROUP_SIZE = 128;
 layout(constant_id = 1) const uint SUBGROUP_SIZE = 32;
 layout(constant_id = 2) const uint KEYS_PER_THREAD = 16;
 layout(constant_id = 3) const uint KEY_WORDS = 1; // 32-bit words per key: 1 (u32) or 2 (u64)
-const uint RADIX = 256u;
+const uint RADIX_BITS = 8u;
+const uint RADIX = 1u << RADIX_BITS;
 const uint MAX_SUBGROUPS = WORKGROUP_SIZE / SUBGROUP_SIZE;
 const uint TILE_LEN = WORKGROUP_SIZE * KEYS_PER_THREAD;
 

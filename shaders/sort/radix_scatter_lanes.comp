@@ -1,28 +1,43 @@
 #version 460
 // Radix sort, step 3 of 3 per pass, CPU-device variant (see radix_lanes_common.glsl): every
-// invocation walks its run in order and writes each key to its counter for the key's digit,
+// invocation walks its run in order and writes each pair to its counter for the pair's digit,
 // which starts at the tile's scanned offset plus the counts of the earlier runs. Stable.
 #include "radix_lanes_common.glsl"
 
-// Inputs twice: 16-byte vectors for whole groups of 4 keys, words for the rest.
-layout(std430, binding = 0) readonly buffer KeyVectors { uvec4 key_vectors[]; };
-layout(std430, binding = 0) readonly buffer KeyWords { uint key_words[]; };
-layout(std430, binding = 1) readonly buffer ValueVectors { uvec4 value_vectors[]; };
-layout(std430, binding = 1) readonly buffer ValueWords { uint value_words[]; };
+// 1: the pass writes records; 0: the caller's separate keys and values (the last pass).
+layout(constant_id = 5) const uint RECORDS_OUT = 0;
+
 layout(std430, binding = 2) readonly buffer TileOffsets { uint tile_offsets[]; };
 layout(std430, binding = 3) readonly buffer RunCounts { uint run_counts[]; };
-layout(std430, binding = 4) writeonly buffer KeysOut { uint keys_out[]; };
+// The output: records (binding 4, binding 5 unused), or keys (binding 4) and values (binding 5).
+layout(std430, binding = 4) writeonly buffer KeyWordsOut { uint key_words_out[]; };
+layout(std430, binding = 4) writeonly buffer WideOut { uint64_t wide_out[]; }; // 64-bit keys or records
 layout(std430, binding = 5) writeonly buffer ValuesOut { uint values_out[]; };
 
-void place(uint row, uint lo, uint hi, uint value) {
-    uint digit = digit_of(params.word == 0u ? lo : hi);
-    uint dst = run_digits[row + digit];
-    run_digits[row + digit] = dst + 1u;
-    keys_out[dst * KEY_WORDS] = lo;
-    if (KEY_WORDS == 2u) {
-        keys_out[dst * 2u + 1u] = hi;
+// This invocation's next output position per digit; private for the reason in the histogram.
+uint next_position[RADIX];
+
+void store(uint dst, Pair p) {
+    if (RECORDS_OUT == 1u) {
+        wide_out[dst * KEY_WORDS] = record_word(p, 0u);
+        if (KEY_WORDS == 2u) {
+            wide_out[dst * 2u + 1u] = record_word(p, 1u);
+        }
+        return;
     }
-    values_out[dst] = value;
+    if (KEY_WORDS == 1u) {
+        key_words_out[dst] = p.lo;
+    } else {
+        wide_out[dst] = packUint2x32(uvec2(p.lo, p.hi));
+    }
+    values_out[dst] = p.value;
+}
+
+void place(Pair p) {
+    uint digit = digit_of_pair(p);
+    uint dst = next_position[digit];
+    next_position[digit] = dst + 1u;
+    store(dst, p);
 }
 
 void main() {
@@ -41,25 +56,17 @@ void main() {
     }
     barrier();
     uint row = gl_LocalInvocationID.x * RADIX;
-    uvec3 range = run_range(tile);
-    for (uint i = range.x; i < range.z; i += 4u) {
-        uvec4 v = value_vectors[i / 4u];
-        if (KEY_WORDS == 1u) {
-            uvec4 k = key_vectors[i / 4u];
-            place(row, k.x, 0u, v.x);
-            place(row, k.y, 0u, v.y);
-            place(row, k.z, 0u, v.z);
-            place(row, k.w, 0u, v.w);
-        } else {
-            uvec4 a = key_vectors[i / 2u];
-            uvec4 b = key_vectors[i / 2u + 1u];
-            place(row, a.x, a.y, v.x);
-            place(row, a.z, a.w, v.y);
-            place(row, b.x, b.y, v.z);
-            place(row, b.z, b.w, v.w);
-        }
+    for (uint d = 0u; d < digits; d++) {
+        next_position[d] = run_digits[row + d];
     }
-    for (uint i = range.z; i < range.y; i++) {
-        place(row, key_words[i * KEY_WORDS], KEY_WORDS == 2u ? key_words[i * 2u + 1u] : 0u, value_words[i]);
+    uvec3 range = run_range(tile);
+    for (uint i = range.x; i < range.z; i += 2u) {
+        Pair a, b;
+        load_couple(i, a, b);
+        place(a);
+        place(b);
+    }
+    if (range.z < range.y) {
+        place(load_one(range.z));
     }
 }
