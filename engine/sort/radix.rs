@@ -77,7 +77,7 @@ impl<K: RadixKey> RadixSort<K> {
     /// GPU variant runs instead.
     pub fn new(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<Self> {
         let mut tuning = RadixTuning::for_device(ctx);
-        let record_bytes = (capacity * Self::RECORD_WORDS * 4) as u64;
+        let record_bytes = (capacity as u64).saturating_mul(Self::RECORD_WORDS as u64 * 4);
         if tuning.variant() == RadixVariant::Lanes && record_bytes > ctx.limits().max_storage_buffer_range {
             tuning = RadixTuning::subgroups(ctx);
         }
