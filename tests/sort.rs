@@ -33,10 +33,12 @@ fn scan_wraps_like_u32() {
     assert_eq!(gpu_scan(&gpu, &data), exclusive_scan_cpu(&data));
 }
 
-/// Both kernel variants: the device's own (the CPU one on lavapipe) and the GPU one.
+/// Every kernel variant and path: the device's own (the CPU one on lavapipe, which takes the
+/// bucket path where the keys allow), the CPU one held to its LSD passes, and the GPU one.
 fn tunings(gpu: &common::TestGpu) -> Vec<RadixTuning> {
     let mut tunings = vec![RadixTuning::for_device(gpu.ctx())];
     if tunings[0] != RadixTuning::subgroups(gpu.ctx()) {
+        tunings.push(tunings[0].with_max_bucket_len(0));
         tunings.push(RadixTuning::subgroups(gpu.ctx()));
     }
     tunings
@@ -46,7 +48,7 @@ fn tunings(gpu: &common::TestGpu) -> Vec<RadixTuning> {
 /// of the masked keys, and values show the sort is stable (equal keys keep their input order).
 fn check_sort<K: RadixKey + std::fmt::Debug>(gpu: &common::TestGpu, keys: &[K], bits: u32, what: &str) {
     for tuning in tunings(gpu) {
-        check_sort_with(gpu, keys, bits, &format!("{what} ({:?})", tuning.variant()), tuning);
+        check_sort_with(gpu, keys, bits, &format!("{what} ({tuning:?})"), tuning);
     }
 }
 
@@ -117,6 +119,41 @@ fn sort_u64_keys() {
 fn sort_millions_non_power_of_two() {
     let gpu = common::gpu();
     check_sort(&gpu, &random_keys(3_000_017, 11, |x| x as u32), 32, "millions");
+}
+
+/// Keys whose top digit (the `bits` - 8 bits up) is 0 for `heavy` of them and spread over the
+/// other 255 values for the rest, in random order.
+fn one_heavy_bucket<K: RadixKey>(heavy: usize, rest: usize, bits: u32, seed: u64, make: impl Fn(u64) -> K) -> Vec<K> {
+    let mut rng = common::rng(seed);
+    let low_mask = (1u64 << (bits - 8)) - 1;
+    let mut keys: Vec<u64> = (0..heavy).map(|_| rng.next_u64() & low_mask).collect();
+    keys.extend((0..rest).map(|_| ((1 + rng.next_u64() % 255) << (bits - 8)) | (rng.next_u64() & low_mask)));
+    for i in (1..keys.len()).rev() {
+        keys.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
+    }
+    keys.into_iter().map(make).collect()
+}
+
+/// The bucket path sorts a bucket of exactly its limit in one invocation; lavapipe would cut
+/// the loops short (silently) if the limit ignored its loop budget. One pair more sends the
+/// sort down the LSD passes.
+#[test]
+fn sort_bucket_at_its_limit() {
+    let gpu = common::gpu();
+    let tuning = RadixTuning::for_device(gpu.ctx());
+    let u32_limit = RadixSort::<u32>::with_tuning(gpu.ctx(), 1, tuning).unwrap().bucket_limit(32);
+    let u64_limit = RadixSort::<u64>::with_tuning(gpu.ctx(), 1, tuning).unwrap().bucket_limit(64);
+    if u32_limit == 0 {
+        return; // a GPU: no bucket path
+    }
+    for heavy in [u32_limit, u32_limit + 1] {
+        let keys = one_heavy_bucket(heavy, 60_000, 32, heavy as u64, |x| x as u32);
+        check_sort_with(&gpu, &keys, 32, &format!("u32 bucket of {heavy}, limit {u32_limit}"), tuning);
+    }
+    for heavy in [u64_limit, u64_limit + 1] {
+        let keys = one_heavy_bucket(heavy, 30_000, 64, heavy as u64, |x| x);
+        check_sort_with(&gpu, &keys, 64, &format!("u64 bucket of {heavy}, limit {u64_limit}"), tuning);
+    }
 }
 
 #[test]

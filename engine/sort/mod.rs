@@ -17,7 +17,8 @@ pub enum RadixVariant {
     /// each subgroup and holds them in registers until the subgroups' offsets are known.
     Subgroups,
     /// CPU devices (lavapipe): each invocation owns a contiguous run of the tile and a private
-    /// row of digit counters, so there is no cross-lane matching and no atomic.
+    /// row of digit counters, so there is no cross-lane matching and no atomic. Sorts of more
+    /// than 8 bits take the bucket path where the keys allow (see `radix.rs`).
     Lanes,
 }
 
@@ -27,6 +28,8 @@ pub struct RadixTuning {
     variant: RadixVariant,
     workgroup_size: u32,
     keys_per_thread: u32,
+    /// Cap on the bucket path's bucket length (CPU variant), under its own loop-budget limit.
+    max_bucket_len: u32,
 }
 
 impl RadixTuning {
@@ -36,7 +39,8 @@ impl RadixTuning {
     pub fn for_device(ctx: &GpuContext) -> Self {
         let limits = ctx.limits();
         if ctx.info().kind == ash::vk::PhysicalDeviceType::CPU {
-            return Self { variant: RadixVariant::Lanes, workgroup_size: limits.subgroup_size.clamp(4, 16), keys_per_thread: 4096 };
+            let workgroup_size = limits.subgroup_size.clamp(4, 16);
+            return Self { variant: RadixVariant::Lanes, workgroup_size, keys_per_thread: 4096, max_bucket_len: u32::MAX };
         }
         Self::subgroups(ctx)
     }
@@ -45,7 +49,13 @@ impl RadixTuning {
     pub fn subgroups(ctx: &GpuContext) -> Self {
         let limits = ctx.limits();
         let workgroup_size = (limits.subgroup_size * 16).min(256).min(limits.max_workgroup_invocations);
-        Self { variant: RadixVariant::Subgroups, workgroup_size, keys_per_thread: 16 }
+        Self { variant: RadixVariant::Subgroups, workgroup_size, keys_per_thread: 16, max_bucket_len: 0 }
+    }
+
+    /// This tuning with the CPU variant's buckets capped at `len` pairs; 0 makes every sort take
+    /// the LSD passes. Tests use it to run both paths on the same keys.
+    pub fn with_max_bucket_len(self, len: u32) -> Self {
+        Self { max_bucket_len: len, ..self }
     }
 
     pub fn variant(&self) -> RadixVariant {
@@ -58,6 +68,10 @@ impl RadixTuning {
 
     pub(crate) fn keys_per_thread(&self) -> u32 {
         self.keys_per_thread
+    }
+
+    pub(crate) fn max_bucket_len(&self) -> u32 {
+        self.max_bucket_len
     }
 
     pub fn tile_len(&self) -> usize {

@@ -3,6 +3,12 @@
 //! (digit-major, so it yields every (digit, tile) its output start), and a stable scatter.
 //! Passes ping-pong between the caller's buffers and scratch buffers owned by the sorter; on
 //! CPU devices the scratch holds key-value records (see shaders/sort/radix_lanes_common.glsl).
+//!
+//! CPU devices sort more than 8 bits by the bucket path when they can: one pass on the top
+//! digit, then each of its 256 buckets sorted alone by the low bits while it stays in cache
+//! (shaders/sort/radix_bucket_lanes.comp). A kernel on the device checks that every bucket
+//! fits (radix_plan_lanes.comp); when one does not, the LSD passes run instead, so skewed
+//! keys cost one histogram pass more than LSD alone.
 
 use super::scan::PrefixScan;
 use super::{RadixTuning, RadixVariant};
@@ -47,6 +53,52 @@ struct RadixParams {
     shift: u32,
     digit_bits: u32,
     tile_count: u32,
+    bits: u32,
+    max_bucket_len: u32,
+    gate: u32,
+}
+
+/// Which path of the CPU variant's sort a kernel belongs to (`GATE_*` in
+/// shaders/sort/radix_pair.glsl); the plan kernel chooses one on the device.
+#[derive(Clone, Copy)]
+enum Gate {
+    Always = 0,
+    BucketPath = 1,
+    LsdPath = 2,
+}
+
+impl RadixParams {
+    fn new(len: usize, tile_count: usize, bits: u32) -> Self {
+        let (len, tile_count) = (len as u32, tile_count as u32);
+        Self { len, word: 0, shift: 0, digit_bits: 0, tile_count, bits, max_bucket_len: 0, gate: Gate::Always as u32 }
+    }
+
+    /// The pass over the `digit_bits` key bits from bit `low`.
+    fn digit(self, low: u32, digit_bits: u32) -> Self {
+        Self { word: low / 32, shift: low % 32, digit_bits, ..self }
+    }
+
+    /// LSD pass `pass`: the 8-bit digit from bit 8 * pass, narrower at the top of `bits`.
+    fn lsd_pass(self, pass: u32) -> Self {
+        let low = pass * RADIX_BITS;
+        self.digit(low, self.bits.saturating_sub(low).min(RADIX_BITS))
+    }
+
+    fn gated(self, gate: Gate) -> Self {
+        Self { gate: gate as u32, ..self }
+    }
+}
+
+/// Longest bucket the bucket path sorts in one invocation with `local_passes` passes under the
+/// top digit. lavapipe ends an invocation's loops after 65535 iterations in all; the bucket
+/// kernel loops over the bucket `local_passes + 1` times, unrolled by 4, and 256 times per pass
+/// over the digits. The budget keeps a margin under 65535.
+fn bucket_len_for_loop_budget(local_passes: u32) -> u32 {
+    const LOOP_BUDGET: u32 = 60_000;
+    const UNROLL: u32 = 4;
+    let loops_over_bucket = local_passes + 1;
+    let fixed = RADIX as u32 * (1 + local_passes) + 16 * local_passes + UNROLL * loops_over_bucket;
+    LOOP_BUDGET.saturating_sub(fixed) / loops_over_bucket * UNROLL
 }
 
 /// The variant's kernels and scratch memory.
@@ -54,8 +106,17 @@ enum Passes<K: RadixKey> {
     /// Keys and values ping-pong between the caller's buffers and a scratch copy.
     Subgroups { histogram: ComputePipeline, scatter: ComputePipeline, scratch_keys: GpuBuffer<K>, scratch_values: GpuBuffer<u32> },
     /// The first pass turns the caller's pairs into records, the last turns them back, the
-    /// passes between ping-pong records. Kernels are indexed by [`lanes_kernels`].
-    Lanes { histograms: [ComputePipeline; 2], scatters: [ComputePipeline; 3], run_counts: GpuBuffer<u32>, records: [GpuBuffer<u32>; 2] },
+    /// passes between ping-pong records. Kernels are indexed by [`lanes_kernels`]; `plan` and
+    /// `buckets` serve the bucket path, `plan_flag` holds its choice.
+    Lanes {
+        histograms: [ComputePipeline; 2],
+        scatters: [ComputePipeline; 3],
+        plan: ComputePipeline,
+        buckets: ComputePipeline,
+        run_counts: GpuBuffer<u32>,
+        records: [GpuBuffer<u32>; 2],
+        plan_flag: GpuBuffer<u32>,
+    },
 }
 
 pub struct RadixSort<K: RadixKey> {
@@ -139,13 +200,16 @@ impl<K: RadixKey> RadixSort<K> {
         })?;
         let records = [GpuBuffer::new(ctx, "radix records A", record_words)?, GpuBuffer::new(ctx, "radix records B", record_words)?];
         let runs = capacity.div_ceil(tuning.tile_len()) * tuning.workgroup_size() as usize;
-        let histogram = |records_in| Self::pipeline(ctx, tuning, "radix_histogram_lanes", shaders::SORT_RADIX_HISTOGRAM_LANES, 4, [records_in, 0]);
-        let scatter = |records_in, records_out| Self::pipeline(ctx, tuning, "radix_scatter_lanes", shaders::SORT_RADIX_SCATTER_LANES, 6, [records_in, records_out]);
+        let histogram = |records_in| Self::pipeline(ctx, tuning, "radix_histogram_lanes", shaders::SORT_RADIX_HISTOGRAM_LANES, 5, [records_in, 0]);
+        let scatter = |records_in, records_out| Self::pipeline(ctx, tuning, "radix_scatter_lanes", shaders::SORT_RADIX_SCATTER_LANES, 7, [records_in, records_out]);
         Ok(Passes::Lanes {
             histograms: [histogram(0)?, histogram(1)?],
             scatters: [scatter(0, 1)?, scatter(1, 1)?, scatter(1, 0)?],
+            plan: Self::pipeline(ctx, tuning, "radix_plan_lanes", shaders::SORT_RADIX_PLAN_LANES, 2, [0, 0])?,
+            buckets: Self::pipeline(ctx, tuning, "radix_bucket_lanes", shaders::SORT_RADIX_BUCKET_LANES, 6, [0, 0])?,
             run_counts: GpuBuffer::new(ctx, "radix run counts", runs * RADIX)?,
             records,
+            plan_flag: GpuBuffer::new(ctx, "radix plan", 1)?,
         })
     }
 
@@ -156,6 +220,17 @@ impl<K: RadixKey> RadixSort<K> {
     /// Number of 8-bit digit passes for `bits` significant bits.
     pub fn passes(bits: u32) -> u32 {
         bits.min(K::BITS).div_ceil(RADIX_BITS)
+    }
+
+    /// The largest top-digit bucket the bucket path sorts for a sort of `bits` bits; 0 where
+    /// it is not used (GPUs, 8 bits or fewer). A larger bucket sends the sort down the LSD
+    /// passes.
+    pub fn bucket_limit(&self, bits: u32) -> usize {
+        let passes = Self::passes(bits);
+        if self.tuning.variant() != RadixVariant::Lanes || passes < 2 {
+            return 0;
+        }
+        bucket_len_for_loop_budget(passes - 1).min(self.tuning.max_bucket_len()) as usize
     }
 
     /// Records a stable sort of the first `len` pairs of `keys` and `values` by the low `bits`
@@ -173,17 +248,17 @@ impl<K: RadixKey> RadixSort<K> {
             return Ok(());
         }
         let tile_count = len.div_ceil(self.tuning.tile_len());
+        let base = RadixParams::new(len, tile_count, bits);
         recorder.begin_pass("radix sort");
         match &self.passes {
             Passes::Subgroups { histogram, scatter, scratch_keys, scratch_values } => {
                 let buffers = [(keys.binding(), values.binding()), (scratch_keys.binding(), scratch_values.binding())];
                 for pass in 0..passes {
                     let (input, output) = (buffers[(pass % 2) as usize], buffers[((pass + 1) % 2) as usize]);
-                    let params = Self::pass_params(len, tile_count, bits, pass);
                     let counts = self.tile_counts.binding();
                     let histogram_io = [input.0, counts];
                     let scatter_io = [input.0, input.1, counts, output.0, output.1];
-                    self.record_pass(recorder, [(histogram, &histogram_io), (scatter, &scatter_io)], &params)?;
+                    self.record_pass(recorder, [(histogram, &histogram_io), (scatter, &scatter_io)], &base.lsd_pass(pass))?;
                 }
                 if passes % 2 == 1 {
                     // An odd pass count leaves the result in scratch: bring it home.
@@ -191,18 +266,36 @@ impl<K: RadixKey> RadixSort<K> {
                     recorder.copy_buffer(scratch_values, values, len);
                 }
             }
-            Passes::Lanes { histograms, scatters, run_counts, records } => {
+            Passes::Lanes { histograms, scatters, plan, buckets, run_counts, records, plan_flag } => {
+                let (counts, runs, plan_io) = (self.tile_counts.binding(), run_counts.binding(), plan_flag.binding());
+                let lsd_gate = if passes >= 2 {
+                    // The bucket path: the top digit's histogram and scan, the plan, then (if
+                    // every bucket fits) its scatter into records A and the bucket sort.
+                    let top = RadixParams { max_bucket_len: self.bucket_limit(bits) as u32, ..base.digit(bits - RADIX_BITS, RADIX_BITS) };
+                    let top_histogram_io = [keys.binding(), values.binding(), counts, runs, plan_io];
+                    let top_scatter_io = [keys.binding(), values.binding(), counts, runs, records[0].binding(), records[0].binding(), plan_io];
+                    let bucket_io = [records[0].binding(), records[1].binding(), keys.binding(), values.binding(), counts, plan_io];
+                    self.record_counts(recorder, &histograms[0], &top_histogram_io, &top)?;
+                    recorder.dispatch_1d(plan, &[counts, plan_io], &top, 1)?;
+                    self.record_scatter(recorder, &scatters[0], &top_scatter_io, &top.gated(Gate::BucketPath))?;
+                    recorder.begin_pass("radix buckets");
+                    let bucket_groups = RADIX.div_ceil(self.tuning.workgroup_size() as usize);
+                    recorder.dispatch_1d(buckets, &bucket_io, &top.gated(Gate::BucketPath), bucket_groups as u64)?;
+                    recorder.end_pass();
+                    Gate::LsdPath
+                } else {
+                    Gate::Always
+                };
                 // A pass over zero bits moves the records home unchanged when one pass sorts.
                 let passes = passes.max(2);
                 for pass in 0..passes {
                     let (first, last) = (pass == 0, pass + 1 == passes);
                     let input = if first { [keys.binding(), values.binding()] } else { [records[(pass as usize + 1) % 2].binding(); 2] };
                     let output = if last { [keys.binding(), values.binding()] } else { [records[pass as usize % 2].binding(); 2] };
-                    let (counts, runs) = (self.tile_counts.binding(), run_counts.binding());
-                    let histogram_io = [input[0], input[1], counts, runs];
-                    let scatter_io = [input[0], input[1], counts, runs, output[0], output[1]];
+                    let histogram_io = [input[0], input[1], counts, runs, plan_io];
+                    let scatter_io = [input[0], input[1], counts, runs, output[0], output[1], plan_io];
                     let (histogram, scatter) = lanes_kernels(first, last);
-                    let params = Self::pass_params(len, tile_count, bits, pass);
+                    let params = base.lsd_pass(pass).gated(lsd_gate);
                     self.record_pass(recorder, [(&histograms[histogram], &histogram_io), (&scatters[scatter], &scatter_io)], &params)?;
                 }
             }
@@ -211,21 +304,24 @@ impl<K: RadixKey> RadixSort<K> {
         Ok(())
     }
 
-    fn pass_params(len: usize, tile_count: usize, bits: u32, pass: u32) -> RadixParams {
-        let low = pass * RADIX_BITS;
-        RadixParams { len: len as u32, word: low / 32, shift: low % 32, digit_bits: bits.saturating_sub(low).min(RADIX_BITS), tile_count: tile_count as u32 }
-    }
-
     /// One pass: the histogram, the scan of its tile counts, the scatter, each kernel with
     /// its bindings.
     fn record_pass<'a>(&'a self, recorder: &mut Recorder<'a>, [histogram, scatter]: [(&'a ComputePipeline, &[BufferBinding<'a>]); 2], params: &RadixParams) -> GpuResult<()> {
-        let tile_count = params.tile_count as u64;
+        self.record_counts(recorder, histogram.0, histogram.1, params)?;
+        self.record_scatter(recorder, scatter.0, scatter.1, params)
+    }
+
+    /// A pass's histogram and the scan that turns its tile counts into output offsets.
+    fn record_counts<'a>(&'a self, recorder: &mut Recorder<'a>, histogram: &'a ComputePipeline, io: &[BufferBinding<'a>], params: &RadixParams) -> GpuResult<()> {
         recorder.begin_pass("radix histogram");
-        recorder.dispatch_1d(histogram.0, histogram.1, params, tile_count)?;
+        recorder.dispatch_1d(histogram, io, params, params.tile_count as u64)?;
         recorder.end_pass();
-        self.scan.record(recorder, &self.tile_counts, (params.tile_count as usize) << params.digit_bits)?;
+        self.scan.record(recorder, &self.tile_counts, (params.tile_count as usize) << params.digit_bits)
+    }
+
+    fn record_scatter<'a>(&'a self, recorder: &mut Recorder<'a>, scatter: &'a ComputePipeline, io: &[BufferBinding<'a>], params: &RadixParams) -> GpuResult<()> {
         recorder.begin_pass("radix scatter");
-        recorder.dispatch_1d(scatter.0, scatter.1, params, tile_count)?;
+        recorder.dispatch_1d(scatter, io, params, params.tile_count as u64)?;
         recorder.end_pass();
         Ok(())
     }

@@ -22,6 +22,10 @@ layout(push_constant) uniform RadixParams {
     uint shift;       // digit's lowest bit within that word
     uint digit_bits;  // bits in this pass's digit (8, fewer on the last pass)
     uint tile_count;  // tiles (workgroups) in the sort
+    // Read only by the CPU-device variant (radix_lanes_common.glsl):
+    uint bits;           // significant key bits of the whole sort
+    uint max_bucket_len; // the bucket path's limit on one bucket (radix_plan_lanes.comp)
+    uint gate;           // GATE_*: which path of the sort the kernel belongs to
 } params;
 
 #include "../common/grid.glsl"

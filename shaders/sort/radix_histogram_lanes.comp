@@ -1,6 +1,7 @@
 #version 460
 // Radix sort, step 1 of 3 per pass, CPU-device variant (see radix_lanes_common.glsl): digit
 // counts per tile (digit-major, for the scan) and per invocation run (for the scatter).
+#define PLAN_BINDING 4
 #include "radix_lanes_common.glsl"
 
 layout(std430, binding = 2) writeonly buffer TileCounts { uint tile_counts[]; };
@@ -16,7 +17,7 @@ void count(Pair p) {
 
 void main() {
     uint tile = flat_workgroup_id();
-    if (tile >= params.tile_count) {
+    if (tile >= params.tile_count || !gate_open()) {
         return;
     }
     for (uint d = 0u; d < RADIX; d++) {

@@ -9,10 +9,14 @@
 // made the scatter 1.2x faster. Accesses are 64-bit: one lane-loop iteration moves two keys,
 // or a whole record of a 32-bit key.
 //
+// With a sort of more than 8 bits these kernels first run one pass on the top digit (the
+// bucket path, radix_bucket_lanes.comp); the usual LSD passes run only if a bucket is too
+// large for it (params.gate).
+//
 // Every loop is bounded by the run length: lavapipe ends an invocation's loops after 65535
 // iterations in all, so no loop may grow with the data.
-#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #include "radix_common.glsl"
+#include "radix_pair.glsl"
 
 // 1: the pass reads records; 0: it reads the caller's separate keys and values.
 layout(constant_id = 4) const uint RECORDS_IN = 0;
@@ -23,28 +27,8 @@ layout(std430, binding = 0) readonly buffer WideIn { uint64_t wide_in[]; }; // k
 layout(std430, binding = 1) readonly buffer ValueWordsIn { uint value_words_in[]; };
 layout(std430, binding = 1) readonly buffer ValueCouplesIn { uint64_t value_couples_in[]; };
 
-// One key and its value. `hi` is 0 for 32-bit keys.
-struct Pair {
-    uint lo;
-    uint hi;
-    uint value;
-};
-
-// Record i is KEY_WORDS 64-bit words: (lo, value) for 32-bit keys; (lo, hi), (value, 0) for
-// 64-bit keys.
 Pair load_record(uint i) {
-    uvec2 first = unpackUint2x32(wide_in[i * KEY_WORDS]);
-    if (KEY_WORDS == 1u) {
-        return Pair(first.x, 0u, first.y);
-    }
-    return Pair(first.x, first.y, unpackUint2x32(wide_in[i * 2u + 1u]).x);
-}
-
-uint64_t record_word(Pair p, uint w) {
-    if (KEY_WORDS == 1u) {
-        return packUint2x32(uvec2(p.lo, p.value));
-    }
-    return packUint2x32(w == 0u ? uvec2(p.lo, p.hi) : uvec2(p.value, 0u));
+    return record_from(wide_in[i * KEY_WORDS], KEY_WORDS == 2u ? wide_in[i * 2u + 1u] : 0ul);
 }
 
 // Pairs i and i + 1 (i even).
@@ -80,7 +64,16 @@ Pair load_one(uint i) {
 }
 
 uint digit_of_pair(Pair p) {
-    return digit_of(params.word == 0u ? p.lo : p.hi);
+    return digit_at(p, params.word * 32u + params.shift, params.digit_bits);
+}
+
+// The plan (radix_plan_lanes.comp): [0] is 1 when the sort takes the bucket path. Each kernel
+// defines PLAN_BINDING, its binding after its own buffers.
+layout(std430, binding = PLAN_BINDING) readonly buffer Plan { uint plan[]; };
+
+// Whether this dispatch does work, or belongs to the path the plan did not take.
+bool gate_open() {
+    return gate_open(plan[0]);
 }
 
 // Key range [begin, end) of this invocation's run of `tile`, and the end of its whole

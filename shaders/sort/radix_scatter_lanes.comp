@@ -2,6 +2,7 @@
 // Radix sort, step 3 of 3 per pass, CPU-device variant (see radix_lanes_common.glsl): every
 // invocation walks its run in order and writes each pair to its counter for the pair's digit,
 // which starts at the tile's scanned offset plus the counts of the earlier runs. Stable.
+#define PLAN_BINDING 6
 #include "radix_lanes_common.glsl"
 
 // 1: the pass writes records; 0: the caller's separate keys and values (the last pass).
@@ -42,7 +43,7 @@ void place(Pair p) {
 
 void main() {
     uint tile = flat_workgroup_id();
-    if (tile >= params.tile_count) {
+    if (tile >= params.tile_count || !gate_open()) {
         return;
     }
     uint digits = 1u << params.digit_bits;
