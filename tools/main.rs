@@ -1,6 +1,6 @@
 //! `tagsplat`: the command-line face of the engine. It parses, calls the library, prints.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
@@ -195,6 +195,9 @@ fn run(cli: Cli) -> Result<()> {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
                 print_sort_report(&report);
+            }
+            if !report.verified {
+                bail!("bench sort --n {n} --bits {bits}: the GPU result is not sorted");
             }
             Ok(())
         }

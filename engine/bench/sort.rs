@@ -38,7 +38,7 @@ pub struct SortBenchReport {
     pub bandwidth_fraction: f64,
     pub cpu_sort_ms: f64,
     pub cpu_sort_keys_per_s: f64,
-    /// The GPU result was checked to be sorted.
+    /// The GPU result was checked to be the stable sort of the input pairs.
     pub verified: bool,
 }
 
@@ -64,12 +64,14 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
     // Create the GPU side first: an impossible `n` fails here, before host memory is spent.
     let sorter = RadixSort::<K>::new(ctx, n)?;
     let mut input = GpuBuffer::<K>::new(ctx, "bench keys (input)", n)?;
+    let mut input_values = GpuBuffer::<u32>::new(ctx, "bench values (input)", n)?;
     let keys = GpuBuffer::<K>::new(ctx, "bench keys", n)?;
     let values = GpuBuffer::<u32>::new(ctx, "bench values", n)?;
 
     let mut rng = SplitMix64::new(0x5EED ^ n as u64);
     let host_keys: Vec<K> = (0..n).map(|_| make(rng.next_u64()).low_bits(bits)).collect();
     input.write(&host_keys)?;
+    input_values.write(&(0..n as u32).collect::<Vec<_>>())?;
 
     let pair_bytes = (size_of::<K>() + 4) as u64;
     let copy_bytes = (n as u64 * pair_bytes).clamp(1 << 20, ctx.limits().max_storage_buffer_range);
@@ -79,14 +81,15 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
     let mut recorder = Recorder::new(ctx)?;
     for _ in 0..repetitions + 1 {
         probe.record(&mut recorder)?;
-        recorder.copy_buffer(&input, &keys, n); // Every repetition sorts the same input.
+        // Every repetition sorts the same input.
+        recorder.copy_buffer(&input, &keys, n);
+        recorder.copy_buffer(&input_values, &values, n);
         recorder.begin_pass(SORT_PASS);
         sorter.record(&mut recorder, &keys, &values, n, bits)?;
         recorder.end_pass();
     }
     let times = recorder.submit_and_wait()?;
-    let sorted = keys.read()?;
-    let verified = sorted.windows(2).all(|w| w[0] <= w[1]);
+    let verified = is_stable_sort(&host_keys, &keys.read()?, &values.read()?);
 
     let sort_times: Vec<f64> = times.passes.iter().filter(|p| p.name == SORT_PASS).skip(1).map(|p| p.ms).collect();
     let sort_ms = super::fastest(sort_times.clone());
@@ -121,6 +124,15 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
         cpu_sort_keys_per_s: per_s(cpu_sort_ms),
         verified,
     })
+}
+
+/// Whether (`sorted_keys`, `sorted_values`) is the stable sort of `keys` paired with their
+/// indices: keys in order, each with its own index, equal keys in input order.
+fn is_stable_sort<K: RadixKey>(keys: &[K], sorted_keys: &[K], sorted_values: &[u32]) -> bool {
+    let own_index = sorted_keys.iter().zip(sorted_values).all(|(k, &v)| keys.get(v as usize) == Some(k));
+    let pair = |i: usize| (sorted_keys[i], sorted_values[i]);
+    let in_order = (1..sorted_keys.len()).all(|i| pair(i - 1) < pair(i));
+    own_index && in_order
 }
 
 /// Median time per stage of one sort: passes nested in each top-level "sort" pass are summed
