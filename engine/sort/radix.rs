@@ -91,11 +91,11 @@ impl RadixParams {
 
 /// Longest bucket the bucket path sorts in one invocation with `local_passes` passes under the
 /// top digit. lavapipe ends an invocation's loops after 65535 iterations in all; the bucket
-/// kernel loops over the bucket `local_passes + 1` times, unrolled by 4, and 256 times per pass
+/// kernel loops over the bucket `local_passes + 1` times, unrolled by 8, and 256 times per pass
 /// over the digits. The budget keeps a margin under 65535.
 fn bucket_len_for_loop_budget(local_passes: u32) -> u32 {
     const LOOP_BUDGET: u32 = 60_000;
-    const UNROLL: u32 = 4;
+    const UNROLL: u32 = 8;
     let loops_over_bucket = local_passes + 1;
     let fixed = RADIX as u32 * (1 + local_passes) + 16 * local_passes + UNROLL * loops_over_bucket;
     LOOP_BUDGET.saturating_sub(fixed) / loops_over_bucket * UNROLL

@@ -19,7 +19,7 @@ layout(std430, binding = 3) writeonly buffer ValuesOut { uint values_out[]; };
 layout(std430, binding = 4) readonly buffer TopDigitOffsets { uint tile_offsets[]; }; // scanned, digit-major
 layout(std430, binding = 5) readonly buffer Plan { uint plan[]; };
 
-const uint UNROLL = 4u;
+const uint UNROLL = 8u;
 
 // [pass parity][digit]: this pass's next output positions, then the next pass's counts.
 uint counters[2 * RADIX];
@@ -84,22 +84,32 @@ void count_first(uvec2 range, uvec2 digit) {
         count(load_a(i + 1u), 0u, digit);
         count(load_a(i + 2u), 0u, digit);
         count(load_a(i + 3u), 0u, digit);
+        count(load_a(i + 4u), 0u, digit);
+        count(load_a(i + 5u), 0u, digit);
+        count(load_a(i + 6u), 0u, digit);
+        count(load_a(i + 7u), 0u, digit);
     }
     for (; i < range.y; i++) {
         count(load_a(i), 0u, digit);
     }
 }
 
-// One pass over records [range.x, range.y) from LOAD to STORE: four loads, then four stores.
+// One pass over records [range.x, range.y) from LOAD to STORE, UNROLL pairs at a time: their
+// loads, then their stores.
 #define DEFINE_PASS(NAME, LOAD, STORE)                                                   \
     void NAME(uvec2 range, uint cur, uint next, uvec2 digit, uvec2 next_digit) {         \
         uint i = range.x;                                                                \
         for (; i + UNROLL <= range.y; i += UNROLL) {                                     \
             Pair p0 = LOAD(i), p1 = LOAD(i + 1u), p2 = LOAD(i + 2u), p3 = LOAD(i + 3u);  \
+            Pair p4 = LOAD(i + 4u), p5 = LOAD(i + 5u), p6 = LOAD(i + 6u), p7 = LOAD(i + 7u); \
             STORE(next_slot(p0, cur, next, digit, next_digit), p0);                      \
             STORE(next_slot(p1, cur, next, digit, next_digit), p1);                      \
             STORE(next_slot(p2, cur, next, digit, next_digit), p2);                      \
             STORE(next_slot(p3, cur, next, digit, next_digit), p3);                      \
+            STORE(next_slot(p4, cur, next, digit, next_digit), p4);                      \
+            STORE(next_slot(p5, cur, next, digit, next_digit), p5);                      \
+            STORE(next_slot(p6, cur, next, digit, next_digit), p6);                      \
+            STORE(next_slot(p7, cur, next, digit, next_digit), p7);                      \
         }                                                                                \
         for (; i < range.y; i++) {                                                       \
             Pair p = LOAD(i);                                                            \
