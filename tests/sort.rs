@@ -48,11 +48,13 @@ fn tunings(gpu: &common::TestGpu) -> Vec<RadixTuning> {
 /// of the masked keys, and values show the sort is stable (equal keys keep their input order).
 fn check_sort<K: RadixKey + std::fmt::Debug>(gpu: &common::TestGpu, keys: &[K], bits: u32, what: &str) {
     for tuning in tunings(gpu) {
-        check_sort_with(gpu, keys, bits, &format!("{what} ({tuning:?})"), tuning);
+        let bucket_path = check_sort_with(gpu, keys, bits, &format!("{what} ({tuning:?})"), tuning);
+        assert!(!bucket_path || tuning.max_bucket_len() > 0, "{what}: bucket path taken with buckets capped at 0");
     }
 }
 
-fn check_sort_with<K: RadixKey + std::fmt::Debug>(gpu: &common::TestGpu, keys: &[K], bits: u32, what: &str, tuning: RadixTuning) {
+/// Returns whether the sort took the bucket path.
+fn check_sort_with<K: RadixKey + std::fmt::Debug>(gpu: &common::TestGpu, keys: &[K], bits: u32, what: &str, tuning: RadixTuning) -> bool {
     let n = keys.len();
     let values: Vec<u32> = (0..n as u32).collect();
     let key_buffer = GpuBuffer::from_slice(gpu.ctx(), "keys", keys).unwrap();
@@ -70,6 +72,7 @@ fn check_sort_with<K: RadixKey + std::fmt::Debug>(gpu: &common::TestGpu, keys: &
         // Bits above `bits` travel with their key.
         assert_eq!(sorted_keys[i], keys[index as usize], "{what}: key bits lost at {i}");
     }
+    sorter.took_bucket_path().unwrap()
 }
 
 fn random_keys<K: RadixKey>(n: usize, seed: u64, make: impl Fn(u64) -> K) -> Vec<K> {
@@ -118,7 +121,12 @@ fn sort_u64_keys() {
 #[test]
 fn sort_millions_non_power_of_two() {
     let gpu = common::gpu();
-    check_sort(&gpu, &random_keys(3_000_017, 11, |x| x as u32), 32, "millions");
+    let keys = random_keys(3_000_017, 11, |x| x as u32);
+    check_sort(&gpu, &keys, 32, "millions");
+    // Uniform keys are what the bucket path is for: the CPU variant must take it.
+    let tuning = RadixTuning::for_device(gpu.ctx());
+    let bucket_path = check_sort_with(&gpu, &keys, 32, "millions", tuning);
+    assert_eq!(bucket_path, tuning.max_bucket_len() > 0, "millions of uniform keys: wrong path");
 }
 
 /// Keys whose top digit (the `bits` - 8 bits up) is 0 for `heavy` of them and spread over the
@@ -148,11 +156,13 @@ fn sort_bucket_at_its_limit() {
     }
     for heavy in [u32_limit, u32_limit + 1] {
         let keys = one_heavy_bucket(heavy, 60_000, 32, heavy as u64, |x| x as u32);
-        check_sort_with(&gpu, &keys, 32, &format!("u32 bucket of {heavy}, limit {u32_limit}"), tuning);
+        let bucket_path = check_sort_with(&gpu, &keys, 32, &format!("u32 bucket of {heavy}, limit {u32_limit}"), tuning);
+        assert_eq!(bucket_path, heavy == u32_limit, "u32 bucket of {heavy}, limit {u32_limit}: wrong path");
     }
     for heavy in [u64_limit, u64_limit + 1] {
         let keys = one_heavy_bucket(heavy, 30_000, 64, heavy as u64, |x| x);
-        check_sort_with(&gpu, &keys, 64, &format!("u64 bucket of {heavy}, limit {u64_limit}"), tuning);
+        let bucket_path = check_sort_with(&gpu, &keys, 64, &format!("u64 bucket of {heavy}, limit {u64_limit}"), tuning);
+        assert_eq!(bucket_path, heavy == u64_limit, "u64 bucket of {heavy}, limit {u64_limit}: wrong path");
     }
 }
 

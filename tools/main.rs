@@ -90,6 +90,10 @@ enum Bench {
         /// Timed repetitions (after one warm-up); the fastest sets pairs/s and the fraction.
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=1000))]
         repetitions: u64,
+        /// Sort by the LSD passes only. CPU devices otherwise take the bucket path (one pass
+        /// on the top digit, then each bucket sorted in cache) where the keys allow it.
+        #[arg(long)]
+        lsd_only: bool,
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
@@ -188,9 +192,9 @@ fn run(cli: Cli) -> Result<()> {
         Command::Demo(args) => demo::demo(&context(&options)?, &args),
         Command::Ablate(args) => demo::ablate(&context(&options)?, &args),
         Command::Eval(args) => eval::run(args),
-        Command::Bench(Bench::Sort { n, bits, repetitions, json }) => {
+        Command::Bench(Bench::Sort { n, bits, repetitions, lsd_only, json }) => {
             let ctx = context(&options)?;
-            let report = bench_sort(&ctx, n, bits, repetitions as usize).with_context(|| format!("bench sort --n {n} --bits {bits}"))?;
+            let report = bench_sort(&ctx, n, bits, repetitions as usize, lsd_only).with_context(|| format!("bench sort --n {n} --bits {bits}"))?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
@@ -260,6 +264,7 @@ fn devices(wanted: Option<&str>) -> Result<()> {
 fn print_sort_report(r: &SortBenchReport) {
     println!("device            {}", r.device);
     println!("pairs             {} ({}-bit keys, {} significant bits, {} passes, u32 values)", r.n, r.key_bytes * 8, r.bits, r.passes);
+    println!("variant, path     {}, {}", r.variant, if r.bucket_path { "bucket path (top-digit pass, then each bucket in cache)" } else { "LSD passes" });
     println!("GPU sort          {:.3} ms  = {:.1} M pairs/s  (fastest of {}; median {:.3} ms)", r.sort_ms, r.keys_per_s * 1e-6, r.repetitions, r.sort_median_ms);
     for stage in &r.stage_ms {
         println!("  {:<16}{:.3} ms (median)", stage.name, stage.ms);

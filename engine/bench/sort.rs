@@ -38,6 +38,10 @@ pub struct SortBenchReport {
     pub bandwidth_fraction: f64,
     pub cpu_sort_ms: f64,
     pub cpu_sort_keys_per_s: f64,
+    /// The kernel variant: "Lanes" (CPU devices) or "Subgroups".
+    pub variant: String,
+    /// The sort took the CPU variant's bucket path, not the LSD passes.
+    pub bucket_path: bool,
     /// The GPU result was checked to be the stable sort of the input pairs.
     pub verified: bool,
 }
@@ -45,24 +49,26 @@ pub struct SortBenchReport {
 /// Sorts `n` random keys with `bits` significant bits (u64 keys above 32 bits) `repetitions`
 /// times. Speeds use the fastest repetition, of the sort as of the copy bound: both are what
 /// the device can do when the (shared, noisy) machine lets it.
-pub fn bench_sort(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize) -> GpuResult<SortBenchReport> {
+/// `lsd_only` holds the CPU variant to its LSD passes (see [`crate::sort::RadixTuning::with_max_bucket_len`]).
+pub fn bench_sort(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize, lsd_only: bool) -> GpuResult<SortBenchReport> {
     if ctx.limits().timestamp_period_ns.is_none() {
         return Err(GpuError::MissingFeatures { device: ctx.info().name.clone(), missing: vec!["timestamp queries on the compute queue"] });
     }
     if bits <= 32 {
-        run::<u32>(ctx, n, bits, repetitions, |x| x as u32)
+        run::<u32>(ctx, n, bits, repetitions, lsd_only, |x| x as u32)
     } else {
-        run::<u64>(ctx, n, bits, repetitions, |x| x)
+        run::<u64>(ctx, n, bits, repetitions, lsd_only, |x| x)
     }
 }
 
-fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize, make: fn(u64) -> K) -> GpuResult<SortBenchReport> {
+fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize, lsd_only: bool, make: fn(u64) -> K) -> GpuResult<SortBenchReport> {
     if repetitions > MAX_REPETITIONS {
         return Err(GpuError::LimitExceeded { what: "bench sort repetitions".into(), count: repetitions as u64, limit: MAX_REPETITIONS as u64, limit_name: "one submission's passes" });
     }
     let repetitions = repetitions.max(1);
     // Create the GPU side first: an impossible `n` fails here, before host memory is spent.
-    let sorter = RadixSort::<K>::new(ctx, n)?;
+    let tuning = RadixSort::<K>::tuning_for(ctx, n);
+    let sorter = RadixSort::<K>::with_tuning(ctx, n, if lsd_only { tuning.with_max_bucket_len(0) } else { tuning })?;
     let mut input = GpuBuffer::<K>::new(ctx, "bench keys (input)", n)?;
     let mut input_values = GpuBuffer::<u32>::new(ctx, "bench values (input)", n)?;
     let keys = GpuBuffer::<K>::new(ctx, "bench keys", n)?;
@@ -89,6 +95,7 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
         recorder.end_pass();
     }
     let times = recorder.submit_and_wait()?;
+    let bucket_path = sorter.took_bucket_path()?;
     let verified = is_stable_sort(&host_keys, &keys.read()?, &values.read()?);
 
     let sort_times: Vec<f64> = times.passes.iter().filter(|p| p.name == SORT_PASS).skip(1).map(|p| p.ms).collect();
@@ -122,6 +129,8 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
         bandwidth_fraction: if sort_ms > 0.0 { bound_ms / sort_ms } else { 0.0 },
         cpu_sort_ms,
         cpu_sort_keys_per_s: per_s(cpu_sort_ms),
+        variant: format!("{:?}", sorter.tuning().variant()),
+        bucket_path,
         verified,
     })
 }

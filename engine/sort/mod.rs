@@ -70,7 +70,7 @@ impl RadixTuning {
         self.keys_per_thread
     }
 
-    pub(crate) fn max_bucket_len(&self) -> u32 {
+    pub fn max_bucket_len(&self) -> u32 {
         self.max_bucket_len
     }
 

@@ -137,12 +137,17 @@ impl<K: RadixKey> RadixSort<K> {
     /// and 256 counts per run, unless records that large exceed a buffer's range, when the
     /// GPU variant runs instead.
     pub fn new(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<Self> {
-        let mut tuning = RadixTuning::for_device(ctx);
+        Self::with_tuning(ctx, capacity, Self::tuning_for(ctx, capacity))
+    }
+
+    /// The tuning [`Self::new`] picks for `capacity` pairs on this device.
+    pub fn tuning_for(ctx: &GpuContext, capacity: usize) -> RadixTuning {
+        let tuning = RadixTuning::for_device(ctx);
         let record_bytes = (capacity as u64).saturating_mul(Self::RECORD_WORDS as u64 * 4);
         if tuning.variant() == RadixVariant::Lanes && record_bytes > ctx.limits().max_storage_buffer_range {
-            tuning = RadixTuning::subgroups(ctx);
+            return RadixTuning::subgroups(ctx);
         }
-        Self::with_tuning(ctx, capacity, tuning)
+        tuning
     }
 
     /// A sorter with an explicit tuning, e.g. [`RadixTuning::subgroups`] on a CPU device.
@@ -209,8 +214,12 @@ impl<K: RadixKey> RadixSort<K> {
             buckets: Self::pipeline(ctx, tuning, "radix_bucket_lanes", shaders::SORT_RADIX_BUCKET_LANES, 6, [0, 0])?,
             run_counts: GpuBuffer::new(ctx, "radix run counts", runs * RADIX)?,
             records,
-            plan_flag: GpuBuffer::new(ctx, "radix plan", 1)?,
+            plan_flag: GpuBuffer::from_slice(ctx, "radix plan", &[0])?,
         })
+    }
+
+    pub fn tuning(&self) -> RadixTuning {
+        self.tuning
     }
 
     pub fn capacity(&self) -> usize {
@@ -284,6 +293,7 @@ impl<K: RadixKey> RadixSort<K> {
                     recorder.end_pass();
                     Gate::LsdPath
                 } else {
+                    recorder.fill_buffer(plan_flag, 0); // for took_bucket_path
                     Gate::Always
                 };
                 // A pass over zero bits moves the records home unchanged when one pass sorts.
@@ -324,6 +334,15 @@ impl<K: RadixKey> RadixSort<K> {
         recorder.dispatch_1d(scatter, io, params, params.tile_count as u64)?;
         recorder.end_pass();
         Ok(())
+    }
+
+    /// Whether the last sort that ran took the bucket path (a readback of the plan the device
+    /// chose; false on GPUs and after sorts of 8 bits or fewer). For benchmarks and tests.
+    pub fn took_bucket_path(&self) -> GpuResult<bool> {
+        match &self.passes {
+            Passes::Lanes { plan_flag, .. } => Ok(plan_flag.read()?[0] == 1),
+            Passes::Subgroups { .. } => Ok(false),
+        }
     }
 
     /// Sorts in one submission and returns the GPU pass times.
