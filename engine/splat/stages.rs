@@ -38,8 +38,10 @@ fn groups(items: usize) -> u64 {
 impl Kernels {
     pub(crate) fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
         let frame_bytes = size_of::<FrameParams>() as u32;
+        // Constant 0 is the workgroup size, 1 the subgroup size (read by the rasterizers).
+        let subgroup = ctx.limits().subgroup_size;
         let pipeline = |name, spirv, bindings, push_constant_bytes, workgroup: u32| {
-            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes, specialization: &[workgroup] })
+            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes, specialization: &[workgroup, subgroup] })
         };
         Ok(Self {
             project: pipeline("splat project", shaders::SPLAT_PROJECT, 7, frame_bytes, LINEAR_WORKGROUP)?,

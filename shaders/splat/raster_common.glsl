@@ -1,6 +1,6 @@
 // Shared by rasterize.comp and rasterize_backward.comp: one workgroup per 16x16 tile, one
 // invocation per pixel. Each subgroup walks the tile's depth-sorted Gaussians on its own, a
-// chunk of SUBGROUP_SIZE at a time: lane l loads the chunk's l-th Gaussian, then every
+// chunk of gl_SubgroupSize at a time: lane l loads the chunk's l-th Gaussian, then every
 // Gaussian of the chunk is broadcast to all lanes in turn. One load instruction thus fetches a
 // whole chunk (on CPU devices every memory access is a loop over the lanes, so this matters
 // most there), and no barrier or shared memory is needed.
@@ -15,6 +15,12 @@
 #include "frame.glsl"
 
 layout(local_size_x_id = 0) in; // TILE_SIZE * TILE_SIZE
+
+// The device's subgroup size, as a constant: the loops over a chunk then have a constant trip
+// count, which the compiler unrolls, so lavapipe's limit of 65 535 loop iterations per
+// invocation (it ends loops silently) counts chunks, not Gaussians. Lanes past the real
+// subgroup size, should a device run smaller subgroups, are skipped.
+layout(constant_id = 1) const uint SUBGROUP_SIZE = 32;
 
 layout(std430, binding = 0) readonly buffer Splats { Splat splats[]; };
 layout(std430, binding = 1) readonly buffer TileRanges { uvec2 tile_ranges[]; };

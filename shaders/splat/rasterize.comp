@@ -18,14 +18,14 @@ void main() {
     bool done = !px.inside;
     for (uint start = range.x; start < range.y && !subgroupAll(done); start += gl_SubgroupSize) {
         Chunk mine = load_chunk(start, range.y);
-        uint count = min(gl_SubgroupSize, range.y - start);
-        for (uint g = 0u; g < count; g++) {
+        // A constant trip count (see SUBGROUP_SIZE); lanes past the range hold zero opacity.
+        for (uint g = 0u; g < SUBGROUP_SIZE; g++) {
             Chunk c = broadcast(mine, g);
             float falloff;
             vec2 d;
             float alpha = alpha_at(c, px.center, falloff, d);
             float next = transmittance * (1.0 - alpha);
-            if (done || alpha < ALPHA_MIN) {
+            if (done || alpha < ALPHA_MIN || g >= gl_SubgroupSize) {
                 continue;
             }
             if (next < TRANSMITTANCE_MIN) {
