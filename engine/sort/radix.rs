@@ -103,20 +103,29 @@ fn bucket_len_for_loop_budget(local_passes: u32) -> u32 {
 
 /// The variant's kernels and scratch memory.
 enum Passes<K: RadixKey> {
-    /// Keys and values ping-pong between the caller's buffers and a scratch copy.
-    Subgroups { histogram: ComputePipeline, scatter: ComputePipeline, scratch_keys: GpuBuffer<K>, scratch_values: GpuBuffer<u32> },
-    /// The first pass turns the caller's pairs into records, the last turns them back, the
-    /// passes between ping-pong records. Kernels are indexed by [`lanes_kernels`]; `plan` and
-    /// `buckets` serve the bucket path, `plan_flag` holds its choice.
-    Lanes {
-        histograms: [ComputePipeline; 2],
-        scatters: [ComputePipeline; 3],
-        plan: ComputePipeline,
-        buckets: ComputePipeline,
-        run_counts: GpuBuffer<u32>,
-        records: [GpuBuffer<u32>; 2],
-        plan_flag: GpuBuffer<u32>,
-    },
+    Subgroups(SubgroupPasses<K>),
+    Lanes(LanesPasses),
+}
+
+/// Keys and values ping-pong between the caller's buffers and a scratch copy.
+struct SubgroupPasses<K: RadixKey> {
+    histogram: ComputePipeline,
+    scatter: ComputePipeline,
+    scratch_keys: GpuBuffer<K>,
+    scratch_values: GpuBuffer<u32>,
+}
+
+/// The first pass turns the caller's pairs into records, the last turns them back, the passes
+/// between ping-pong records. Kernels are indexed by [`lanes_kernels`]; `plan` and `buckets`
+/// serve the bucket path, `plan_flag` holds its choice.
+struct LanesPasses {
+    histograms: [ComputePipeline; 2],
+    scatters: [ComputePipeline; 3],
+    plan: ComputePipeline,
+    buckets: ComputePipeline,
+    run_counts: GpuBuffer<u32>,
+    records: [GpuBuffer<u32>; 2],
+    plan_flag: GpuBuffer<u32>,
 }
 
 pub struct RadixSort<K: RadixKey> {
@@ -188,12 +197,12 @@ impl<K: RadixKey> RadixSort<K> {
         // Scratch first: an impossible capacity fails here, before any pipeline is built.
         let scratch_keys = GpuBuffer::new(ctx, "radix scratch keys", capacity)?;
         let scratch_values = GpuBuffer::new(ctx, "radix scratch values", capacity)?;
-        Ok(Passes::Subgroups {
+        Ok(Passes::Subgroups(SubgroupPasses {
             histogram: Self::pipeline(ctx, tuning, "radix_histogram", shaders::SORT_RADIX_HISTOGRAM, 2, [0, 0])?,
             scatter: Self::pipeline(ctx, tuning, "radix_scatter", shaders::SORT_RADIX_SCATTER, 5, [0, 0])?,
             scratch_keys,
             scratch_values,
-        })
+        }))
     }
 
     fn lanes_passes(ctx: &Arc<GpuContext>, capacity: usize, tuning: RadixTuning) -> GpuResult<Passes<K>> {
@@ -207,7 +216,7 @@ impl<K: RadixKey> RadixSort<K> {
         let runs = capacity.div_ceil(tuning.tile_len()) * tuning.workgroup_size() as usize;
         let histogram = |records_in| Self::pipeline(ctx, tuning, "radix_histogram_lanes", shaders::SORT_RADIX_HISTOGRAM_LANES, 5, [records_in, 0]);
         let scatter = |records_in, records_out| Self::pipeline(ctx, tuning, "radix_scatter_lanes", shaders::SORT_RADIX_SCATTER_LANES, 7, [records_in, records_out]);
-        Ok(Passes::Lanes {
+        Ok(Passes::Lanes(LanesPasses {
             histograms: [histogram(0)?, histogram(1)?],
             scatters: [scatter(0, 1)?, scatter(1, 1)?, scatter(1, 0)?],
             plan: Self::pipeline(ctx, tuning, "radix_plan_lanes", shaders::SORT_RADIX_PLAN_LANES, 2, [0, 0])?,
@@ -215,7 +224,7 @@ impl<K: RadixKey> RadixSort<K> {
             run_counts: GpuBuffer::new(ctx, "radix run counts", runs * RADIX)?,
             records,
             plan_flag: GpuBuffer::from_slice(ctx, "radix plan", &[0])?,
-        })
+        }))
     }
 
     pub fn tuning(&self) -> RadixTuning {
@@ -232,8 +241,8 @@ impl<K: RadixKey> RadixSort<K> {
     }
 
     /// The largest top-digit bucket the bucket path sorts for a sort of `bits` bits; 0 where
-    /// it is not used (GPUs, 8 bits or fewer). A larger bucket sends the sort down the LSD
-    /// passes.
+    /// it is not used (GPUs, 8 bits or fewer, a tuning capped at 0): then the sort records the
+    /// LSD passes alone. A larger bucket sends the sort down the LSD passes.
     pub fn bucket_limit(&self, bits: u32) -> usize {
         let passes = Self::passes(bits);
         if self.tuning.variant() != RadixVariant::Lanes || passes < 2 {
@@ -260,56 +269,75 @@ impl<K: RadixKey> RadixSort<K> {
         let base = RadixParams::new(len, tile_count, bits);
         recorder.begin_pass("radix sort");
         match &self.passes {
-            Passes::Subgroups { histogram, scatter, scratch_keys, scratch_values } => {
-                let buffers = [(keys.binding(), values.binding()), (scratch_keys.binding(), scratch_values.binding())];
-                for pass in 0..passes {
-                    let (input, output) = (buffers[(pass % 2) as usize], buffers[((pass + 1) % 2) as usize]);
-                    let counts = self.tile_counts.binding();
-                    let histogram_io = [input.0, counts];
-                    let scatter_io = [input.0, input.1, counts, output.0, output.1];
-                    self.record_pass(recorder, [(histogram, &histogram_io), (scatter, &scatter_io)], &base.lsd_pass(pass))?;
-                }
-                if passes % 2 == 1 {
-                    // An odd pass count leaves the result in scratch: bring it home.
-                    recorder.copy_buffer(scratch_keys, keys, len);
-                    recorder.copy_buffer(scratch_values, values, len);
-                }
-            }
-            Passes::Lanes { histograms, scatters, plan, buckets, run_counts, records, plan_flag } => {
-                let (counts, runs, plan_io) = (self.tile_counts.binding(), run_counts.binding(), plan_flag.binding());
-                let lsd_gate = if passes >= 2 {
-                    // The bucket path: the top digit's histogram and scan, the plan, then (if
-                    // every bucket fits) its scatter into records A and the bucket sort.
-                    let top = RadixParams { max_bucket_len: self.bucket_limit(bits) as u32, ..base.digit(bits - RADIX_BITS, RADIX_BITS) };
-                    let top_histogram_io = [keys.binding(), values.binding(), counts, runs, plan_io];
-                    let top_scatter_io = [keys.binding(), values.binding(), counts, runs, records[0].binding(), records[0].binding(), plan_io];
-                    let bucket_io = [records[0].binding(), records[1].binding(), keys.binding(), values.binding(), counts, plan_io];
-                    self.record_counts(recorder, &histograms[0], &top_histogram_io, &top)?;
-                    recorder.dispatch_1d(plan, &[counts, plan_io], &top, 1)?;
-                    self.record_scatter(recorder, &scatters[0], &top_scatter_io, &top.gated(Gate::BucketPath))?;
-                    recorder.begin_pass("radix buckets");
-                    let bucket_groups = RADIX.div_ceil(self.tuning.workgroup_size() as usize);
-                    recorder.dispatch_1d(buckets, &bucket_io, &top.gated(Gate::BucketPath), bucket_groups as u64)?;
-                    recorder.end_pass();
-                    Gate::LsdPath
-                } else {
-                    recorder.fill_buffer(plan_flag, 0); // for took_bucket_path
-                    Gate::Always
-                };
-                // A pass over zero bits moves the records home unchanged when one pass sorts.
-                let passes = passes.max(2);
-                for pass in 0..passes {
-                    let (first, last) = (pass == 0, pass + 1 == passes);
-                    let input = if first { [keys.binding(), values.binding()] } else { [records[(pass as usize + 1) % 2].binding(); 2] };
-                    let output = if last { [keys.binding(), values.binding()] } else { [records[pass as usize % 2].binding(); 2] };
-                    let histogram_io = [input[0], input[1], counts, runs, plan_io];
-                    let scatter_io = [input[0], input[1], counts, runs, output[0], output[1], plan_io];
-                    let (histogram, scatter) = lanes_kernels(first, last);
-                    let params = base.lsd_pass(pass).gated(lsd_gate);
-                    self.record_pass(recorder, [(&histograms[histogram], &histogram_io), (&scatters[scatter], &scatter_io)], &params)?;
-                }
-            }
+            Passes::Subgroups(subgroups) => self.record_subgroups(recorder, subgroups, keys, values, &base)?,
+            Passes::Lanes(lanes) => self.record_lanes(recorder, lanes, keys, values, &base)?,
         }
+        recorder.end_pass();
+        Ok(())
+    }
+
+    fn record_subgroups<'a>(&'a self, recorder: &mut Recorder<'a>, kernels: &'a SubgroupPasses<K>, keys: &'a GpuBuffer<K>, values: &'a GpuBuffer<u32>, base: &RadixParams) -> GpuResult<()> {
+        let SubgroupPasses { histogram, scatter, scratch_keys, scratch_values } = kernels;
+        let buffers = [(keys.binding(), values.binding()), (scratch_keys.binding(), scratch_values.binding())];
+        let passes = Self::passes(base.bits);
+        for pass in 0..passes {
+            let (input, output) = (buffers[(pass % 2) as usize], buffers[((pass + 1) % 2) as usize]);
+            let counts = self.tile_counts.binding();
+            let histogram_io = [input.0, counts];
+            let scatter_io = [input.0, input.1, counts, output.0, output.1];
+            self.record_pass(recorder, [(histogram, &histogram_io), (scatter, &scatter_io)], &base.lsd_pass(pass))?;
+        }
+        if passes % 2 == 1 {
+            // An odd pass count leaves the result in scratch: bring it home.
+            let len = base.len as usize;
+            recorder.copy_buffer(scratch_keys, keys, len);
+            recorder.copy_buffer(scratch_values, values, len);
+        }
+        Ok(())
+    }
+
+    /// The bucket path where the tuning allows it, then the LSD passes, gated to run only if
+    /// the plan turned the bucket path down.
+    fn record_lanes<'a>(&'a self, recorder: &mut Recorder<'a>, kernels: &'a LanesPasses, keys: &'a GpuBuffer<K>, values: &'a GpuBuffer<u32>, base: &RadixParams) -> GpuResult<()> {
+        let LanesPasses { histograms, scatters, run_counts, records, plan_flag, .. } = kernels;
+        let lsd_gate = if self.bucket_limit(base.bits) > 0 {
+            self.record_bucket_path(recorder, kernels, keys, values, base)?;
+            Gate::LsdPath
+        } else {
+            recorder.fill_buffer(plan_flag, 0); // for took_bucket_path
+            Gate::Always
+        };
+        let (counts, runs, plan_io) = (self.tile_counts.binding(), run_counts.binding(), plan_flag.binding());
+        // A pass over zero bits moves the records home unchanged when one pass sorts.
+        let passes = Self::passes(base.bits).max(2);
+        for pass in 0..passes {
+            let (first, last) = (pass == 0, pass + 1 == passes);
+            let input = if first { [keys.binding(), values.binding()] } else { [records[(pass as usize + 1) % 2].binding(); 2] };
+            let output = if last { [keys.binding(), values.binding()] } else { [records[pass as usize % 2].binding(); 2] };
+            let histogram_io = [input[0], input[1], counts, runs, plan_io];
+            let scatter_io = [input[0], input[1], counts, runs, output[0], output[1], plan_io];
+            let (histogram, scatter) = lanes_kernels(first, last);
+            let params = base.lsd_pass(pass).gated(lsd_gate);
+            self.record_pass(recorder, [(&histograms[histogram], &histogram_io), (&scatters[scatter], &scatter_io)], &params)?;
+        }
+        Ok(())
+    }
+
+    /// The top digit's histogram and scan, the plan, then (if every bucket fits) its scatter
+    /// into records A and the bucket sort.
+    fn record_bucket_path<'a>(&'a self, recorder: &mut Recorder<'a>, kernels: &'a LanesPasses, keys: &'a GpuBuffer<K>, values: &'a GpuBuffer<u32>, base: &RadixParams) -> GpuResult<()> {
+        let LanesPasses { histograms, scatters, plan, buckets, run_counts, records, plan_flag } = kernels;
+        let (counts, runs, plan_io) = (self.tile_counts.binding(), run_counts.binding(), plan_flag.binding());
+        let top = RadixParams { max_bucket_len: self.bucket_limit(base.bits) as u32, ..base.digit(base.bits - RADIX_BITS, RADIX_BITS) };
+        let top_histogram_io = [keys.binding(), values.binding(), counts, runs, plan_io];
+        let top_scatter_io = [keys.binding(), values.binding(), counts, runs, records[0].binding(), records[0].binding(), plan_io];
+        let bucket_io = [records[0].binding(), records[1].binding(), keys.binding(), values.binding(), counts, plan_io];
+        self.record_counts(recorder, &histograms[0], &top_histogram_io, &top)?;
+        recorder.dispatch_1d(plan, &[counts, plan_io], &top, 1)?;
+        self.record_scatter(recorder, &scatters[0], &top_scatter_io, &top.gated(Gate::BucketPath))?;
+        recorder.begin_pass("radix buckets");
+        let bucket_groups = RADIX.div_ceil(self.tuning.workgroup_size() as usize);
+        recorder.dispatch_1d(buckets, &bucket_io, &top.gated(Gate::BucketPath), bucket_groups as u64)?;
         recorder.end_pass();
         Ok(())
     }
@@ -340,8 +368,8 @@ impl<K: RadixKey> RadixSort<K> {
     /// chose; false on GPUs and after sorts of 8 bits or fewer). For benchmarks and tests.
     pub fn took_bucket_path(&self) -> GpuResult<bool> {
         match &self.passes {
-            Passes::Lanes { plan_flag, .. } => Ok(plan_flag.read()?[0] == 1),
-            Passes::Subgroups { .. } => Ok(false),
+            Passes::Lanes(lanes) => Ok(lanes.plan_flag.read()?[0] == 1),
+            Passes::Subgroups(_) => Ok(false),
         }
     }
 

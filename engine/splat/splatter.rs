@@ -76,7 +76,7 @@ impl Splatter {
             grad2d: GpuBuffer::new(ctx, "splat 2D gradients", 0)?,
             keys: GpuBuffer::new(ctx, "splat intersection keys", MIN_INTERSECTIONS)?,
             ids: GpuBuffer::new(ctx, "splat intersection ids", MIN_INTERSECTIONS)?,
-            sort: RadixSort::new(ctx, MIN_INTERSECTIONS)?,
+            sort: intersection_sort(ctx, MIN_INTERSECTIONS)?,
             tile_ranges: GpuBuffer::new(ctx, "splat tile ranges", 0)?,
             rgba: GpuBuffer::new(ctx, "splat colour and alpha", 0)?,
             depth: GpuBuffer::new(ctx, "splat depth", 0)?,
@@ -113,7 +113,7 @@ impl Splatter {
             self.ids = GpuBuffer::new(&self.ctx, "splat intersection ids", capacity)?;
         }
         if self.sort.capacity() < capacity {
-            self.sort = RadixSort::new(&self.ctx, capacity)?;
+            self.sort = intersection_sort(&self.ctx, capacity)?;
         }
         Ok(())
     }
@@ -304,4 +304,13 @@ impl From<GpuError> for SplatError {
     fn from(e: GpuError) -> Self {
         SplatError::Gpu(e)
     }
+}
+
+/// The sorter of (tile, depth) keys, held to the LSD passes. Its keys cluster by tile, so the
+/// CPU variant's bucket path (one invocation per top-digit bucket) leaves lanes idle beside the
+/// busy tiles: on lavapipe it sorted 120 000 intersections in 8.4 ms against 6.6–7.7 by LSD,
+/// 728 000 in 44 ms against 38.
+fn intersection_sort(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<RadixSort<u64>> {
+    let tuning = RadixSort::<u64>::tuning_for(ctx, capacity).with_max_bucket_len(0);
+    RadixSort::with_tuning(ctx, capacity, tuning)
 }
