@@ -300,8 +300,10 @@ impl<K: RadixKey> RadixSort<K> {
     /// the plan turned the bucket path down.
     fn record_lanes<'a>(&'a self, recorder: &mut Recorder<'a>, kernels: &'a LanesPasses, keys: &'a GpuBuffer<K>, values: &'a GpuBuffer<u32>, base: &RadixParams) -> GpuResult<()> {
         let LanesPasses { histograms, scatters, run_counts, records, plan_flag, .. } = kernels;
-        let lsd_gate = if self.bucket_limit(base.bits) > 0 {
-            self.record_bucket_path(recorder, kernels, keys, values, base)?;
+        let bucket_limit = self.bucket_limit(base.bits);
+        let lsd_gate = if bucket_limit > 0 {
+            let top = RadixParams { max_bucket_len: bucket_limit as u32, ..base.digit(base.bits - RADIX_BITS, RADIX_BITS) };
+            self.record_bucket_path(recorder, kernels, keys, values, &top)?;
             Gate::LsdPath
         } else {
             recorder.fill_buffer(plan_flag, 0); // for took_bucket_path
@@ -324,16 +326,15 @@ impl<K: RadixKey> RadixSort<K> {
     }
 
     /// The top digit's histogram and scan, the plan, then (if every bucket fits) its scatter
-    /// into records A and the bucket sort.
-    fn record_bucket_path<'a>(&'a self, recorder: &mut Recorder<'a>, kernels: &'a LanesPasses, keys: &'a GpuBuffer<K>, values: &'a GpuBuffer<u32>, base: &RadixParams) -> GpuResult<()> {
+    /// into records A and the bucket sort. `top`: the top digit's pass with its bucket limit.
+    fn record_bucket_path<'a>(&'a self, recorder: &mut Recorder<'a>, kernels: &'a LanesPasses, keys: &'a GpuBuffer<K>, values: &'a GpuBuffer<u32>, top: &RadixParams) -> GpuResult<()> {
         let LanesPasses { histograms, scatters, plan, buckets, run_counts, records, plan_flag } = kernels;
         let (counts, runs, plan_io) = (self.tile_counts.binding(), run_counts.binding(), plan_flag.binding());
-        let top = RadixParams { max_bucket_len: self.bucket_limit(base.bits) as u32, ..base.digit(base.bits - RADIX_BITS, RADIX_BITS) };
         let top_histogram_io = [keys.binding(), values.binding(), counts, runs, plan_io];
         let top_scatter_io = [keys.binding(), values.binding(), counts, runs, records[0].binding(), records[0].binding(), plan_io];
         let bucket_io = [records[0].binding(), records[1].binding(), keys.binding(), values.binding(), counts, plan_io];
-        self.record_counts(recorder, &histograms[0], &top_histogram_io, &top)?;
-        recorder.dispatch_1d(plan, &[counts, plan_io], &top, 1)?;
+        self.record_counts(recorder, &histograms[0], &top_histogram_io, top)?;
+        recorder.dispatch_1d(plan, &[counts, plan_io], top, 1)?;
         self.record_scatter(recorder, &scatters[0], &top_scatter_io, &top.gated(Gate::BucketPath))?;
         recorder.begin_pass("radix buckets");
         let bucket_groups = RADIX.div_ceil(self.tuning.workgroup_size() as usize);
@@ -365,7 +366,8 @@ impl<K: RadixKey> RadixSort<K> {
     }
 
     /// Whether the last sort that ran took the bucket path (a readback of the plan the device
-    /// chose; false on GPUs and after sorts of 8 bits or fewer). For benchmarks and tests.
+    /// chose; false on GPUs, after sorts of 8 bits or fewer and with buckets capped at 0). For
+    /// benchmarks and tests.
     pub fn took_bucket_path(&self) -> GpuResult<bool> {
         match &self.passes {
             Passes::Lanes(lanes) => Ok(lanes.plan_flag.read()?[0] == 1),

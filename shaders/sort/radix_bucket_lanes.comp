@@ -8,14 +8,13 @@
 //
 // Loops are unrolled by UNROLL: lavapipe ends an invocation's loops after 65535 iterations in
 // all, and radix.rs sizes max_bucket_len so that every loop here stays under that.
+#define PAIRS_OUT_BINDING 2
 #include "radix_common.glsl"
 #include "radix_pair.glsl"
 
 layout(std430, binding = 0) buffer RecordsA { uint64_t records_a[]; };
 layout(std430, binding = 1) buffer RecordsB { uint64_t records_b[]; };
-layout(std430, binding = 2) writeonly buffer KeyWordsOut { uint key_words_out[]; };
-layout(std430, binding = 2) writeonly buffer KeysOut { uint64_t keys_out[]; }; // 64-bit keys
-layout(std430, binding = 3) writeonly buffer ValuesOut { uint values_out[]; };
+// Bindings 2 and 3: the caller's keys and values (PAIRS_OUT_BINDING).
 layout(std430, binding = 4) readonly buffer TopDigitOffsets { uint tile_offsets[]; }; // scanned, digit-major
 layout(std430, binding = 5) readonly buffer Plan { uint plan[]; };
 
@@ -24,36 +23,10 @@ const uint UNROLL = 8u;
 // [pass parity][digit]: this pass's next output positions, then the next pass's counts.
 uint counters[2 * RADIX];
 
-Pair load_a(uint i) {
-    return record_from(records_a[i * KEY_WORDS], KEY_WORDS == 2u ? records_a[i * 2u + 1u] : 0ul);
-}
-
-Pair load_b(uint i) {
-    return record_from(records_b[i * KEY_WORDS], KEY_WORDS == 2u ? records_b[i * 2u + 1u] : 0ul);
-}
-
-void store_a(uint i, Pair p) {
-    records_a[i * KEY_WORDS] = record_word(p, 0u);
-    if (KEY_WORDS == 2u) {
-        records_a[i * 2u + 1u] = record_word(p, 1u);
-    }
-}
-
-void store_b(uint i, Pair p) {
-    records_b[i * KEY_WORDS] = record_word(p, 0u);
-    if (KEY_WORDS == 2u) {
-        records_b[i * 2u + 1u] = record_word(p, 1u);
-    }
-}
-
-void store_pairs(uint i, Pair p) {
-    if (KEY_WORDS == 1u) {
-        key_words_out[i] = p.lo;
-    } else {
-        keys_out[i] = packUint2x32(uvec2(p.lo, p.hi));
-    }
-    values_out[i] = p.value;
-}
+DEFINE_RECORD_LOAD(load_a, records_a)
+DEFINE_RECORD_LOAD(load_b, records_b)
+DEFINE_RECORD_STORE(store_a, records_a)
+DEFINE_RECORD_STORE(store_b, records_b)
 
 // Shift and width of local pass k's digit within the `low_bits` under the top digit; a pass
 // past the last has a zero-bit digit.
@@ -119,8 +92,8 @@ void count_first(uvec2 range, uvec2 digit) {
 
 DEFINE_PASS(pass_a_to_b, load_a, store_b)
 DEFINE_PASS(pass_b_to_a, load_b, store_a)
-DEFINE_PASS(pass_a_to_pairs, load_a, store_pairs)
-DEFINE_PASS(pass_b_to_pairs, load_b, store_pairs)
+DEFINE_PASS(pass_a_to_pairs, load_a, store_pair)
+DEFINE_PASS(pass_b_to_pairs, load_b, store_pair)
 
 void main() {
     uint bucket = flat_workgroup_id() * WORKGROUP_SIZE + gl_LocalInvocationID.x;

@@ -27,9 +27,7 @@ layout(std430, binding = 0) readonly buffer WideIn { uint64_t wide_in[]; }; // k
 layout(std430, binding = 1) readonly buffer ValueWordsIn { uint value_words_in[]; };
 layout(std430, binding = 1) readonly buffer ValueCouplesIn { uint64_t value_couples_in[]; };
 
-Pair load_record(uint i) {
-    return record_from(wide_in[i * KEY_WORDS], KEY_WORDS == 2u ? wide_in[i * 2u + 1u] : 0ul);
-}
+DEFINE_RECORD_LOAD(load_record, wide_in)
 
 // Pairs i and i + 1 (i even).
 void load_couple(uint i, out Pair a, out Pair b) {

@@ -38,6 +38,38 @@ uint64_t record_word(Pair p, uint w) {
     return packUint2x32(w == 0u ? uvec2(p.lo, p.hi) : uvec2(p.value, 0u));
 }
 
+// Pair LOAD(uint i): record i of the uint64_t array ARRAY.
+#define DEFINE_RECORD_LOAD(LOAD, ARRAY)                                                      \
+    Pair LOAD(uint i) {                                                                      \
+        return record_from(ARRAY[i * KEY_WORDS], KEY_WORDS == 2u ? ARRAY[i * 2u + 1u] : 0ul); \
+    }
+
+// void STORE(uint i, Pair p): record i of the uint64_t array ARRAY.
+#define DEFINE_RECORD_STORE(STORE, ARRAY)             \
+    void STORE(uint i, Pair p) {                      \
+        ARRAY[i * KEY_WORDS] = record_word(p, 0u);    \
+        if (KEY_WORDS == 2u) {                        \
+            ARRAY[i * 2u + 1u] = record_word(p, 1u);  \
+        }                                             \
+    }
+
+#ifdef PAIRS_OUT_BINDING
+// The caller's keys (binding PAIRS_OUT_BINDING) and values (the next binding), for the kernels
+// that write pairs back.
+layout(std430, binding = PAIRS_OUT_BINDING) writeonly buffer KeyWordsOut { uint key_words_out[]; };
+layout(std430, binding = PAIRS_OUT_BINDING) writeonly buffer KeysOut { uint64_t keys_out[]; }; // 64-bit keys
+layout(std430, binding = PAIRS_OUT_BINDING + 1) writeonly buffer ValuesOut { uint values_out[]; };
+
+void store_pair(uint i, Pair p) {
+    if (KEY_WORDS == 1u) {
+        key_words_out[i] = p.lo;
+    } else {
+        keys_out[i] = packUint2x32(uvec2(p.lo, p.hi));
+    }
+    values_out[i] = p.value;
+}
+#endif
+
 // Which path of the sort a kernel belongs to (params.gate), against the plan's choice.
 const uint GATE_ALWAYS = 0u;
 const uint GATE_BUCKET_PATH = 1u; // runs only when every top-digit bucket fits

@@ -3,6 +3,7 @@
 // invocation walks its run in order and writes each pair to its counter for the pair's digit,
 // which starts at the tile's scanned offset plus the counts of the earlier runs. Stable.
 #define PLAN_BINDING 6
+#define PAIRS_OUT_BINDING 4
 #include "radix_lanes_common.glsl"
 
 // 1: the pass writes records; 0: the caller's separate keys and values (the last pass).
@@ -10,28 +11,20 @@ layout(constant_id = 5) const uint RECORDS_OUT = 0;
 
 layout(std430, binding = 2) readonly buffer TileOffsets { uint tile_offsets[]; };
 layout(std430, binding = 3) readonly buffer RunCounts { uint run_counts[]; };
-// The output: records (binding 4, binding 5 unused), or keys (binding 4) and values (binding 5).
-layout(std430, binding = 4) writeonly buffer KeyWordsOut { uint key_words_out[]; };
-layout(std430, binding = 4) writeonly buffer WideOut { uint64_t wide_out[]; }; // 64-bit keys or records
-layout(std430, binding = 5) writeonly buffer ValuesOut { uint values_out[]; };
+// The output: records (binding 4, binding 5 unused), or keys (binding 4) and values (binding 5,
+// see PAIRS_OUT_BINDING).
+layout(std430, binding = 4) writeonly buffer RecordsOut { uint64_t records_out[]; };
+DEFINE_RECORD_STORE(store_record, records_out)
 
 // This invocation's next output position per digit; private for the reason in the histogram.
 uint next_position[RADIX];
 
 void store(uint dst, Pair p) {
     if (RECORDS_OUT == 1u) {
-        wide_out[dst * KEY_WORDS] = record_word(p, 0u);
-        if (KEY_WORDS == 2u) {
-            wide_out[dst * 2u + 1u] = record_word(p, 1u);
-        }
-        return;
-    }
-    if (KEY_WORDS == 1u) {
-        key_words_out[dst] = p.lo;
+        store_record(dst, p);
     } else {
-        wide_out[dst] = packUint2x32(uvec2(p.lo, p.hi));
+        store_pair(dst, p);
     }
-    values_out[dst] = p.value;
 }
 
 void place(Pair p) {
