@@ -19,6 +19,7 @@
 //! - [`optim`]: fused Adam with moments that survive Gaussian-set changes, schedules.
 //! - [`eval`]: image, surface and tracking metrics.
 //! - [`regularize`]: the topology regularizers on the GPU and their f64 CPU reference.
+//! - [`deform`]: the embedded deformation graph the temporal stage solves first in every frame.
 //! - [`topology`]: the manifold mesh the Gaussians live on, its local operations and remap.
 //! - [`synth`]: synthetic dynamic scenes with ground truth (procedural body, glTF skinning).
 //! - [`init`]: the first mesh of a frame from its masks (visual hull, marching tetrahedra,
@@ -26,6 +27,7 @@
 
 pub mod bench;
 pub mod camera;
+pub mod deform;
 pub mod demo;
 pub mod eval;
 pub mod gpu;

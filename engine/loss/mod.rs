@@ -16,6 +16,7 @@
 
 mod params;
 pub mod reference;
+pub mod silhouette;
 
 pub use params::{LossParams, LOSS_SHARE_L1, LOSS_SHARE_SSIM};
 

@@ -202,7 +202,7 @@ pub fn rotation_backward(q: [f64; 4], g: DMat3) -> DVec4 {
 }
 
 /// From dL/d(q/|q|) to dL/dq for the stored (w, x, y, z).
-fn normalize_backward(q: [f64; 4], g: DVec4) -> DVec4 {
+pub fn normalize_backward(q: [f64; 4], g: DVec4) -> DVec4 {
     let q = DVec4::from_array(q);
     let len = q.length();
     if len == 0.0 {

@@ -18,6 +18,39 @@ impl ViewTarget {
     pub fn rgb(&self) -> Vec<f32> {
         self.target.iter().flat_map(|p| [p[0], p[1], p[2]]).collect()
     }
+
+    /// The mask channel.
+    pub fn mask(&self) -> Vec<f32> {
+        self.target.iter().map(|p| p[3]).collect()
+    }
+
+    /// Whether the mask has a foreground pixel (> 0.5).
+    pub fn has_subject(&self) -> bool {
+        self.target.iter().any(|p| p[3] > 0.5)
+    }
+
+    /// The view at 1/`factor` resolution: each pixel the mean of a `factor × factor` block (a
+    /// partial block at the right or bottom edge is dropped), the camera scaled to match
+    /// (pixel edges scale from 0, so fx, fy, cx, cy scale by the same factor).
+    pub fn downsampled(&self, factor: u32) -> Self {
+        let f = factor.max(1);
+        let (w, h) = (self.camera.width / f, self.camera.height / f);
+        let mut target = vec![[0.0f32; 4]; (w * h) as usize];
+        let scale = 1.0 / (f * f) as f32;
+        for (i, out) in target.iter_mut().enumerate() {
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            for dy in 0..f {
+                let row = ((y * f + dy) * self.camera.width + x * f) as usize;
+                for p in &self.target[row..row + f as usize] {
+                    (0..4).for_each(|c| out[c] += p[c] * scale);
+                }
+            }
+        }
+        let c = &self.camera;
+        let s = 1.0 / f as f64;
+        let camera = Camera { width: w, height: h, fx: c.fx * s, fy: c.fy * s, cx: c.cx * s, cy: c.cy * s, world_to_camera: c.world_to_camera };
+        Self { name: self.name.clone(), camera, target }
+    }
 }
 
 /// Loads the views of `frame` whose cameras are in `cameras`. Without masks (`use_masks`

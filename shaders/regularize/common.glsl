@@ -31,23 +31,6 @@ const uint BOUNDARY_BIT = 0x80000000u;
 
 #include "../common/quaternion.glsl"
 
-// q / |q|; identity for a zero or non-finite quaternion (such a Gaussian gets no rotation
-// gradient: see normalize_backward).
-vec4 unit_quat(vec4 q) {
-    float n = length(q);
-    return (n > 0.0 && !isinf(n)) ? q / n : vec4(1.0, 0.0, 0.0, 0.0);
-}
-
-// dL/dq from dL/d(q / |q|).
-vec4 normalize_backward(vec4 q, vec4 g) {
-    float n = length(q);
-    if (!(n > 0.0) || isinf(n)) {
-        return vec4(0.0);
-    }
-    vec4 u = q / n;
-    return (g - u * dot(u, g)) / n;
-}
-
 // Adds `value` (0 from inactive invocations) to losses[slot]: one atomic per subgroup.
 // Must be reached by every invocation of the subgroup.
 #define ADD_LOSS(slot, value)                         \

@@ -49,13 +49,43 @@ pub struct CanonicalConfig {
     pub prune_scale: f32,
 }
 
-/// Frames 1..T: topology frozen, frame t − 1 extrapolated at constant velocity.
+/// Frames 1..T: topology frozen, frame t − 1 extrapolated at constant velocity, then the
+/// deformation graph solved coarse to fine, then the per-vertex refinement. Every stage stops
+/// when its loss stops improving (see `tolerance`) or at its iteration cap.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TemporalConfig {
+    /// Most per-vertex refinement iterations per frame.
     pub iterations: u32,
+    /// Fewest per-vertex refinement iterations per frame.
+    pub min_iterations: u32,
+    /// A stage stops when its mean loss over one pass through the training views improved on
+    /// the pass before by less than this fraction (0: run while it falls at all).
+    pub tolerance: f32,
     /// Keep colour, opacity and scale of frame 0 (only positions and rotations move).
     pub freeze_appearance: bool,
+    /// Weight of the long-range silhouette term (every vertex inside every mask; 0: off).
+    pub silhouette: f32,
+    pub graph: GraphConfig,
+}
+
+/// The coarse deformation model solved first in every later frame (`crate::deform`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GraphConfig {
+    /// Graph nodes (0: no graph stage).
+    pub nodes: u32,
+    /// Image downsampling factor of each level, coarse first (1: full resolution).
+    pub levels: Vec<u32>,
+    /// Most and fewest iterations per level.
+    pub iterations: u32,
+    pub min_iterations: u32,
+    /// Adam step of node translations, × the mesh's bounding-box diagonal, and of node
+    /// rotations (quaternion units); both decay tenfold over a level's cap.
+    pub translation_lr: f32,
+    pub rotation_lr: f32,
+    /// Weight of the as-rigid-as-possible term (mean squared residual in node spacings).
+    pub arap: f32,
 }
 
 /// Loss weights and the temporal falloff λ_w (per mean edge length). MISSION.md's table, but
@@ -120,7 +150,13 @@ impl Default for CanonicalConfig {
 
 impl Default for TemporalConfig {
     fn default() -> Self {
-        Self { iterations: 300, freeze_appearance: true }
+        Self { iterations: 300, min_iterations: 60, tolerance: 0.005, freeze_appearance: true, silhouette: 10.0, graph: GraphConfig::default() }
+    }
+}
+
+impl Default for GraphConfig {
+    fn default() -> Self {
+        Self { nodes: 200, levels: vec![2, 1], iterations: 150, min_iterations: 30, translation_lr: 2e-3, rotation_lr: 5e-3, arap: 1.0 }
     }
 }
 
@@ -186,6 +222,8 @@ impl TrainConfig {
             ("init.edge_pixels", self.init.edge_pixels as f32),
             ("position_lr_scale", self.position_lr_scale),
             ("report.stats_every", self.report.stats_every as f32),
+            ("temporal.graph.translation_lr", self.temporal.graph.translation_lr),
+            ("temporal.graph.rotation_lr", self.temporal.graph.rotation_lr),
         ];
         let non_negative = [
             ("canonical.prune_opacity", c.prune_opacity),
@@ -200,6 +238,9 @@ impl TrainConfig {
             ("loss.rigidity", l.rigidity),
             ("loss.rotation", l.rotation),
             ("loss.lambda_w", l.lambda_w),
+            ("temporal.tolerance", self.temporal.tolerance),
+            ("temporal.silhouette", self.temporal.silhouette),
+            ("temporal.graph.arap", self.temporal.graph.arap),
             ("learning_rates.log_scales", r.log_scales),
             ("learning_rates.rotations", r.rotations),
             ("learning_rates.opacity_logits", r.opacity_logits),
@@ -210,6 +251,13 @@ impl TrainConfig {
         check_appearance(self.sh_degree, self.background)?;
         if !(c.prune_opacity < 1.0) {
             return value_error("canonical.prune_opacity", format!("must be below 1 (got {})", c.prune_opacity));
+        }
+        let (t, g) = (&self.temporal, &self.temporal.graph);
+        if t.min_iterations > t.iterations || g.min_iterations > g.iterations {
+            return value_error("temporal.min_iterations", format!("({} / graph {}) must not exceed temporal.iterations ({} / graph {})", t.min_iterations, g.min_iterations, t.iterations, g.iterations));
+        }
+        if g.nodes > 0 && (g.levels.is_empty() || g.levels.iter().any(|&f| f == 0 || f > 16)) {
+            return value_error("temporal.graph.levels", format!("must be downsampling factors from 1 to 16, at least one (got {:?})", g.levels));
         }
         if c.densify_from > c.densify_until {
             return value_error("canonical.densify_from", format!("({}) must not be after canonical.densify_until ({})", c.densify_from, c.densify_until));

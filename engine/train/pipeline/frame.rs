@@ -4,8 +4,11 @@
 //! previous frame) — then Adam. Frame 0 also densifies and prunes through the topology.
 
 use super::config::TrainConfig;
+use super::graph_stage::{solve_graph, GraphInput, GraphReport, ImageWeights};
+use super::plateau::{Plateau, StopReason};
 use crate::eval::psnr;
 use crate::gpu::{GpuContext, Recorder};
+use crate::loss::silhouette::{SilhouetteTerm, SilhouetteView};
 use crate::optim::{AdamParams, LearningRates};
 use crate::regularize::{Losses, Neighbourhoods, Regularizers, Temporal};
 use crate::rng::SplitMix64;
@@ -22,7 +25,14 @@ use std::time::Instant;
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct FrameReport {
     pub frame: usize,
+    /// Per-vertex iterations (the graph stage's are in `graph`).
     pub iterations: u32,
+    /// Why the per-vertex stage stopped.
+    pub stop_reason: StopReason,
+    /// The deformation graph's levels (later frames with a graph).
+    pub graph: Option<GraphReport>,
+    /// Training views left out of this frame: their mask is empty (the subject is lost there).
+    pub lost_views: Vec<String>,
     /// Optimisation wall time (evaluation excluded), seconds.
     pub wall_s: f64,
     pub gaussians: usize,
@@ -33,6 +43,7 @@ pub struct FrameReport {
     /// Mean weighted losses of the last statistics interval.
     pub loss_gs: f32,
     pub loss_mesh: f32,
+    pub loss_silhouette: f32,
     /// Unweighted regularizer values of the last statistics check.
     pub regularizers: [f32; 6],
     /// Mean GPU ms per iteration, by pass.
@@ -54,28 +65,53 @@ pub struct FrameTask<'a> {
     pub previous: Option<&'a GaussianScene>,
 }
 
-/// The optimised Gaussians (or, after a non-finite loss, the error naming it).
+/// The optimised Gaussians (or, after a non-finite loss, the error naming it). Later frames
+/// first solve the deformation graph (when configured), then refine per vertex until the loss
+/// stops improving; frame 0 runs its fixed iterations with densification and pruning.
 pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConfig, progress: &mut dyn FnMut(u32, u32)) -> Result<(GaussianScene, FrameReport), TrainError> {
     let canonical = task.previous.is_none();
-    let iterations = if canonical { config.canonical.iterations } else { config.temporal.iterations };
-    let (w, bg) = (&config.loss, config.background);
-    let lambda_gs = [w.gaussian_color / 3.0, w.gaussian_color / 3.0, w.gaussian_color / 3.0, w.gaussian_mask];
-    let lambda_mesh = [w.mesh_color / 3.0, w.mesh_color / 3.0, w.mesh_color / 3.0, w.mesh_mask];
+    let (w, bg, t) = (&config.loss, config.background, &config.temporal);
+    let iterations = if canonical { config.canonical.iterations } else { t.iterations };
+    let weights = ImageWeights {
+        gaussians: [w.gaussian_color / 3.0, w.gaussian_color / 3.0, w.gaussian_color / 3.0, w.gaussian_mask],
+        mesh: [w.mesh_color / 3.0, w.mesh_color / 3.0, w.mesh_color / 3.0, w.mesh_mask],
+    };
     let extent = scene_extent(&task.train.iter().map(|v| &v.camera).collect::<Vec<_>>());
     let first = task.train.first().ok_or_else(|| TrainError::Input(format!("frame {}: no training views", task.frame)))?;
     let mut settings = RenderSettings { background: bg, near: (extent * 1e-3) as f32, far: (extent * 1e3) as f32, sh_degree: config.sh_degree, mask_mode: false };
+    let mut rng = SplitMix64::new(config.seed ^ task.frame as u64);
+    let mut report = empty_report(task.frame);
 
-    let mut trainer = Trainer::new(ctx, &task.start, task.train)?;
-    task.mesh.positions = task.start.positions.clone();
-    let mut mesh_term = MeshTerm::new(ctx, &task.start.positions, &task.mesh.live_faces(), first.camera.width, first.camera.height)?;
+    let silhouette = if canonical || t.silhouette == 0.0 { None } else { Some(SilhouetteTerm::new(ctx, &task.train.iter().map(|v| SilhouetteView::from_mask(v.camera, &v.mask())).collect::<Vec<_>>())?) };
+    let mut start = task.start;
+    let mut train_s = 0.0;
+    if let (false, true) = (canonical, t.graph.nodes > 0) {
+        let t0 = Instant::now();
+        let no_silhouette;
+        let silhouette = match &silhouette {
+            Some(s) => s,
+            None => {
+                no_silhouette = SilhouetteTerm::new(ctx, &[])?;
+                &no_silhouette
+            }
+        };
+        let (faces, neighbourhoods) = (task.mesh.live_faces(), Neighbourhoods::from_mesh(task.mesh));
+        let input = GraphInput { train: task.train, start: &start, faces: &faces, neighbourhoods: &neighbourhoods, silhouette };
+        let (moved, graph) = solve_graph(ctx, &input, config, weights, &settings, &mut rng)?;
+        (start, report.graph, train_s) = (moved, Some(graph), t0.elapsed().as_secs_f64());
+    }
+
+    let mut trainer = Trainer::new(ctx, &start, task.train)?;
+    task.mesh.positions = start.positions.clone();
+    let mut mesh_term = MeshTerm::new(ctx, &start.positions, &task.mesh.live_faces(), first.camera.width, first.camera.height)?;
     let mut regs = Regularizers::new(ctx)?;
     regs.upload(&Neighbourhoods::from_mesh(task.mesh))?;
     let previous = task.previous.map(|p| GaussianBuffers::from_scene(ctx, p)).transpose()?;
 
-    let mut rng = SplitMix64::new(config.seed ^ task.frame as u64);
-    let (mut order, mut passes, mut report) = (Vec::new(), BTreeMap::new(), empty_report(task.frame));
-    let mut interval_start = 1;
-    let mut train_s = 0.0;
+    // Frame 0 runs all its iterations (min = max), reading the losses every `stats_every`.
+    let mut plateau = if canonical { Plateau::new(iterations, iterations, config.report.stats_every as usize, 0.0) } else { Plateau::new(t.min_iterations, iterations, task.train.len(), t.tolerance) };
+    let (mut order, mut passes) = (Vec::new(), BTreeMap::new());
+    let (mut interval_start, mut done) = (1, 0);
     for it in 1..=iterations {
         let t0 = Instant::now();
         if order.is_empty() {
@@ -89,29 +125,26 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
         let adam = AdamParams::new(&rates, it, trainer.gaussians(), trainer.sh_degree());
         let frame = trainer.prepare_step(view, &settings)?;
         let mut rec = Recorder::new(ctx)?;
-        trainer.record_splat(&mut rec, view, &frame, lambda_gs)?;
-        mesh_term.record(&mut rec, trainer.params(), trainer.grads(), trainer.camera(view), trainer.target(view), lambda_mesh, bg)?;
+        trainer.record_splat(&mut rec, view, &frame, weights.gaussians)?;
+        mesh_term.record(&mut rec, trainer.params(), trainer.grads(), trainer.camera(view), trainer.target(view), weights.mesh, bg)?;
         rec.begin_pass("regularizers");
         regs.record(&mut rec, trainer.params(), trainer.grads(), &w.regularizers(trainer.gaussians()), previous.as_ref().map(Temporal::of))?;
+        if let Some(s) = &silhouette {
+            s.record(&mut rec, &trainer.params().positions, &trainer.grads().positions, t.silhouette, settings.near)?;
+        }
         rec.end_pass();
         trainer.record_adam(&mut rec, &adam)?;
         add_times(&mut passes, &rec.submit_and_wait()?);
         report.truncated_steps += (!trainer.finish_step(frame)?) as u32;
         train_s += t0.elapsed().as_secs_f64();
 
-        if it % config.report.stats_every == 0 || it == iterations {
-            let steps = (it - interval_start + 1) as f32;
-            let (gs, mesh) = (trainer.take_terms()?.total(lambda_gs) / steps, mesh_term.take_terms()?.total(lambda_mesh) / steps);
-            let regularizers: Losses<f32> = regs.read_losses()?;
-            if !(gs.is_finite() && mesh.is_finite() && regularizers.slots().iter().all(|v| v.is_finite())) {
-                return Err(TrainError::Input(format!(
-                    "frame {}: the loss went non-finite between iterations {interval_start} and {it} (Gaussian {gs}, mesh {mesh}, regularizers {:?}); the finished frames are kept",
-                    task.frame,
-                    regularizers.slots()
-                )));
-            }
-            (report.loss_gs, report.loss_mesh, report.regularizers, interval_start) = (gs, mesh, regularizers.slots(), it + 1);
-        }
+        let pass_loss = if plateau.pass_ends(it) {
+            let mean = read_losses(&trainer, &mesh_term, &regs, silhouette.as_ref(), weights, (interval_start, it), &mut report)?;
+            interval_start = it + 1;
+            Some(mean)
+        } else {
+            None
+        };
         let c = &config.canonical;
         if canonical && it > c.densify_from && it <= c.densify_until.min(iterations.saturating_sub(c.densify_every)) && it % c.densify_every == 0 {
             let t0 = Instant::now();
@@ -120,21 +153,48 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
             train_s += t0.elapsed().as_secs_f64();
         }
         progress(it, iterations);
+        done = it;
+        if let Some(reason) = plateau.check(it, pass_loss) {
+            report.stop_reason = reason;
+            break;
+        }
     }
     for ms in passes.values_mut() {
-        *ms /= iterations.max(1) as f64;
+        *ms /= done.max(1) as f64;
     }
     let scene = trainer.scene()?;
     task.mesh.positions = scene.positions.clone();
-    (report.iterations, report.wall_s, report.gaussians, report.passes_ms) = (iterations, train_s, scene.len(), passes);
+    (report.iterations, report.wall_s, report.gaussians, report.passes_ms) = (done, train_s, scene.len(), passes);
     (report.psnr_gs, report.ssim_gs, report.psnr_mesh) = evaluate(&mut trainer, &mesh_term, task.eval, &settings)?;
     Ok((scene, report))
+}
+
+/// Reads back the losses summed over iterations `first..=last` into the report (mean weighted
+/// image terms, silhouette, unweighted regularizers) and returns their weighted mean total;
+/// a non-finite value is an error naming the frame, the iterations and the terms.
+fn read_losses(trainer: &Trainer, mesh_term: &MeshTerm, regs: &Regularizers, silhouette: Option<&SilhouetteTerm>, weights: ImageWeights, (first, last): (u32, u32), report: &mut FrameReport) -> Result<f64, TrainError> {
+    let steps = (last - first + 1) as f32;
+    let (gs, mesh) = (trainer.take_terms()?.total(weights.gaussians) / steps, mesh_term.take_terms()?.total(weights.mesh) / steps);
+    let sil = silhouette.map(|s| s.take_loss()).transpose()?.unwrap_or(0.0) / steps;
+    let regularizers: Losses<f32> = regs.read_losses()?;
+    if !(gs.is_finite() && mesh.is_finite() && sil.is_finite() && regularizers.slots().iter().all(|v| v.is_finite())) {
+        return Err(TrainError::Input(format!(
+            "frame {}: the loss went non-finite between iterations {first} and {last} (Gaussian {gs}, mesh {mesh}, silhouette {sil}, regularizers {:?}); the finished frames are kept",
+            report.frame,
+            regularizers.slots()
+        )));
+    }
+    (report.loss_gs, report.loss_mesh, report.loss_silhouette, report.regularizers) = (gs, mesh, sil, regularizers.slots());
+    Ok((gs + mesh + sil) as f64)
 }
 
 fn empty_report(frame: usize) -> FrameReport {
     FrameReport {
         frame,
         iterations: 0,
+        stop_reason: StopReason::MaxIterations,
+        graph: None,
+        lost_views: Vec::new(),
         wall_s: 0.0,
         gaussians: 0,
         psnr_gs: 0.0,
@@ -142,6 +202,7 @@ fn empty_report(frame: usize) -> FrameReport {
         psnr_mesh: 0.0,
         loss_gs: 0.0,
         loss_mesh: 0.0,
+        loss_silhouette: 0.0,
         regularizers: [0.0; 6],
         passes_ms: BTreeMap::new(),
         topology_steps: Vec::new(),

@@ -1,12 +1,18 @@
 //! The reconstruction pipeline (`tagsplat train`): multi-view video in, a topology-consistent
 //! mesh sequence and per-frame Gaussians out. The canonical stage fits frame 0 with the
 //! Gaussians on a manifold mesh (densified and pruned through the topology); the temporal stage
-//! moves that mesh through every later frame with its topology frozen.
+//! moves that mesh through every later frame with its topology frozen: a deformation graph
+//! solved coarse to fine first, then every vertex refined, each stage until its loss stops
+//! improving.
 
 pub mod config;
 mod frame;
+mod graph_stage;
+mod plateau;
 mod run;
 
 pub use config::TrainConfig;
 pub use frame::{optimize_frame, FrameReport, FrameTask};
+pub use graph_stage::{GraphReport, LevelReport};
+pub use plateau::StopReason;
 pub use run::{run_train, TrainJob, TrainProgress, TrainReport};

@@ -1,0 +1,25 @@
+//! The coarse deformation model of the temporal stage: an embedded deformation graph (a few
+//! hundred nodes on the surface, each a rotation and a translation; each vertex blended from
+//! its geodesically nearest nodes) with an as-rigid-as-possible term between nodes, optimised
+//! on the GPU against the same image and mask losses before the per-vertex refinement.
+//!
+//! [`graph`] builds it on the CPU from the frame's start pose, [`GraphDeformer`] runs it on the
+//! GPU, [`reference`] is the f64 CPU reference of its kernels.
+
+pub mod graph;
+mod kernels;
+pub mod reference;
+
+pub use graph::{build_graph, DeformGraph, NODES_PER_VERTEX};
+pub use kernels::GraphDeformer;
+pub use reference::NodeTransforms;
+
+#[derive(Debug, thiserror::Error)]
+pub enum DeformError {
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
+    #[error(transparent)]
+    Splat(#[from] crate::splat::SplatError),
+    #[error("mismatched buffers: {0}")]
+    Shape(String),
+}

@@ -1,0 +1,119 @@
+//! The long-range silhouette term (shaders/loss/silhouette.comp): every vertex of a correct
+//! surface projects inside every view's mask, so a vertex outside one is pulled towards it by
+//! the mask's distance field, from any distance: the anti-aliased edge gradient of the
+//! rasterizer acts within a pixel of the outline, this acts everywhere. All views are scored
+//! in every step (one field lookup per vertex and view); a view whose mask is empty is left out
+//! and named by [`SilhouetteTerm::views_without_mask`].
+
+mod distance;
+pub mod reference;
+
+pub use distance::mask_distance;
+
+use crate::camera::Camera;
+use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder};
+use crate::shaders;
+use bytemuck::{Pod, Zeroable};
+use std::sync::Arc;
+
+const WORKGROUP: u32 = 128;
+
+/// Push constants of silhouette.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Push {
+    vertices: u32,
+    views: u32,
+    scale: f32,
+    near: f32,
+}
+
+/// One view as the kernel reads it (silhouette.comp `View`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuView {
+    world_to_camera: [f32; 16],
+    intrinsics: [f32; 4],
+    dims: [u32; 4],
+}
+
+/// A view's camera and its mask's distance field (`None`: the mask is empty).
+pub struct SilhouetteView {
+    pub camera: Camera,
+    pub field: Option<Vec<f32>>,
+}
+
+impl SilhouetteView {
+    /// From a camera and its mask (row-major, one value per pixel, > 0.5 is foreground).
+    pub fn from_mask(camera: Camera, mask: &[f32]) -> Self {
+        Self { camera, field: mask_distance(mask, camera.width as usize, camera.height as usize) }
+    }
+}
+
+pub struct SilhouetteTerm {
+    ctx: Arc<GpuContext>,
+    pipeline: ComputePipeline,
+    views: GpuBuffer<GpuView>,
+    fields: GpuBuffer<f32>,
+    losses: GpuBuffer<f32>,
+    view_count: usize,
+    with_mask: usize,
+    without_mask: Vec<usize>,
+}
+
+impl SilhouetteTerm {
+    /// Uploads the views' fields. Views must be at least 2 × 2 pixels.
+    pub fn new(ctx: &Arc<GpuContext>, views: &[SilhouetteView]) -> Result<Self, crate::gpu::GpuError> {
+        let (mut gpu_views, mut fields, mut without_mask) = (Vec::new(), Vec::new(), Vec::new());
+        for (index, view) in views.iter().enumerate() {
+            let c = &view.camera;
+            let usable = view.field.as_ref().filter(|f| c.width >= 2 && c.height >= 2 && f.len() == (c.width * c.height) as usize);
+            if usable.is_none() {
+                without_mask.push(index);
+            }
+            gpu_views.push(GpuView {
+                world_to_camera: c.world_to_camera.to_cols_array().map(|v| v as f32),
+                intrinsics: [c.fx, c.fy, c.cx, c.cy].map(|v| v as f32),
+                dims: [c.width, c.height, fields.len() as u32, usable.is_some() as u32],
+            });
+            fields.extend_from_slice(usable.map_or(&[][..], |f| f));
+        }
+        Ok(Self {
+            pipeline: ComputePipeline::new(ctx, &PipelineDesc { name: "silhouette", spirv: shaders::LOSS_SILHOUETTE, bindings: 5, push_constant_bytes: size_of::<Push>() as u32, specialization: &[WORKGROUP] })?,
+            views: GpuBuffer::from_slice(ctx, "silhouette views", &gpu_views)?,
+            fields: GpuBuffer::from_slice(ctx, "silhouette distance fields", &fields)?,
+            losses: GpuBuffer::from_slice(ctx, "silhouette loss", &[0.0])?,
+            view_count: views.len(),
+            with_mask: views.len() - without_mask.len(),
+            without_mask,
+            ctx: ctx.clone(),
+        })
+    }
+
+    /// Indices (into the views given to [`Self::new`]) of views left out: empty mask.
+    pub fn views_without_mask(&self) -> &[usize] {
+        &self.without_mask
+    }
+
+    /// Records the term for `vertices` positions (3 floats each), ADDING `weight` × its
+    /// gradient (the mean over vertices and views with a mask) into `grad_positions`; the
+    /// weighted value is summed for [`Self::take_loss`]. `near`: closer points are skipped.
+    pub fn record<'a>(&'a self, rec: &mut Recorder<'a>, positions: &'a GpuBuffer<f32>, grad_positions: &'a GpuBuffer<f32>, weight: f32, near: f32) -> GpuResult<()> {
+        let vertices = positions.len() / 3;
+        if vertices == 0 || self.with_mask == 0 || weight == 0.0 {
+            return Ok(());
+        }
+        let push = Push { vertices: vertices as u32, views: self.view_count as u32, scale: weight / (vertices * self.with_mask) as f32, near };
+        let buffers = [positions.binding(), self.views.binding(), self.fields.binding(), grad_positions.binding(), self.losses.binding()];
+        rec.dispatch_1d(&self.pipeline, &buffers, &push, (vertices as u64).div_ceil(WORKGROUP as u64))
+    }
+
+    /// The weighted loss summed since the last call (which restarts the sum).
+    pub fn take_loss(&self) -> GpuResult<f32> {
+        let value = self.losses.read()?[0];
+        let mut rec = Recorder::new(&self.ctx)?;
+        rec.fill_buffer(&self.losses, 0);
+        rec.submit_and_wait()?;
+        Ok(value)
+    }
+}

@@ -1,0 +1,120 @@
+//! The coarse stage of a later frame: the embedded deformation graph (`crate::deform`) solved
+//! coarse to fine against the frame's image, mask and silhouette losses, before any vertex
+//! moves alone. Each level renders the training views downsampled by its factor, so a limb
+//! that moved many pixels is within reach of the loss; every level stops at its plateau.
+
+use super::config::TrainConfig;
+use super::plateau::{Plateau, StopReason};
+use crate::deform::{build_graph, GraphDeformer};
+use crate::gpu::{GpuContext, Recorder};
+use crate::loss::silhouette::SilhouetteTerm;
+use crate::mesh::bounding_diagonal;
+use crate::regularize::Neighbourhoods;
+use crate::rng::SplitMix64;
+use crate::splat::{GaussianScene, RenderSettings};
+use crate::train::fit::shuffled;
+use crate::train::mesh_term::MeshTerm;
+use crate::train::{Trainer, TrainError, ViewTarget};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// One level of the graph stage.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct LevelReport {
+    /// Image downsampling factor.
+    pub factor: u32,
+    pub iterations: u32,
+    pub stop_reason: StopReason,
+    pub wall_s: f64,
+    /// Mean total loss over the level's last pass through the views.
+    pub loss: f64,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct GraphReport {
+    pub nodes: usize,
+    pub levels: Vec<LevelReport>,
+}
+
+/// What the stage works on: the frame's training views, where it starts (the extrapolated
+/// previous frame), the topology, and the silhouette term of the training views.
+pub struct GraphInput<'a> {
+    pub train: &'a [ViewTarget],
+    pub start: &'a GaussianScene,
+    pub faces: &'a [[u32; 3]],
+    pub neighbourhoods: &'a Neighbourhoods,
+    pub silhouette: &'a SilhouetteTerm,
+}
+
+/// The loss weights of a step: λ per rgba channel of the Gaussian and mesh renders.
+#[derive(Clone, Copy)]
+pub struct ImageWeights {
+    pub gaussians: [f32; 4],
+    pub mesh: [f32; 4],
+}
+
+/// Solves the graph level by level; returns the start moved by the graph (appearance
+/// unchanged) and what each level did.
+pub fn solve_graph(ctx: &Arc<GpuContext>, input: &GraphInput, config: &TrainConfig, weights: ImageWeights, settings: &RenderSettings, rng: &mut SplitMix64) -> Result<(GaussianScene, GraphReport), TrainError> {
+    let g = &config.temporal.graph;
+    let graph = build_graph(&input.start.positions, |i| input.neighbourhoods.neighbours(i), g.nodes as usize);
+    let deformer = GraphDeformer::new(ctx, &graph, input.start, g.arap).map_err(|e| TrainError::Input(format!("deformation graph: {e}")))?;
+    let diagonal = bounding_diagonal(&input.start.positions) as f32;
+    let mut report = GraphReport { nodes: deformer.nodes(), levels: Vec::new() };
+    let mut moved = input.start.clone();
+    let mut adam_step = 0;
+    for &factor in &g.levels {
+        let t0 = Instant::now();
+        let views: Vec<ViewTarget> = input.train.iter().map(|v| v.downsampled(factor)).collect();
+        let mut trainer = Trainer::new(ctx, input.start, &views)?;
+        let (width, height) = (views[0].camera.width, views[0].camera.height);
+        let mesh_term = MeshTerm::new(ctx, &input.start.positions, input.faces, width, height)?;
+        let mut rec = Recorder::new(ctx)?;
+        deformer.record_blend(&mut rec, trainer.params())?;
+        rec.submit_and_wait()?;
+
+        let mut plateau = Plateau::new(g.min_iterations, g.iterations, views.len(), config.temporal.tolerance);
+        let (mut order, mut pass_start) = (Vec::new(), 1);
+        for it in 1.. {
+            if order.is_empty() {
+                order = shuffled(views.len(), rng);
+            }
+            let view = order.pop().unwrap_or(0);
+            let frame = trainer.prepare_step(view, settings)?;
+            let mut rec = Recorder::new(ctx)?;
+            trainer.record_splat(&mut rec, view, &frame, weights.gaussians)?;
+            mesh_term.record(&mut rec, trainer.params(), trainer.grads(), trainer.camera(view), trainer.target(view), weights.mesh, settings.background)?;
+            input.silhouette.record(&mut rec, &trainer.params().positions, &trainer.grads().positions, config.temporal.silhouette, settings.near)?;
+            deformer.record_gradients(&mut rec, &trainer.grads().positions)?;
+            adam_step += 1;
+            // Tenfold decay over the level's cap.
+            let decay = 0.1f32.powf(it as f32 / g.iterations as f32);
+            deformer.record_adam(&mut rec, g.translation_lr * diagonal * decay, g.rotation_lr * decay, adam_step)?;
+            deformer.record_blend(&mut rec, trainer.params())?;
+            rec.submit_and_wait()?;
+            trainer.finish_step(frame)?;
+
+            let pass_loss = if plateau.pass_ends(it) {
+                let total = trainer.take_terms()?.total(weights.gaussians) as f64
+                    + mesh_term.take_terms()?.total(weights.mesh) as f64
+                    + input.silhouette.take_loss()? as f64
+                    + deformer.take_arap_loss()? as f64;
+                let mean = total / (it + 1 - pass_start) as f64;
+                pass_start = it + 1;
+                Some(mean)
+            } else {
+                None
+            };
+            if let Some(stop_reason) = plateau.check(it, pass_loss) {
+                let loss = pass_loss.unwrap_or(f64::NAN);
+                if !loss.is_finite() {
+                    return Err(TrainError::Input(format!("the deformation graph's loss went non-finite at level {factor}, iteration {it}")));
+                }
+                report.levels.push(LevelReport { factor, iterations: it, stop_reason, wall_s: t0.elapsed().as_secs_f64(), loss });
+                break;
+            }
+        }
+        moved = trainer.scene()?;
+    }
+    Ok((moved, report))
+}
