@@ -144,3 +144,41 @@ fn bad_inputs_are_named() {
     assert!(error.contains("fin.obj") && error.contains("non-manifold"), "{error}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Later frames that lose the subject: views with an empty mask are left out and named, a
+/// frame with none left keeps its extrapolated pose, and every frame is still written.
+#[test]
+fn frames_that_lose_the_subject_keep_going_and_say_where() {
+    let g = gpu();
+    let dir = temp("lost");
+    let data = dir.join("data");
+    let options = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 8, frames: 4, resolution: 96, seed: 5, samples: 2, track_vertices: 10, track_surface: 10, ..Default::default() };
+    generate(&options, &data).unwrap();
+    let meta: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(data.join("dataset.json")).unwrap()).unwrap();
+    let test_cameras: Vec<&str> = meta["test_cameras"].as_array().unwrap().iter().map(|c| c.as_str().unwrap()).collect();
+    let train_cameras: Vec<String> = meta["cameras"].as_array().unwrap().iter().map(|c| c.as_str().unwrap().to_string()).filter(|c| !test_cameras.contains(&c.as_str())).collect();
+    let blank = |camera: &str, t: usize| image::GrayImage::new(96, 96).save(data.join(format!("masks/{camera}/{t:06}.png"))).unwrap();
+    blank(&train_cameras[0], 2);
+    blank(&train_cameras[2], 2);
+    train_cameras.iter().for_each(|c| blank(c, 3));
+
+    let out = dir.join("out");
+    let mut config = quick_config();
+    config.temporal.iterations = 60;
+    config.temporal.graph.iterations = 40;
+    let report = run_train(g.ctx(), &job(&data, &out, config, None), &mut |_| {}).unwrap();
+    let frame = |t: usize| report.frames.iter().find(|f| f.frame == t).unwrap();
+    assert!(frame(1).lost_views.is_empty());
+    assert_eq!(frame(2).lost_views, vec![train_cameras[0].clone(), train_cameras[2].clone()]);
+    assert!(frame(2).iterations > 0 && frame(2).graph.is_some());
+    assert_eq!(frame(3).lost_views, train_cameras);
+    assert_eq!(frame(3).stop_reason, tagsplat::train::pipeline::StopReason::NoViews);
+    assert_eq!(frame(3).iterations, 0);
+    for t in 0..4 {
+        assert!(out.join(format!("meshes/{t:06}.ply")).is_file(), "frame {t} is written");
+    }
+    assert!(out.join("sequence.glb").is_file(), "the sequence is exported");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["frames"][3]["stop_reason"], "no_views");
+    let _ = std::fs::remove_dir_all(&dir);
+}

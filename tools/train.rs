@@ -30,7 +30,7 @@ pub struct TrainArgs {
     print_config: bool,
 }
 
-fn parse_range(text: &str) -> Result<std::ops::Range<usize>, String> {
+pub(crate) fn parse_range(text: &str) -> Result<std::ops::Range<usize>, String> {
     let (a, b) = text.split_once("..").ok_or_else(|| format!("'{text}' is not A..B"))?;
     let parse = |s: &str| s.trim().parse::<usize>().map_err(|e| format!("'{s}' in '{text}': {e}"));
     let (a, b) = (parse(a)?, parse(b)?);
@@ -80,9 +80,14 @@ pub fn print_report(r: &TrainReport) {
     if !r.resumed_frames.is_empty() {
         println!("resumed: frames {:?} were complete", r.resumed_frames);
     }
-    println!("frame  iters  seconds  Gaussians  PSNR gs  PSNR mesh");
+    println!("frame  graph iters  iters  stopped         seconds  Gaussians  PSNR gs  PSNR mesh");
     for f in &r.frames {
-        println!("{:>5}  {:>5}  {:>7.1}  {:>9}  {:>7.2}  {:>9.2}", f.frame, f.iterations, f.wall_s, f.gaussians, f.psnr_gs, f.psnr_mesh);
+        let graph = f.graph.as_ref().map_or("-".into(), |g| g.levels.iter().map(|l| l.iterations.to_string()).collect::<Vec<_>>().join("+"));
+        let stop = serde_json::to_value(f.stop_reason).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default();
+        println!("{:>5}  {graph:>11}  {:>5}  {stop:<14}  {:>7.1}  {:>9}  {:>7.2}  {:>9.2}", f.frame, f.iterations, f.wall_s, f.gaussians, f.psnr_gs, f.psnr_mesh);
+    }
+    for f in r.frames.iter().filter(|f| !f.lost_views.is_empty()) {
+        println!("frame {}: no subject in view(s) {} (left out of the frame{})", f.frame, f.lost_views.join(", "), if f.graph.is_none() && f.iterations == 0 { "; no view left, the pose is extrapolated" } else { "" });
     }
     for path in &r.outputs {
         println!("wrote {}", path.display());

@@ -188,6 +188,13 @@ fn read_losses(trainer: &Trainer, mesh_term: &MeshTerm, regs: &Regularizers, sil
     Ok((gs + mesh + sil) as f64)
 }
 
+impl FrameReport {
+    /// A frame that was not optimised: no training view shows the subject (`lost_views`).
+    pub fn without_views(frame: usize, gaussians: usize, lost_views: Vec<String>) -> Self {
+        Self { gaussians, lost_views, stop_reason: StopReason::NoViews, ..empty_report(frame) }
+    }
+}
+
 fn empty_report(frame: usize) -> FrameReport {
     FrameReport {
         frame,

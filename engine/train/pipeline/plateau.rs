@@ -10,6 +10,9 @@ pub enum StopReason {
     Converged,
     /// The iteration cap came first.
     MaxIterations,
+    /// Nothing to fit: no training view of the frame shows the subject (the frame keeps the
+    /// extrapolated pose).
+    NoViews,
 }
 
 /// The stopping test of one stage.

@@ -94,9 +94,20 @@ pub fn run_train(ctx: &Arc<GpuContext>, job: &TrainJob, progress: &mut dyn FnMut
             return Err(TrainError::Input(format!("frame {t} needs frame {} in {}", t - 1, job.out.display())));
         }
         let (train, eval) = views(&dataset, t, &job.config)?;
+        // A view whose mask is empty has lost the subject: it is left out of this frame, and
+        // a frame with no view left keeps its extrapolated pose; the report names both.
+        let (train, lost): (Vec<_>, Vec<_>) = train.into_iter().partition(ViewTarget::has_subject);
+        let lost_views: Vec<String> = lost.into_iter().map(|v| v.name).collect();
         let start = extrapolate(&previous, before_previous.as_ref());
-        let task = FrameTask { frame: t, train: &train, eval: &eval, start, mesh: &mut mesh, previous: Some(&previous) };
-        let (scene, frame_report) = optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| progress(TrainProgress { frame: t, frames_end: frames.end, iteration, iterations }))?;
+        let (scene, frame_report) = if train.is_empty() {
+            let report = FrameReport::without_views(t, start.len(), lost_views);
+            mesh.positions = start.positions.clone();
+            (start, report)
+        } else {
+            let task = FrameTask { frame: t, train: &train, eval: &eval, start, mesh: &mut mesh, previous: Some(&previous) };
+            let (scene, report) = optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| progress(TrainProgress { frame: t, frames_end: frames.end, iteration, iterations }))?;
+            (scene, FrameReport { lost_views, ..report })
+        };
         write_frame(&out, t, &mesh, &scene)?;
         before_previous = Some(std::mem::replace(&mut previous, scene));
         report.frames.push(frame_report);
