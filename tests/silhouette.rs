@@ -10,7 +10,7 @@ use glam::DVec3;
 use tagsplat::camera::Camera;
 use tagsplat::gpu::{GpuBuffer, Recorder};
 use tagsplat::loss::silhouette::reference::silhouette_loss;
-use tagsplat::loss::silhouette::{SilhouetteTerm, SilhouetteView};
+use tagsplat::loss::silhouette::{self, SilhouetteTerm, SilhouetteView};
 
 const SIZE: u32 = 48;
 
@@ -134,4 +134,67 @@ fn hard_cases() {
     let empty: Vec<SilhouetteView> = views.iter().map(|v| SilhouetteView { camera: v.camera, field: None }).collect();
     let term = SilhouetteTerm::new(ctx, &empty).unwrap();
     assert_eq!(term.views_without_mask(), &[0, 1, 2]);
+}
+
+/// A 40² view of the sphere with the left half of its mask uncovered by the "render".
+fn coverage_case() -> (Camera, Vec<f32>, Vec<f32>, Vec<[f64; 3]>) {
+    let view = &views(0)[1];
+    let camera = Camera { width: 40, height: 40, fx: view.camera.fx * 40.0 / SIZE as f64, fy: view.camera.fy * 40.0 / SIZE as f64, cx: 20.0, cy: 20.0, ..view.camera };
+    let mask: Vec<f32> = (0..1600).map(|p| (((p % 40) as f64 - 19.5).hypot((p / 40) as f64 - 19.5) < 12.0) as u8 as f32).collect();
+    let coverage: Vec<f32> = (0..1600).map(|p| ((p % 40) >= 20) as u8 as f32).collect();
+    (camera, mask, coverage, points(300, 7))
+}
+
+#[test]
+fn coverage_reference_matches_central_differences() {
+    let (camera, mask, coverage, pts) = coverage_case();
+    let (value, grads) = silhouette::reference::coverage_loss(&pts, &camera, (&mask, &coverage), 8, 2.0, 0.01);
+    assert!(value > 0.0);
+    let scale = grads.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let h = 1e-7;
+    let mut checked = 0;
+    for i in 0..pts.len() {
+        for a in 0..3 {
+            let at = |delta: f64| {
+                let mut p = pts.clone();
+                p[i][a] += delta;
+                silhouette::reference::coverage_loss(&p, &camera, (&mask, &coverage), 8, 2.0, 0.01).0
+            };
+            let numeric = (at(h) - at(-h)) / (2.0 * h);
+            assert!((numeric - grads[i][a]).abs() < 1e-4 * scale, "point {i} axis {a}: {} vs {numeric}", grads[i][a]);
+            checked += (grads[i][a] != 0.0) as usize;
+        }
+    }
+    assert!(checked > 20, "only {checked} non-zero gradient components were checked");
+}
+
+#[test]
+fn coverage_gpu_matches_reference() {
+    let test = gpu();
+    let ctx = test.ctx();
+    let (camera, mask, coverage, pts) = coverage_case();
+    let flat: Vec<f32> = pts.iter().flatten().map(|&v| v as f32).collect();
+    let pts32: Vec<[f64; 3]> = flat.chunks(3).map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]).collect();
+    let positions = GpuBuffer::from_slice(ctx, "positions", &flat).unwrap();
+    let grads = GpuBuffer::from_slice(ctx, "gradients", &vec![0.5f32; flat.len()]).unwrap();
+    let target = GpuBuffer::from_slice(ctx, "target", &mask.iter().map(|&m| [0.0, 0.0, 0.0, m]).collect::<Vec<_>>()).unwrap();
+    let render = GpuBuffer::from_slice(ctx, "render", &coverage.iter().map(|&c| [0.0, 0.0, 0.0, c]).collect::<Vec<_>>()).unwrap();
+    let term = silhouette::CoverageTerm::new(ctx, pts.len(), 1600, 8).unwrap();
+    let mut rec = Recorder::new(ctx).unwrap();
+    term.record(&mut rec, &camera, (&target, &render), &positions, &grads, 2.0, 0.01).unwrap();
+    rec.submit_and_wait().unwrap();
+    let (value, expect) = silhouette::reference::coverage_loss(&pts32, &camera, (&mask, &coverage), 8, 2.0, 0.01);
+    let got = grads.read().unwrap();
+    let scale = expect.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (i, e) in expect.iter().enumerate() {
+        for a in 0..3 {
+            assert!((got[3 * i + a] as f64 - 0.5 - e[a]).abs() < 1e-4 * scale, "point {i} axis {a}: {} vs {}", got[3 * i + a] - 0.5, e[a]);
+        }
+    }
+    let gpu_value = term.take_loss().unwrap() as f64;
+    assert!((gpu_value - value).abs() < 1e-4 * value, "{gpu_value} vs {value}");
+    // A view larger than the buffers is refused, not overrun.
+    let big = Camera { width: 41, ..camera };
+    let mut rec = Recorder::new(ctx).unwrap();
+    assert!(term.record(&mut rec, &big, (&target, &render), &positions, &grads, 2.0, 0.01).is_err());
 }

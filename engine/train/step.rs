@@ -157,6 +157,11 @@ impl Trainer {
         &self.state.grads
     }
 
+    /// The last Gaussian render (rgba per pixel; alpha is its coverage).
+    pub fn rendered(&self) -> &GpuBuffer<[f32; 4]> {
+        self.splatter.rgba()
+    }
+
     /// Training view `view`'s target (rgb over the background, mask), on the GPU.
     pub fn target(&self, view: usize) -> &GpuBuffer<[f32; 4]> {
         &self.targets[view]

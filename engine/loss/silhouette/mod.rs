@@ -3,11 +3,14 @@
 //! the mask's distance field, from any distance: the anti-aliased edge gradient of the
 //! rasterizer acts within a pixel of the outline, this acts everywhere. All views are scored
 //! in every step (one field lookup per vertex and view); a view whose mask is empty is left out
-//! and named by [`SilhouetteTerm::views_without_mask`].
+//! and named by [`SilhouetteTerm::views_without_mask`]. [`CoverageTerm`] is the other
+//! direction: mask pixels the render leaves uncovered pull the nearest vertex.
 
+mod coverage;
 mod distance;
 pub mod reference;
 
+pub use coverage::CoverageTerm;
 pub use distance::mask_distance;
 
 use crate::camera::Camera;

@@ -50,3 +50,48 @@ pub fn silhouette_loss(positions: &[[f64; 3]], views: &[SilhouetteView], weight:
     }
     (energy, grads)
 }
+
+/// The coverage term (coverage_*.comp) for one view: `mask` and `coverage` per pixel
+/// (row-major), uncovered where mask > 0.5 and coverage < 0.5; value and position gradients.
+pub fn coverage_loss(positions: &[[f64; 3]], camera: &crate::camera::Camera, (mask, coverage): (&[f32], &[f32]), radius: i64, weight: f64, near: f64) -> (f64, Vec<[f64; 3]>) {
+    let (w, h) = (camera.width as i64, camera.height as i64);
+    let project = |x: [f64; 3]| {
+        let c = camera.to_camera(DVec3::from(x));
+        (c, DVec2::new(camera.fx * c.x / c.z + camera.cx, camera.fy * c.y / c.z + camera.cy))
+    };
+    // Each pixel keeps its lowest-id vertex.
+    let mut seeds = vec![usize::MAX; (w * h) as usize];
+    for (i, x) in positions.iter().enumerate().rev() {
+        let (c, uv) = project(*x);
+        if c.z > near && uv.x >= 0.0 && uv.y >= 0.0 && uv.x < w as f64 && uv.y < h as f64 {
+            seeds[(uv.y as i64 * w + uv.x as i64) as usize] = i;
+        }
+    }
+    let scale = weight / (w * h) as f64;
+    let (mut energy, mut grads) = (0.0, vec![[0.0; 3]; positions.len()]);
+    for p in 0..(w * h) {
+        if !(mask[p as usize] > 0.5 && !(coverage[p as usize] >= 0.5)) {
+            continue;
+        }
+        let centre = DVec2::new((p % w) as f64 + 0.5, (p / w) as f64 + 0.5);
+        let window = (-radius..=radius).flat_map(|dy| (-radius..=radius).map(move |dx| (p % w + dx, p / w + dy)));
+        let nearest = window
+            .filter(|&(x, y)| x >= 0 && y >= 0 && x < w && y < h)
+            .map(|(x, y)| seeds[(y * w + x) as usize])
+            .filter(|&s| s != usize::MAX)
+            .min_by(|&a, &b| {
+                let d = |s: usize| (project(positions[s]).1 - centre).length_squared();
+                d(a).total_cmp(&d(b)).then(a.cmp(&b))
+            });
+        let Some(s) = nearest else { continue };
+        let (c, uv) = project(positions[s]);
+        energy += scale * (uv - centre).length_squared();
+        let g = 2.0 * scale * (uv - centre);
+        let dc = DVec3::new(g.x * camera.fx / c.z, g.y * camera.fy / c.z, -(g.x * camera.fx * c.x + g.y * camera.fy * c.y) / (c.z * c.z));
+        let dx = DMat3::from_mat4(camera.world_to_camera).transpose() * dc;
+        for a in 0..3 {
+            grads[s][a] += dx[a];
+        }
+    }
+    (energy, grads)
+}

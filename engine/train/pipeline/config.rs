@@ -66,6 +66,10 @@ pub struct TemporalConfig {
     pub freeze_appearance: bool,
     /// Weight of the long-range silhouette term (every vertex inside every mask; 0: off).
     pub silhouette: f32,
+    /// Weight of the coverage term (mask pixels the render leaves uncovered pull the nearest
+    /// vertex; 0: off) and how far it searches, pixels at the level's resolution.
+    pub coverage: f32,
+    pub coverage_radius: u32,
     pub graph: GraphConfig,
 }
 
@@ -150,7 +154,7 @@ impl Default for CanonicalConfig {
 
 impl Default for TemporalConfig {
     fn default() -> Self {
-        Self { iterations: 300, min_iterations: 60, tolerance: 0.005, freeze_appearance: true, silhouette: 10.0, graph: GraphConfig::default() }
+        Self { iterations: 300, min_iterations: 60, tolerance: 0.005, freeze_appearance: true, silhouette: 10.0, coverage: 0.01, coverage_radius: 24, graph: GraphConfig::default() }
     }
 }
 
@@ -240,6 +244,7 @@ impl TrainConfig {
             ("loss.lambda_w", l.lambda_w),
             ("temporal.tolerance", self.temporal.tolerance),
             ("temporal.silhouette", self.temporal.silhouette),
+            ("temporal.coverage", self.temporal.coverage),
             ("temporal.graph.arap", self.temporal.graph.arap),
             ("learning_rates.log_scales", r.log_scales),
             ("learning_rates.rotations", r.rotations),

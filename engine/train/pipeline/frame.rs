@@ -8,7 +8,7 @@ use super::graph_stage::{solve_graph, GraphInput, GraphReport, ImageWeights};
 use super::plateau::{Plateau, StopReason};
 use crate::eval::psnr;
 use crate::gpu::{GpuContext, Recorder};
-use crate::loss::silhouette::{SilhouetteTerm, SilhouetteView};
+use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm, SilhouetteView};
 use crate::optim::{AdamParams, LearningRates};
 use crate::regularize::{Losses, Neighbourhoods, Regularizers, Temporal};
 use crate::rng::SplitMix64;
@@ -43,6 +43,7 @@ pub struct FrameReport {
     /// Mean weighted losses of the last statistics interval.
     pub loss_gs: f32,
     pub loss_mesh: f32,
+    /// Silhouette and coverage terms, weighted, mean per iteration (later frames).
     pub loss_silhouette: f32,
     /// Unweighted regularizer values of the last statistics check.
     pub regularizers: [f32; 6],
@@ -107,6 +108,8 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
     let mut regs = Regularizers::new(ctx)?;
     regs.upload(&Neighbourhoods::from_mesh(task.mesh))?;
     let previous = task.previous.map(|p| GaussianBuffers::from_scene(ctx, p)).transpose()?;
+    let pixels = task.train.iter().map(|v| v.target.len()).max().unwrap_or(0);
+    let coverage = if canonical { None } else { Some(CoverageTerm::new(ctx, start.len(), pixels, t.coverage_radius)?) };
 
     // Frame 0 runs all its iterations (min = max), reading the losses every `stats_every`.
     let mut plateau = if canonical { Plateau::new(iterations, iterations, config.report.stats_every as usize, 0.0) } else { Plateau::new(t.min_iterations, iterations, task.train.len(), t.tolerance) };
@@ -132,6 +135,9 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
         if let Some(s) = &silhouette {
             s.record(&mut rec, &trainer.params().positions, &trainer.grads().positions, t.silhouette, settings.near)?;
         }
+        if let Some(c) = &coverage {
+            c.record(&mut rec, trainer.camera(view), (trainer.target(view), trainer.rendered()), &trainer.params().positions, &trainer.grads().positions, t.coverage, settings.near)?;
+        }
         rec.end_pass();
         trainer.record_adam(&mut rec, &adam)?;
         add_times(&mut passes, &rec.submit_and_wait()?);
@@ -139,7 +145,8 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
         train_s += t0.elapsed().as_secs_f64();
 
         let pass_loss = if plateau.pass_ends(it) {
-            let mean = read_losses(&trainer, &mesh_term, &regs, silhouette.as_ref(), weights, (interval_start, it), &mut report)?;
+            let silhouettes = (silhouette.as_ref(), coverage.as_ref());
+            let mean = read_losses(&trainer, &mesh_term, &regs, silhouettes, weights, (interval_start, it), &mut report)?;
             interval_start = it + 1;
             Some(mean)
         } else {
@@ -170,12 +177,20 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
 }
 
 /// Reads back the losses summed over iterations `first..=last` into the report (mean weighted
-/// image terms, silhouette, unweighted regularizers) and returns their weighted mean total;
+/// image terms, silhouette and coverage, unweighted regularizers) and returns their weighted mean total;
 /// a non-finite value is an error naming the frame, the iterations and the terms.
-fn read_losses(trainer: &Trainer, mesh_term: &MeshTerm, regs: &Regularizers, silhouette: Option<&SilhouetteTerm>, weights: ImageWeights, (first, last): (u32, u32), report: &mut FrameReport) -> Result<f64, TrainError> {
+fn read_losses(
+    trainer: &Trainer,
+    mesh_term: &MeshTerm,
+    regs: &Regularizers,
+    (silhouette, coverage): (Option<&SilhouetteTerm>, Option<&CoverageTerm>),
+    weights: ImageWeights,
+    (first, last): (u32, u32),
+    report: &mut FrameReport,
+) -> Result<f64, TrainError> {
     let steps = (last - first + 1) as f32;
     let (gs, mesh) = (trainer.take_terms()?.total(weights.gaussians) / steps, mesh_term.take_terms()?.total(weights.mesh) / steps);
-    let sil = silhouette.map(|s| s.take_loss()).transpose()?.unwrap_or(0.0) / steps;
+    let sil = (silhouette.map(|s| s.take_loss()).transpose()?.unwrap_or(0.0) + coverage.map(|c| c.take_loss()).transpose()?.unwrap_or(0.0)) / steps;
     let regularizers: Losses<f32> = regs.read_losses()?;
     if !(gs.is_finite() && mesh.is_finite() && sil.is_finite() && regularizers.slots().iter().all(|v| v.is_finite())) {
         return Err(TrainError::Input(format!(

@@ -7,7 +7,7 @@ use super::config::TrainConfig;
 use super::plateau::{Plateau, StopReason};
 use crate::deform::{build_graph, GraphDeformer};
 use crate::gpu::{GpuContext, Recorder};
-use crate::loss::silhouette::SilhouetteTerm;
+use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm};
 use crate::mesh::bounding_diagonal;
 use crate::regularize::Neighbourhoods;
 use crate::rng::SplitMix64;
@@ -69,6 +69,7 @@ pub fn solve_graph(ctx: &Arc<GpuContext>, input: &GraphInput, config: &TrainConf
         let mut trainer = Trainer::new(ctx, input.start, &views)?;
         let (width, height) = (views[0].camera.width, views[0].camera.height);
         let mesh_term = MeshTerm::new(ctx, &input.start.positions, input.faces, width, height)?;
+        let coverage = CoverageTerm::new(ctx, input.start.len(), (width * height) as usize, config.temporal.coverage_radius)?;
         let mut rec = Recorder::new(ctx)?;
         deformer.record_blend(&mut rec, trainer.params())?;
         rec.submit_and_wait()?;
@@ -85,6 +86,8 @@ pub fn solve_graph(ctx: &Arc<GpuContext>, input: &GraphInput, config: &TrainConf
             trainer.record_splat(&mut rec, view, &frame, weights.gaussians)?;
             mesh_term.record(&mut rec, trainer.params(), trainer.grads(), trainer.camera(view), trainer.target(view), weights.mesh, settings.background)?;
             input.silhouette.record(&mut rec, &trainer.params().positions, &trainer.grads().positions, config.temporal.silhouette, settings.near)?;
+            let images = (trainer.target(view), trainer.rendered());
+            coverage.record(&mut rec, trainer.camera(view), images, &trainer.params().positions, &trainer.grads().positions, config.temporal.coverage, settings.near)?;
             deformer.record_gradients(&mut rec, &trainer.grads().positions)?;
             adam_step += 1;
             // Tenfold decay over the level's cap.
@@ -98,6 +101,7 @@ pub fn solve_graph(ctx: &Arc<GpuContext>, input: &GraphInput, config: &TrainConf
                 let total = trainer.take_terms()?.total(weights.gaussians) as f64
                     + mesh_term.take_terms()?.total(weights.mesh) as f64
                     + input.silhouette.take_loss()? as f64
+                    + coverage.take_loss()? as f64
                     + deformer.take_arap_loss()? as f64;
                 let mean = total / (it + 1 - pass_start) as f64;
                 pass_start = it + 1;

@@ -1,0 +1,102 @@
+//! The coverage term, the silhouette term's other direction (shaders/loss/coverage_*.comp):
+//! a pixel the mask covers but the render does not pulls the nearest projected vertex towards
+//! itself, so a limb that moved many pixels is drawn to where the mask now shows it. Scored on
+//! the step's view: E = weight / pixels · Σ over such pixels p of ‖uv_s − p‖², s the nearest
+//! vertex among the lowest-id vertex of each pixel within `radius` pixels (Chebyshev).
+
+use crate::camera::Camera;
+use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder};
+use crate::shaders;
+use bytemuck::{Pod, Zeroable};
+use std::sync::Arc;
+
+const WORKGROUP: u32 = 128;
+
+/// Push constants of both kernels (coverage_common.glsl `Push`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Push {
+    world_to_camera: [f32; 16],
+    intrinsics: [f32; 4],
+    width: u32,
+    height: u32,
+    vertices: u32,
+    radius: u32,
+    scale: f32,
+    near: f32,
+}
+
+pub struct CoverageTerm {
+    ctx: Arc<GpuContext>,
+    seed: ComputePipeline,
+    pull: ComputePipeline,
+    projected: GpuBuffer<[f32; 2]>,
+    seeds: GpuBuffer<u32>,
+    losses: GpuBuffer<f32>,
+    radius: u32,
+}
+
+impl CoverageTerm {
+    /// For `vertices` vertices and views of at most `pixels` pixels, searching `radius` pixels.
+    pub fn new(ctx: &Arc<GpuContext>, vertices: usize, pixels: usize, radius: u32) -> GpuResult<Self> {
+        let pipeline = |name, spirv, bindings| ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes: size_of::<Push>() as u32, specialization: &[WORKGROUP] });
+        Ok(Self {
+            seed: pipeline("coverage seed", shaders::LOSS_COVERAGE_SEED, 3)?,
+            pull: pipeline("coverage pull", shaders::LOSS_COVERAGE_PULL, 7)?,
+            projected: GpuBuffer::new(ctx, "coverage projected vertices", vertices)?,
+            seeds: GpuBuffer::new(ctx, "coverage seeds", pixels)?,
+            losses: GpuBuffer::from_slice(ctx, "coverage loss", &[0.0])?,
+            radius,
+            ctx: ctx.clone(),
+        })
+    }
+
+    /// Records the term for `camera`'s view: `target` and `render` are its rgba images (alpha:
+    /// the mask and the render's coverage), `positions` 3 floats per vertex; ADDS the weighted
+    /// gradient into `grad_positions` and sums the weighted value for [`Self::take_loss`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn record<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        camera: &Camera,
+        (target, render): (&'a GpuBuffer<[f32; 4]>, &'a GpuBuffer<[f32; 4]>),
+        positions: &'a GpuBuffer<f32>,
+        grad_positions: &'a GpuBuffer<f32>,
+        weight: f32,
+        near: f32,
+    ) -> GpuResult<()> {
+        let (vertices, pixels) = (positions.len() / 3, camera.width as usize * camera.height as usize);
+        if weight == 0.0 || vertices == 0 || pixels == 0 {
+            return Ok(());
+        }
+        // Both buffers were sized at construction; a larger mesh or view would overrun them.
+        for (name, len, capacity) in [(self.projected.name(), vertices, self.projected.len()), (self.seeds.name(), pixels, self.seeds.len().min(target.len()).min(render.len()))] {
+            if len > capacity {
+                return Err(crate::gpu::GpuError::LengthMismatch { what: "coverage term", name: name.to_string(), len, capacity });
+            }
+        }
+        let push = Push {
+            world_to_camera: camera.world_to_camera.to_cols_array().map(|v| v as f32),
+            intrinsics: [camera.fx, camera.fy, camera.cx, camera.cy].map(|v| v as f32),
+            width: camera.width,
+            height: camera.height,
+            vertices: vertices as u32,
+            radius: self.radius,
+            scale: weight / pixels as f32,
+            near,
+        };
+        rec.fill_buffer(&self.seeds, u32::MAX);
+        rec.dispatch_1d(&self.seed, &[positions.binding(), self.projected.binding(), self.seeds.binding()], &push, (vertices as u64).div_ceil(WORKGROUP as u64))?;
+        let pull = [positions.binding(), self.projected.binding(), self.seeds.binding(), target.binding(), render.binding(), grad_positions.binding(), self.losses.binding()];
+        rec.dispatch_1d(&self.pull, &pull, &push, (pixels as u64).div_ceil(WORKGROUP as u64))
+    }
+
+    /// The weighted loss summed since the last call (which restarts the sum).
+    pub fn take_loss(&self) -> GpuResult<f32> {
+        let value = self.losses.read()?[0];
+        let mut rec = Recorder::new(&self.ctx)?;
+        rec.fill_buffer(&self.losses, 0);
+        rec.submit_and_wait()?;
+        Ok(value)
+    }
+}
