@@ -5,6 +5,7 @@
 //! - [`gpu`]: Vulkan context, buffers, compute pipelines, command recording, timestamps,
 //!   validation.
 //! - [`sort`]: exclusive prefix scan and LSD radix sort on the GPU.
+//! - [`ablate`]: the temporal stage's ablations on a benchmark with ground truth.
 //! - [`bench`]: benchmarks measured against bounds from the same run.
 //! - [`demo`]: the whole job on generated data, scored against its ground truth.
 //! - [`rng`]: a small deterministic generator for tests, benchmarks and synthetic data.
@@ -25,6 +26,7 @@
 //! - [`init`]: the first mesh of a frame from its masks (visual hull, marching tetrahedra,
 //!   vertex colours), when no mesh is given.
 
+pub mod ablate;
 pub mod bench;
 pub mod camera;
 pub mod deform;

@@ -52,6 +52,16 @@ pub struct AblateArgs {
     /// Base TOML config (see `tagsplat train --print-config`).
     #[arg(long)]
     config: Option<PathBuf>,
+    /// The temporal stage's ablations instead of the paper's, on a benchmark dataset with
+    /// ground truth (DIR/gt/info.json); every variant continues the frame 0 of --frame0.
+    #[arg(long, requires = "frame0")]
+    temporal: bool,
+    /// A finished `tagsplat train` output whose frame 0 the temporal variants continue.
+    #[arg(long)]
+    frame0: Option<PathBuf>,
+    /// Frames of the temporal variants, A..B (default: all).
+    #[arg(long, value_parser = crate::train::parse_range)]
+    frames: Option<std::ops::Range<usize>>,
 }
 
 pub fn ablate(ctx: &Arc<GpuContext>, args: &AblateArgs) -> Result<()> {
@@ -66,7 +76,19 @@ pub fn ablate(ctx: &Arc<GpuContext>, args: &AblateArgs) -> Result<()> {
         bar.set_length(p.iterations as u64);
         bar.set_position(p.iteration as u64);
     };
-    tagsplat::demo::run_ablations(ctx, &args.data, &args.out, &base, &mut progress).with_context(|| format!("ablations of {}", args.data.display()))?;
+    match &args.frame0 {
+        Some(frame0) if args.temporal => {
+            let frames = match &args.frames {
+                Some(range) => range.clone(),
+                None => 0..tagsplat::io::dataset::Dataset::load(&args.data)?.frames.len(),
+            };
+            let job = tagsplat::ablate::TemporalAblationJob { data: args.data.clone(), out: args.out.clone(), base, frame0: frame0.clone(), frames };
+            tagsplat::ablate::run_temporal_ablations(ctx, &job, &mut progress).with_context(|| format!("temporal ablations of {}", args.data.display()))?;
+        }
+        _ => {
+            tagsplat::demo::run_ablations(ctx, &args.data, &args.out, &base, &mut progress).with_context(|| format!("ablations of {}", args.data.display()))?;
+        }
+    }
     bar.finish_and_clear();
     print!("{}", std::fs::read_to_string(args.out.join("ablation.md"))?);
     println!("wrote {}", args.out.join("ablation.md").display());

@@ -1,0 +1,135 @@
+//! `tagsplat ablate --temporal`: the temporal stage's parts switched off one at a time on a
+//! benchmark with ground truth (`DIR/gt/`, see `eval::sequence`), every variant continuing
+//! one finished frame 0, so the rows differ only in what happens after it.
+
+use crate::demo::Ablation;
+use crate::eval::{evaluate_sequence, find_ground_truth, GroundTruth, SequenceEvalError, SequenceEvalOptions};
+use crate::gpu::GpuContext;
+use crate::train::output::SequenceOutput;
+use crate::train::pipeline::{run_train, TrainConfig, TrainJob, TrainProgress};
+use crate::train::TrainError;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The temporal stage's parts, each off in turn, and the stage they replaced.
+pub fn temporal_ablations() -> Vec<Ablation> {
+    vec![
+        Ablation { name: "full model", apply: |_| {} },
+        Ablation { name: "w/o deformation graph", apply: |c| c.temporal.graph.nodes = 0 },
+        Ablation { name: "w/o coarse level", apply: |c| c.temporal.graph.levels = vec![1] },
+        Ablation { name: "w/o silhouette term", apply: |c| c.temporal.silhouette = 0.0 },
+        Ablation { name: "w/o coverage term", apply: |c| c.temporal.coverage = 0.0 },
+        Ablation {
+            name: "w/o adaptive iterations",
+            apply: |c| (c.temporal.min_iterations, c.temporal.graph.min_iterations) = (c.temporal.iterations, c.temporal.graph.iterations),
+        },
+        Ablation {
+            name: "previous temporal stage",
+            apply: |c| (c.temporal.graph.nodes, c.temporal.silhouette, c.temporal.coverage, c.temporal.iterations, c.temporal.min_iterations) = (0, 0.0, 0.0, 300, 300),
+        },
+    ]
+}
+
+pub struct TemporalAblationJob {
+    /// A benchmark dataset (with `gt/info.json`).
+    pub data: PathBuf,
+    pub out: PathBuf,
+    pub base: TrainConfig,
+    /// A `tagsplat train` output whose frame 0 every variant continues.
+    pub frame0: PathBuf,
+    pub frames: Range<usize>,
+}
+
+/// One variant's scores (fractions of the benchmark's size, dB, seconds).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct TemporalRow {
+    pub variant: String,
+    pub tracking_rmse: f64,
+    pub tracking_worst_frame: f64,
+    pub chamfer_worst_frame: f64,
+    pub psnr_mesh_last_db: f64,
+    /// Means over the later frames.
+    pub seconds_per_frame: f64,
+    pub iterations_per_frame: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum AblateError {
+    #[error("{0} has no gt/info.json: temporal ablations need a benchmark with ground truth")]
+    NoGroundTruth(PathBuf),
+    #[error("{}: no finished frame 0 to continue", .0.display())]
+    NoFrame0(PathBuf),
+    #[error(transparent)]
+    Train(#[from] TrainError),
+    #[error(transparent)]
+    Eval(#[from] SequenceEvalError),
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+}
+
+/// Runs every variant into `out/<n>_<name>/` (a finished variant is resumed, not redone) and
+/// writes `out/ablation.md` and `out/ablation.json`.
+pub fn run_temporal_ablations(ctx: &Arc<GpuContext>, job: &TemporalAblationJob, progress: &mut dyn FnMut(&str, TrainProgress)) -> Result<Vec<TemporalRow>, AblateError> {
+    let gt = GroundTruth::read(&find_ground_truth(&job.data).ok_or_else(|| AblateError::NoGroundTruth(job.data.clone()))?)?;
+    let mut rows = Vec::new();
+    for (i, ablation) in temporal_ablations().iter().enumerate() {
+        let mut config = job.base.clone();
+        (ablation.apply)(&mut config);
+        let dir = job.out.join(format!("{i}_{}", ablation.name.replace(['/', ' '], "_")));
+        copy_frame0(&job.frame0, &dir)?;
+        let train = run_train(ctx, &TrainJob { data: job.data.clone(), out: dir.clone(), mesh: None, config, frames: Some(job.frames.clone()) }, &mut |p| progress(ablation.name, p))?;
+        let eval = evaluate_sequence(&dir, &gt, &SequenceEvalOptions { frames: Some(job.frames.clone()), ..Default::default() })?;
+        let later: Vec<_> = train.frames.iter().filter(|f| f.frame > 0).collect();
+        let mean = |v: &dyn Fn(&crate::train::pipeline::FrameReport) -> f64| later.iter().map(|f| v(f)).sum::<f64>() / later.len().max(1) as f64;
+        let s = &eval.summary;
+        rows.push(TemporalRow {
+            variant: ablation.name.to_string(),
+            tracking_rmse: s.tracking_rmse_over_size.unwrap_or(f64::NAN),
+            tracking_worst_frame: s.tracking_worst_frame.map_or(f64::NAN, |v| v.value),
+            chamfer_worst_frame: s.chamfer_worst_frame.map_or(f64::NAN, |v| v.value),
+            psnr_mesh_last_db: s.psnr_mesh_last_db.unwrap_or(f64::NAN),
+            seconds_per_frame: mean(&|f| f.wall_s),
+            iterations_per_frame: mean(&|f| f.iterations as f64 + f.graph.as_ref().map_or(0.0, |g| g.levels.iter().map(|l| l.iterations as f64).sum())),
+        });
+    }
+    write_tables(&job.out, &rows)?;
+    Ok(rows)
+}
+
+/// Frame 0 of `from` into `to` (Gaussians first: the mesh marks the frame complete), unless
+/// `to` has it already.
+fn copy_frame0(from: &Path, to: &Path) -> Result<(), AblateError> {
+    let (source, target) = (SequenceOutput::create(from)?, SequenceOutput::create(to)?);
+    if target.is_complete(0) {
+        return Ok(());
+    }
+    if !source.is_complete(0) {
+        return Err(AblateError::NoFrame0(from.to_owned()));
+    }
+    for (a, b) in [(source.gaussians_path(0), target.gaussians_path(0)), (source.mesh_path(0), target.mesh_path(0))] {
+        crate::io::write_atomically(&b, |w| std::io::copy(&mut std::fs::File::open(&a)?, w).map(drop)).map_err(|source| AblateError::Io { path: b.clone(), source })?;
+    }
+    Ok(())
+}
+
+fn write_tables(out: &Path, rows: &[TemporalRow]) -> Result<(), AblateError> {
+    let mut table = String::from("| variant | tracking RMSE / size | worst frame | Chamfer / size, worst frame | last-frame mesh PSNR (dB) | s per later frame | iterations per later frame |\n|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        table += &format!(
+            "| {} | {:.2} % | {:.2} % | {:.3} % | {:.2} | {:.1} | {:.0} |\n",
+            r.variant,
+            100.0 * r.tracking_rmse,
+            100.0 * r.tracking_worst_frame,
+            100.0 * r.chamfer_worst_frame,
+            r.psnr_mesh_last_db,
+            r.seconds_per_frame,
+            r.iterations_per_frame
+        );
+    }
+    let io = |path: PathBuf| move |source| AblateError::Io { path, source };
+    let md = out.join("ablation.md");
+    crate::io::write_atomically(&md, |w| std::io::Write::write_all(w, table.as_bytes())).map_err(io(md.clone()))?;
+    let json = out.join("ablation.json");
+    crate::io::write_atomically(&json, |w| serde_json::to_writer_pretty(w, rows).map_err(std::io::Error::other)).map_err(io(json.clone()))
+}
