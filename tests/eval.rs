@@ -152,7 +152,7 @@ fn folders_compare_meshes_trajectories_and_images() {
     let root = std::env::temp_dir().join(format!("tagsplat-eval-folders-{}", std::process::id()));
     let (gt, pred) = (root.join("gt"), root.join("pred"));
     std::fs::create_dir_all(pred.join("meshes")).unwrap();
-    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 2 }, views: 2, frames: 2, resolution: 24, seed: 1, samples: 1, track_vertices: 5, track_surface: 5 };
+    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 2 }, views: 2, frames: 2, resolution: 24, seed: 1, samples: 1, track_vertices: 5, track_surface: 5, ..Default::default() };
     generate(&o, &gt).unwrap();
     let options = FolderOptions { chamfer_samples: 2000, emd_samples: 200, seed: 3 };
     let same = evaluate_folders(&gt, &gt, &options).unwrap();
@@ -196,7 +196,7 @@ fn tracker_output_on_generated_ground_truth_scores_near_zero() {
     let root = std::env::temp_dir().join(format!("tagsplat-eval-e2e-{}", std::process::id()));
     let (gt, pred) = (root.join("gt"), root.join("pred"));
     std::fs::create_dir_all(&pred).unwrap();
-    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 1, frames: 4, resolution: 16, seed: 5, samples: 1, track_vertices: 20, track_surface: 40 };
+    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 1, frames: 4, resolution: 16, seed: 5, samples: 1, track_vertices: 20, track_surface: 40, ..Default::default() };
     let report = generate(&o, &gt).unwrap();
     let meshes: Vec<TriMesh> = (0..4).map(|t| TriMesh::read_ply(&gt.join(format!("meshes/{t:06}.ply"))).unwrap()).collect();
     let frames: Vec<Vec<[f32; 3]>> = meshes.iter().map(|m| m.positions.clone()).collect();
@@ -210,5 +210,158 @@ fn tracker_output_on_generated_ground_truth_scores_near_zero() {
     // Both sides place the same barycentric point (f32 mesh, f64 arithmetic): far below the
     // subject's size.
     assert!(t.max < 1e-5 * report.radius, "max error {} (radius {})", t.max, report.radius);
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+#[test]
+fn point_to_surface_chamfer_is_zero_on_itself_and_d_for_a_patch_shifted_along_its_normal() {
+    use tagsplat::eval::chamfer_to_surface;
+    let (p, f) = cube(2.0, [0.5, -1.0, 3.0]);
+    let same = chamfer_to_surface((&p, &f), (&p, &f), 5000, 9).unwrap();
+    // Each sample's closest surface point is itself, up to f64 rounding of the barycentrics.
+    assert!(same.mean < 1e-14, "{}", same.mean);
+    assert_eq!(same.samples, 5000);
+    // Same x-y extent: every sample projects inside the other patch, at distance d.
+    let d = 0.25f32;
+    let (a, f) = plane(6, 0.0);
+    let (b, _) = plane(6, d);
+    let r = chamfer_to_surface((&b, &f), (&a, &f), 3000, 1).unwrap();
+    for v in [r.pred_to_gt, r.gt_to_pred, r.mean] {
+        assert!((v - d as f64).abs() < 1e-12, "{r:?}");
+    }
+    // Unlike sample-to-sample Chamfer, the patch against a finer copy of itself is 0 too.
+    let (fine, ff) = {
+        let (q, g) = plane(12, 0.0);
+        (q.iter().map(|v| [v[0] * 0.5, v[1] * 0.5, v[2]]).collect::<Vec<_>>(), g)
+    };
+    assert!(chamfer_to_surface((&fine, &ff), (&a, &f), 3000, 2).unwrap().mean < 1e-12);
+}
+
+/// A benchmark ground-truth folder (gt/ layout) under `root`: a 4×4 patch sliding along x by
+/// 0.1 per frame, `frames` frames, points on vertices and inside faces, `size` 5.
+fn write_gt(root: &std::path::Path, frames: usize) -> Vec<tagsplat::mesh::TriMesh> {
+    use tagsplat::mesh::TriMesh;
+    let gt = root.join("gt");
+    std::fs::create_dir_all(gt.join("meshes")).unwrap();
+    let (p, f) = plane(4, 0.0);
+    let meshes: Vec<TriMesh> = (0..frames)
+        .map(|t| TriMesh { positions: p.iter().map(|v| [v[0] + 0.1 * t as f32, v[1], v[2]]).collect(), faces: f.clone(), colors: None })
+        .collect();
+    for (t, m) in meshes.iter().enumerate() {
+        m.write_ply(&gt.join(format!("meshes/{t:06}.ply"))).unwrap();
+    }
+    let points: Vec<[f64; 3]> = vec![[0.0, 0.0, 0.0], [2.0, 3.0, 0.0], [1.25, 0.5, 0.0], [3.5, 3.75, 0.0], [0.3, 2.6, 0.0]];
+    let mut csv = String::from("id,x,y,z\n");
+    let mut tracks = String::from("id,frame,x,y,z\n");
+    for (i, q) in points.iter().enumerate() {
+        csv += &format!("p{i},{},{},{}\n", q[0], q[1], q[2]);
+        for t in 0..frames {
+            tracks += &format!("p{i},{t},{},{},{}\n", q[0] + 0.1 * t as f64, q[1], q[2]);
+        }
+    }
+    std::fs::write(gt.join("points.csv"), csv).unwrap();
+    std::fs::write(gt.join("tracks.csv"), tracks).unwrap();
+    std::fs::write(gt.join("info.json"), r#"{"frames": 4, "size": 5.0, "height": 1.0}"#).unwrap();
+    meshes
+}
+
+fn temp(name: &str) -> std::path::PathBuf {
+    let root = std::env::temp_dir().join(format!("tagsplat-eval-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    std::fs::create_dir_all(&root).unwrap();
+    root
+}
+
+#[test]
+fn benchmark_ground_truth_scores_a_perfect_and_an_offset_prediction() {
+    use tagsplat::eval::{evaluate_sequence, find_ground_truth, write_sequence_eval, GroundTruth, SequenceEvalOptions};
+    let root = temp("sequence");
+    let meshes = write_gt(&root, 4);
+    let gt = GroundTruth::read(&find_ground_truth(&root).unwrap()).unwrap();
+    assert_eq!(find_ground_truth(&root.join("gt")), Some(root.join("gt")));
+    assert_eq!((gt.size, gt.frames, gt.points.len(), gt.tracks.len()), (5.0, 4, 5, 20));
+    let options = SequenceEvalOptions { chamfer_samples: 2000, ..Default::default() };
+
+    // The ground truth as its own prediction: every score 0.
+    let same = evaluate_sequence(&root.join("gt"), &gt, &options).unwrap();
+    assert_eq!(same.summary.frames, [0, 1, 2, 3]);
+    assert!(same.summary.tracking_rmse_over_size.unwrap() < 1e-7 && same.summary.chamfer_mean_over_size.unwrap() < 1e-12, "{:?}", same.summary);
+
+    // Frames 1.. moved by d along the patch's normal, frame 2 missing, a training report with
+    // some fields: tracking and Chamfer are d / size on the moved frames.
+    let pred = root.join("pred");
+    std::fs::create_dir_all(pred.join("meshes")).unwrap();
+    let d = 0.3;
+    for (t, m) in meshes.iter().enumerate().filter(|(t, _)| *t != 2) {
+        let mut m = m.clone();
+        m.positions.iter_mut().filter(|_| t > 0).for_each(|v| v[2] += d as f32);
+        m.write_ply(&pred.join(format!("meshes/{t:06}.ply"))).unwrap();
+    }
+    std::fs::write(pred.join("report.json"), r#"{"frames": [{"frame": 0, "psnr_gs": 30.5, "iterations": 50, "wall_s": 2.0}, {"frame": 3, "psnr_mesh": 21.0, "stop_reason": "plateau", "extra": 1}]}"#).unwrap();
+    let e = evaluate_sequence(&pred, &gt, &options).unwrap();
+    let s = &e.summary;
+    assert_eq!((s.frames.as_slice(), s.missing_frames.as_slice()), ([0, 1, 3].as_slice(), [2].as_slice()));
+    let expect = d / 5.0;
+    for f in &e.frames {
+        let want = if f.frame == 0 { 0.0 } else { expect };
+        assert!((f.tracking_rmse_over_size.unwrap() - want).abs() < 1e-6 && (f.tracking_max_over_size.unwrap() - want).abs() < 1e-6, "{f:?}");
+        assert!((f.chamfer_over_size - want).abs() < 1e-6, "{f:?}");
+    }
+    // Over 5 points × 3 frames, two of them off by d.
+    assert!((s.tracking_rmse_over_size.unwrap() - expect * (2.0f64 / 3.0).sqrt()).abs() < 1e-6, "{s:?}");
+    assert_eq!((s.psnr_gs_first_db, s.psnr_gs_last_db, s.psnr_mesh_last_db), (Some(30.5), None, Some(21.0)));
+    assert_eq!((e.frames[0].train.iterations, e.frames[2].train.stop_reason.as_deref()), (Some(50), Some("plateau")));
+    assert_eq!(e.frames[1].train, Default::default(), "frame 1 is not in the report: all absent");
+
+    let files = write_sequence_eval(&root.join("scores"), &e).unwrap();
+    let csv = std::fs::read_to_string(&files[0]).unwrap();
+    assert_eq!(csv.lines().count(), 4);
+    assert!(csv.lines().nth(3).unwrap().ends_with(",,21,,,plateau"), "{csv}");
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+#[test]
+fn bad_benchmark_input_names_the_file() {
+    use tagsplat::eval::{evaluate_sequence, GroundTruth, SequenceEvalOptions};
+    let root = temp("bad");
+    write_gt(&root, 2);
+    let gt_dir = root.join("gt");
+    let read_error = |file: &str, text: &str| {
+        let saved = std::fs::read_to_string(gt_dir.join(file)).unwrap();
+        std::fs::write(gt_dir.join(file), text).unwrap();
+        let e = GroundTruth::read(&gt_dir).unwrap_err().to_string();
+        std::fs::write(gt_dir.join(file), saved).unwrap();
+        e
+    };
+    let e = read_error("info.json", r#"{"height": 1.0}"#);
+    assert!(e.contains("info.json") && e.contains("size"), "{e}");
+    let e = read_error("info.json", r#"{"size": -2}"#);
+    assert!(e.contains("info.json") && e.contains("positive"), "{e}");
+    let e = read_error("tracks.csv", "id,frame,x,y,z\np0,0,0,0,0\np1,1,NaN,0,0\n");
+    assert!(e.contains("tracks.csv") && e.contains("line 3"), "{e}");
+    let e = read_error("tracks.csv", "id,frame,x,y,z\nnose,0,0,0,0\n");
+    assert!(e.contains("tracks.csv") && e.contains("`nose`"), "{e}");
+    let e = read_error("points.csv", "id,x,y,z\np0,0,0\n");
+    assert!(e.contains("points.csv") && e.contains("line 2"), "{e}");
+
+    let gt = GroundTruth::read(&gt_dir).unwrap();
+    let pred = root.join("pred");
+    std::fs::create_dir_all(pred.join("meshes")).unwrap();
+    let options = SequenceEvalOptions { chamfer_samples: 100, ..Default::default() };
+    let e = evaluate_sequence(&pred, &gt, &options).unwrap_err().to_string();
+    assert!(e.contains("000000.ply") && e.contains("missing"), "{e}");
+    // Frame 1 with another face list.
+    std::fs::copy(gt_dir.join("meshes/000000.ply"), pred.join("meshes/000000.ply")).unwrap();
+    let mut m = tagsplat::mesh::TriMesh::read_ply(&gt_dir.join("meshes/000001.ply")).unwrap();
+    m.faces.swap(0, 1);
+    m.write_ply(&pred.join("meshes/000001.ply")).unwrap();
+    let e = evaluate_sequence(&pred, &gt, &options).unwrap_err().to_string();
+    assert!(e.contains("000001.ply") && e.contains("face 0"), "{e}");
+    std::fs::write(pred.join("report.json"), "{\"frames\": 3").unwrap();
+    std::fs::remove_file(pred.join("meshes/000001.ply")).unwrap();
+    let e = evaluate_sequence(&pred, &gt, &options).unwrap_err().to_string();
+    assert!(e.contains("report.json") && e.contains("not JSON"), "{e}");
+    let e = evaluate_sequence(&pred, &gt, &SequenceEvalOptions { frames: Some(0..5), ..options }).unwrap_err().to_string();
+    assert!(e.contains("0..5") && e.contains("0..2"), "{e}");
     std::fs::remove_dir_all(&root).unwrap();
 }

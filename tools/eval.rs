@@ -1,32 +1,64 @@
-//! `tagsplat eval`: metrics of a prediction folder against a ground-truth folder.
+//! `tagsplat eval`: metrics of a prediction folder against a ground-truth folder: a
+//! benchmark's `gt/` (with `info.json`) scores a trained sequence; any other folder is compared
+//! file by file (the layout `tagsplat synth` writes).
 
 use anyhow::{Context, Result};
-use std::path::PathBuf;
-use tagsplat::eval::{evaluate_folders, FolderOptions};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use tagsplat::eval::sequence::{FrameScores, FrameValue};
+use tagsplat::eval::{evaluate_folders, evaluate_sequence, find_ground_truth, write_sequence_eval, FolderOptions, GroundTruth, SequenceEvalOptions, SequenceSummary};
 
 #[derive(clap::Args)]
 pub struct EvalArgs {
-    /// Prediction folder: meshes/<t>.ply, trajectories.csv, images/<camera>/<t>.png (any of them).
+    /// Prediction folder: meshes/<t>.ply, report.json (from `tagsplat train`), trajectories.csv,
+    /// images/<camera>/<t>.png (any of them).
     #[arg(long)]
     pred: PathBuf,
-    /// Ground-truth folder (e.g. written by `tagsplat synth`), same layout.
+    /// Ground truth: a benchmark dataset (DIR/gt/info.json) or its gt/ folder; otherwise a
+    /// folder in the prediction's layout (e.g. written by `tagsplat synth`).
     #[arg(long)]
     gt: PathBuf,
-    /// Surface samples per mesh for Chamfer.
-    #[arg(long, default_value_t = 30_000)]
-    chamfer_samples: usize,
-    /// Surface samples per mesh for EMD (exact assignment, O(n³)).
+    /// Surface samples per mesh for Chamfer (default: 5000 on a benchmark, 30 000 otherwise).
+    #[arg(long)]
+    chamfer_samples: Option<usize>,
+    /// Surface samples per mesh for EMD (exact assignment, O(n³)); not on a benchmark.
     #[arg(long, default_value_t = 1000)]
     emd_samples: usize,
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Benchmark only: frames A..B to score (default: all of the ground truth's).
+    #[arg(long, value_parser = crate::train::parse_range)]
+    frames: Option<Range<usize>>,
+    /// Benchmark only: folder for eval.csv, eval.json and eval.png (default: --pred).
+    #[arg(long)]
+    out: Option<PathBuf>,
     #[arg(long)]
     json: bool,
 }
 
 pub fn run(a: EvalArgs) -> Result<()> {
-    let options = FolderOptions { chamfer_samples: a.chamfer_samples, emd_samples: a.emd_samples, seed: a.seed };
-    let r = evaluate_folders(&a.pred, &a.gt, &options).with_context(|| format!("eval --pred {} --gt {}", a.pred.display(), a.gt.display()))?;
+    let context = || format!("eval --pred {} --gt {}", a.pred.display(), a.gt.display());
+    if let Some(root) = find_ground_truth(&a.gt) {
+        let gt = GroundTruth::read(&root).with_context(context)?;
+        let options = SequenceEvalOptions { chamfer_samples: a.chamfer_samples.unwrap_or(5000), seed: a.seed, frames: a.frames.clone() };
+        let eval = evaluate_sequence(&a.pred, &gt, &options).with_context(context)?;
+        let files = write_sequence_eval(a.out.as_deref().unwrap_or(&a.pred), &eval).with_context(context)?;
+        if a.json {
+            println!("{}", serde_json::to_string_pretty(&eval)?);
+        } else {
+            println!("{} against {}", eval.pred.display(), eval.ground_truth.display());
+            print_scores(&eval.pred, &eval.summary, &eval.frames);
+            files.iter().for_each(|f| println!("wrote {}", f.display()));
+        }
+        return Ok(());
+    }
+    folders(&a).with_context(context)
+}
+
+/// The file-by-file comparison of two folders in the same layout.
+fn folders(a: &EvalArgs) -> Result<()> {
+    let options = FolderOptions { chamfer_samples: a.chamfer_samples.unwrap_or(30_000), emd_samples: a.emd_samples, seed: a.seed };
+    let r = evaluate_folders(&a.pred, &a.gt, &options)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&r)?);
         return Ok(());
@@ -44,4 +76,43 @@ pub fn run(a: EvalArgs) -> Result<()> {
         println!("images    {}: PSNR {:.3} dB, SSIM {:.5}", i.images, i.psnr_db, i.ssim);
     }
     Ok(())
+}
+
+/// A value or `-` when absent, with `digits` decimals (percentages when `percent`).
+fn cell(v: Option<f64>, digits: usize, percent: bool) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{:.digits$}", if percent { v * 100.0 } else { v }))
+}
+
+/// The per-frame table and the summary of a benchmark evaluation of the folder `pred`.
+pub fn print_scores(pred: &Path, s: &SequenceSummary, frames: &[FrameScores]) {
+    println!("size {:.4} scene units; {} points, {} Chamfer samples per mesh", s.size, s.points, s.chamfer_samples);
+    println!("frame  track RMSE %  track max %  Chamfer %  PSNR gs dB  PSNR mesh dB  iters  seconds  stop reason");
+    for f in frames {
+        let t = &f.train;
+        println!(
+            "{:>5}  {:>12}  {:>11}  {:>9}  {:>10}  {:>12}  {:>5}  {:>7}  {}",
+            f.frame,
+            cell(f.tracking_rmse_over_size, 3, true),
+            cell(f.tracking_max_over_size, 3, true),
+            cell(Some(f.chamfer_over_size), 3, true),
+            cell(t.psnr_gs_db, 2, false),
+            cell(t.psnr_mesh_db, 2, false),
+            t.iterations.map_or("-".into(), |i| i.to_string()),
+            cell(t.wall_s, 1, false),
+            t.stop_reason.as_deref().unwrap_or("-")
+        );
+    }
+    println!("(% = per cent of size)");
+    if !s.missing_frames.is_empty() {
+        println!("missing frames   {:?} (not in {})", s.missing_frames, pred.join("meshes").display());
+    }
+    let frame_value = |v: Option<FrameValue>| v.map_or("-".into(), |v| format!("{:.3}% at frame {}", v.value * 100.0, v.frame));
+    println!("tracking RMSE    {}% over all points and frames; worst frame {}; max {}%", cell(s.tracking_rmse_over_size, 3, true), frame_value(s.tracking_worst_frame), cell(s.tracking_max_over_size, 3, true));
+    println!("binding          {:.3}% mean, {:.3}% max distance of the points to the predicted frame-0 surface", s.binding_mean_over_size * 100.0, s.binding_max_over_size * 100.0);
+    println!("Chamfer          {}% mean over frames; worst frame {}", cell(s.chamfer_mean_over_size, 3, true), frame_value(s.chamfer_worst_frame));
+    println!("PSNR gs          {} dB first frame, {} dB last", cell(s.psnr_gs_first_db, 2, false), cell(s.psnr_gs_last_db, 2, false));
+    println!("PSNR mesh        {} dB first frame, {} dB last", cell(s.psnr_mesh_first_db, 2, false), cell(s.psnr_mesh_last_db, 2, false));
+    if s.train_report.is_none() {
+        println!("no report.json in {}: PSNR, iterations and seconds are absent", pred.display());
+    }
 }

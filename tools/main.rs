@@ -9,6 +9,7 @@ mod render_mesh;
 mod track;
 use std::sync::Arc;
 
+mod bench_sequence;
 mod dataset;
 mod demo;
 mod eval;
@@ -75,6 +76,9 @@ enum Command {
 
 #[derive(Subcommand)]
 enum Bench {
+    /// Train on a benchmark dataset with ground truth (gt/) and score the result: tracking
+    /// RMSE, Chamfer and PSNR per frame, seconds per frame, the device and host CPU.
+    Sequence(bench_sequence::BenchSequenceArgs),
     /// Densify and prune steps on a 200k-vertex torus, and the regularizer kernels.
     Topology(topology::BenchTopologyArgs),
     /// BVH build time and closest-point / ray-cast throughput against brute force.
@@ -171,6 +175,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Convert(args) => track::convert(args),
         Command::InitMesh(args) => init_mesh::run(args),
         Command::Bench(Bench::Track(args)) => track::bench(args),
+        Command::Bench(Bench::Sequence(args)) => bench_sequence::run(|| context(&options), args),
         Command::Bench(Bench::Topology(args)) => topology::bench(&context(&options)?, &args),
         Command::Render(args) => render::render(&context(&options)?, &args),
         Command::RenderMesh(args) => render_mesh::render_mesh(&context(&options)?, &args),

@@ -2,10 +2,12 @@
 //! bandwidth (a compute copy kernel and the transfer engine) and the CPU's `sort_unstable`;
 //! the splatting renderer's and the mesh rasterizer's forward and backward per view, pass by
 //! pass; full training iterations against splatting alone; and the topology steps (densify,
-//! prune) with the regularizer kernels.
+//! prune) with the regularizer kernels; and a training run on a benchmark dataset scored against
+//! its ground truth (`sequence`).
 
 mod copy;
 mod mesh;
+mod sequence;
 mod sort;
 mod splat;
 mod train;
@@ -13,6 +15,7 @@ mod topology;
 
 pub use copy::{CopyBandwidth, CopyProbe};
 pub use mesh::{bench_mesh, bumpy_sphere, MeshBenchConfig, MeshBenchReport};
+pub use sequence::{bench_sequence, host_cpu_model, SequenceBenchError, SequenceBenchReport};
 pub use sort::{bench_sort, SortBenchReport};
 pub use topology::{bench_topology, TopologyBenchConfig, TopologyBenchError, TopologyBenchReport};
 pub use splat::{bench_splat, BenchWork, random_scene, ring_cameras, SplatBenchConfig, SplatBenchReport};

@@ -4,12 +4,15 @@
 //!   scikit-image's `structural_similarity(gaussian_weights=True, sigma=1.5,
 //!   use_sample_covariance=False, data_range=1)`.
 //! - [`chamfer`]: symmetric Chamfer distance between area-uniform surface samples of two meshes.
+//! - [`surface_chamfer`]: symmetric Chamfer distance from the samples of each mesh to the other
+//!   mesh's surface (point to triangle: no sampling noise floor).
 //! - [`emd`]: earth mover's distance between equal-size surface samples (exact assignment).
 //! - [`tracking`]: MSE / RMSE of tracked points against ground-truth trajectories.
 //!
 //! Inputs are plain arrays; [`sample`] draws the surface samples, [`trajectories`] reads and
 //! writes the trajectory CSV (`id,frame,x,y,z`), [`folder`] compares a prediction folder with a
-//! ground-truth folder.
+//! ground-truth folder, [`sequence`] scores a trained sequence against a hard-motion
+//! benchmark's ground truth (`gt/` with `info.json`).
 
 pub mod assignment;
 pub mod chamfer;
@@ -17,7 +20,9 @@ pub mod emd;
 pub mod folder;
 pub mod psnr;
 pub mod sample;
+pub mod sequence;
 pub mod ssim;
+pub mod surface_chamfer;
 pub mod tracking;
 pub mod trajectories;
 
@@ -26,7 +31,9 @@ pub use emd::{emd_meshes, emd_points, EmdReport};
 pub use folder::{evaluate_folders, FolderError, FolderOptions, FolderReport};
 pub use psnr::psnr;
 pub use sample::{sample_surface, surface_points, SurfaceSample};
+pub use sequence::{evaluate_sequence, find_ground_truth, write_sequence_eval, GroundTruth, SequenceEval, SequenceEvalError, SequenceEvalOptions, SequenceSummary};
 pub use ssim::ssim;
+pub use surface_chamfer::{chamfer_to_surface, SurfaceChamferReport};
 pub use tracking::{tracking_error, TrackingReport};
 pub use trajectories::{read_trajectories_csv, write_trajectories_csv, TrackPoint};
 

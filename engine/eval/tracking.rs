@@ -2,7 +2,7 @@
 //!
 //! Definition: over every ground-truth (point id, frame) pair and its prediction,
 //! `mse` = mean of ‖p − g‖² (squared scene units), `rmse` = √mse (scene units), `max` = the
-//! largest ‖p − g‖ (scene units). Predictions for pairs the ground truth lacks are ignored
+//! largest ‖p − g‖ (scene units); the same per frame. Predictions for pairs the ground truth lacks are ignored
 //! (counted in `ignored`); a ground-truth pair without a prediction is an error.
 
 use super::trajectories::TrackPoint;
@@ -24,6 +24,8 @@ pub struct TrackingReport {
     pub max: f64,
     /// RMSE of each frame, scene units, in frame order.
     pub rmse_per_frame: Vec<(u32, f64)>,
+    /// Largest error of each frame, scene units, in frame order.
+    pub max_per_frame: Vec<(u32, f64)>,
     /// Predicted pairs without ground truth.
     pub ignored: usize,
 }
@@ -34,7 +36,8 @@ pub fn tracking_error(pred: &[TrackPoint], gt: &[TrackPoint]) -> Result<Tracking
         return Err(EvalError::Empty("ground-truth trajectories"));
     }
     let lookup: HashMap<(&str, u32), [f64; 3]> = pred.iter().map(|p| ((p.id.as_str(), p.frame), p.position)).collect();
-    let mut per_frame: BTreeMap<u32, (f64, usize)> = BTreeMap::new();
+    // Per frame: sum of squares, pairs, largest error.
+    let mut per_frame: BTreeMap<u32, (f64, usize, f64)> = BTreeMap::new();
     let mut ids = BTreeSet::new();
     let (mut sum, mut max) = (0.0f64, 0.0f64);
     for g in gt {
@@ -48,6 +51,7 @@ pub fn tracking_error(pred: &[TrackPoint], gt: &[TrackPoint]) -> Result<Tracking
         let f = per_frame.entry(g.frame).or_default();
         f.0 += e2;
         f.1 += 1;
+        f.2 = f.2.max(e2.sqrt());
         ids.insert(g.id.as_str());
     }
     let mse = sum / gt.len() as f64;
@@ -59,7 +63,8 @@ pub fn tracking_error(pred: &[TrackPoint], gt: &[TrackPoint]) -> Result<Tracking
         mse,
         rmse: mse.sqrt(),
         max,
-        rmse_per_frame: per_frame.into_iter().map(|(f, (s, n))| (f, (s / n as f64).sqrt())).collect(),
+        rmse_per_frame: per_frame.iter().map(|(&f, &(s, n, _))| (f, (s / n as f64).sqrt())).collect(),
+        max_per_frame: per_frame.iter().map(|(&f, &(_, _, m))| (f, m)).collect(),
         ignored: pred.iter().filter(|p| !gt_keys.contains(&(p.id.as_str(), p.frame))).count(),
     })
 }
@@ -83,6 +88,7 @@ mod tests {
         assert!((r.rmse - 8.5f64.sqrt()).abs() < 1e-12);
         assert_eq!(r.max, 5.0);
         assert_eq!(r.rmse_per_frame, vec![(0, 4.5f64.sqrt()), (1, 12.5f64.sqrt())]);
+        assert_eq!(r.max_per_frame, vec![(0, 3.0), (1, 5.0)]);
         assert_eq!(tracking_error(&gt, &gt).unwrap().mse, 0.0);
     }
 

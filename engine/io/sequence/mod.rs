@@ -187,7 +187,7 @@ impl MeshSequence {
 }
 
 /// Frame `t` (read from `file`) must have frame 0's vertex count and faces.
-fn check_same_topology(sequence: &MeshSequence, mesh: &TriMesh, t: usize, file: &Path, first: &Path) -> Result<(), SequenceError> {
+pub(crate) fn check_same_topology(sequence: &MeshSequence, mesh: &TriMesh, t: usize, file: &Path, first: &Path) -> Result<(), SequenceError> {
     let first_name = first.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let n = sequence.frames[0].len();
     if mesh.positions.len() != n {

@@ -1,0 +1,254 @@
+//! A predicted mesh sequence (the output folder of `tagsplat train`) scored against a
+//! hard-motion benchmark's ground truth ([`ground_truth`]), as the benchmarks' README defines
+//! the scores. Every length is divided by the ground truth's `size` (unitless: a fraction of
+//! the subject's largest side).
+//! - Tracking: `points.csv` bound to the predicted frame-0 mesh at its closest surface point
+//!   (however far: nothing is refused), followed through the predicted frames
+//!   ([`crate::track::track`]); RMSE and largest distance to `tracks.csv` per frame and over
+//!   all points and frames ([`crate::eval::tracking_error`]).
+//! - Chamfer: point-to-surface, per frame ([`crate::eval::chamfer_to_surface`]).
+//! - Held-out PSNR, iterations, wall time, stop reason: `OUT/report.json` ([`train_report`]).
+//!
+//! Frames the prediction lacks are listed and skipped; only frame 0 is required.
+
+pub mod files;
+pub mod ground_truth;
+pub mod train_report;
+
+pub use files::write_sequence_eval;
+pub use ground_truth::{find_ground_truth, GroundTruth};
+pub use train_report::{read_train_report, FrameTrainStats};
+
+use super::{chamfer_to_surface, tracking_error, EvalError, TrackPoint, TrackingReport};
+use crate::io::dataset::own::frame_name;
+use crate::io::sequence::{check_same_topology, MeshSequence, SequenceError};
+use crate::mesh::{MeshError, TriMesh};
+use crate::track::{track, Queries, TrackError, TrackReport};
+use serde::Serialize;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// Why a sequence could not be scored; every variant names the file at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum SequenceEvalError {
+    #[error("{}: {problem}", path.display())]
+    Invalid { path: PathBuf, problem: String },
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{}: {source}", path.display())]
+    Metric { path: PathBuf, source: EvalError },
+    /// A reader's error that names its file already.
+    #[error(transparent)]
+    Read(EvalError),
+    #[error(transparent)]
+    Query(TrackError),
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    #[error(transparent)]
+    Sequence(#[from] SequenceError),
+}
+
+#[derive(Clone, Debug)]
+pub struct SequenceEvalOptions {
+    /// Area-uniform samples per mesh for Chamfer (the README's score: 5000).
+    pub chamfer_samples: usize,
+    pub seed: u64,
+    /// Frames to score (default: every ground-truth frame).
+    pub frames: Option<Range<usize>>,
+}
+
+impl Default for SequenceEvalOptions {
+    fn default() -> Self {
+        Self { chamfer_samples: 5000, seed: 0, frames: None }
+    }
+}
+
+/// One frame's scores, fractions of `size`.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameScores {
+    pub frame: usize,
+    /// None when `tracks.csv` has no row for the frame.
+    pub tracking_rmse_over_size: Option<f64>,
+    pub tracking_max_over_size: Option<f64>,
+    /// Point-to-surface Chamfer, and its halves (prediction → truth, truth → prediction).
+    pub chamfer_over_size: f64,
+    pub chamfer_pred_to_gt_over_size: f64,
+    pub chamfer_gt_to_pred_over_size: f64,
+    #[serde(flatten)]
+    pub train: FrameTrainStats,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FrameValue {
+    pub frame: usize,
+    pub value: f64,
+}
+
+/// The sequence's scores; lengths are fractions of `size`.
+#[derive(Clone, Debug, Serialize)]
+pub struct SequenceSummary {
+    /// The ground truth's `size`, scene units.
+    pub size: f64,
+    pub points: usize,
+    pub chamfer_samples: usize,
+    /// Frames scored, and frames of the requested range the prediction lacks.
+    pub frames: Vec<usize>,
+    pub missing_frames: Vec<usize>,
+    /// Distance from the ground-truth points to the predicted frame-0 surface: mean, largest.
+    pub binding_mean_over_size: f64,
+    pub binding_max_over_size: f64,
+    /// Over all points and scored frames (None without a track row in them).
+    pub tracking_rmse_over_size: Option<f64>,
+    pub tracking_max_over_size: Option<f64>,
+    /// The frame of the highest tracking RMSE.
+    pub tracking_worst_frame: Option<FrameValue>,
+    /// Mean over the scored frames, and the worst frame (None when no frame was scored).
+    pub chamfer_mean_over_size: Option<f64>,
+    pub chamfer_worst_frame: Option<FrameValue>,
+    /// PSNR of the first and the last scored frame, dB (None when the report lacks it).
+    pub psnr_gs_first_db: Option<f64>,
+    pub psnr_gs_last_db: Option<f64>,
+    pub psnr_mesh_first_db: Option<f64>,
+    pub psnr_mesh_last_db: Option<f64>,
+    /// The training report read, None when the prediction has none.
+    pub train_report: Option<PathBuf>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct SequenceEval {
+    pub pred: PathBuf,
+    pub ground_truth: PathBuf,
+    pub summary: SequenceSummary,
+    pub frames: Vec<FrameScores>,
+}
+
+/// `OUT/meshes/FFFFFF.ply` of frame `t`.
+pub fn predicted_mesh_path(pred: &Path, t: usize) -> PathBuf {
+    pred.join("meshes").join(format!("{}.ply", frame_name(t)))
+}
+
+/// Scores the prediction folder `pred` against `gt` (see the module docs). Errors name the
+/// file: no predicted frame 0, a frame whose vertex count or faces differ from frame 0's, an
+/// unreadable mesh or report, a range past the ground truth.
+pub fn evaluate_sequence(pred: &Path, gt: &GroundTruth, options: &SequenceEvalOptions) -> Result<SequenceEval, SequenceEvalError> {
+    let range = frame_range(gt, options)?;
+    let (present, missing): (Vec<usize>, Vec<usize>) = range.partition(|&t| predicted_mesh_path(pred, t).is_file());
+    // Frame 0 binds the points even when the range starts later.
+    let loaded: Vec<usize> = std::iter::once(0).chain(present.iter().copied().filter(|&t| t > 0)).collect();
+    let sequence = read_predicted(pred, &loaded)?;
+    let tracked = bind_points(pred, gt, &sequence)?;
+    let tracking = tracking_scores(gt, &tracked, &loaded, &present)?;
+    let report_path = pred.join("report.json");
+    let train = read_train_report(&report_path)?;
+    let mut frames = Vec::with_capacity(present.len());
+    for (i, &t) in loaded.iter().enumerate().filter(|(_, t)| present.contains(t)) {
+        let chamfer = chamfer_frame(pred, gt, t, (&sequence.frames[i], &sequence.faces), options)?;
+        let per_frame = |list: &[(u32, f64)]| list.iter().find(|(f, _)| *f as usize == t).map(|(_, v)| v / gt.size);
+        frames.push(FrameScores {
+            frame: t,
+            tracking_rmse_over_size: tracking.as_ref().and_then(|r| per_frame(&r.rmse_per_frame)),
+            tracking_max_over_size: tracking.as_ref().and_then(|r| per_frame(&r.max_per_frame)),
+            chamfer_over_size: chamfer.mean / gt.size,
+            chamfer_pred_to_gt_over_size: chamfer.pred_to_gt / gt.size,
+            chamfer_gt_to_pred_over_size: chamfer.gt_to_pred / gt.size,
+            train: train.as_ref().and_then(|m| m.get(&t).cloned()).unwrap_or_default(),
+        });
+    }
+    let summary = summarize(gt, options, &tracked, tracking.as_ref(), &frames, missing, train.is_some().then_some(report_path));
+    Ok(SequenceEval { pred: pred.to_owned(), ground_truth: gt.root.clone(), summary, frames })
+}
+
+/// The requested frames, checked against the ground truth's.
+fn frame_range(gt: &GroundTruth, options: &SequenceEvalOptions) -> Result<Range<usize>, SequenceEvalError> {
+    let range = options.frames.clone().unwrap_or(0..gt.frames);
+    if range.is_empty() || range.end > gt.frames {
+        let problem = format!("frames {}..{} requested, the ground truth has frames 0..{}", range.start, range.end, gt.frames);
+        return Err(SequenceEvalError::Invalid { path: gt.root.join("meshes"), problem });
+    }
+    Ok(range)
+}
+
+/// The predicted meshes of `frames` (frame 0 first) as one sequence: frame 0's faces, and
+/// every frame with its vertex count and faces.
+fn read_predicted(pred: &Path, frames: &[usize]) -> Result<MeshSequence, SequenceEvalError> {
+    let first = predicted_mesh_path(pred, 0);
+    if !first.is_file() {
+        return Err(SequenceEvalError::Invalid { path: first, problem: "missing: frame 0 binds the ground-truth points".into() });
+    }
+    let mut sequence = MeshSequence::default();
+    for &t in frames {
+        let path = predicted_mesh_path(pred, t);
+        let mesh = TriMesh::read_ply(&path)?;
+        if sequence.frames.is_empty() {
+            sequence.faces = mesh.faces;
+        } else {
+            check_same_topology(&sequence, &mesh, t, &path, &first)?;
+        }
+        sequence.frames.push(mesh.positions);
+    }
+    Ok(sequence)
+}
+
+/// Every ground-truth point bound to the predicted frame 0 and followed through the sequence.
+fn bind_points(pred: &Path, gt: &GroundTruth, sequence: &MeshSequence) -> Result<TrackReport, SequenceEvalError> {
+    let frame0 = predicted_mesh_path(pred, 0);
+    let queries = Queries::Points(gt.points.clone());
+    // No distance limit: a point far from the predicted surface is an error to score, not to drop.
+    let tracked = track(&sequence.faces, &sequence.frames, &queries, f64::INFINITY).map_err(|e| SequenceEvalError::Invalid { path: frame0.clone(), problem: e.to_string() })?;
+    match tracked.unbound.first() {
+        Some(u) => Err(SequenceEvalError::Invalid { path: frame0, problem: format!("ground-truth point `{}` could not be bound: {}", u.id, u.reason) }),
+        None => Ok(tracked),
+    }
+}
+
+/// Tracking errors over the `tracks.csv` rows of the `present` frames (None when there are
+/// none); `loaded[i]` is the frame of trajectory entry i.
+fn tracking_scores(gt: &GroundTruth, tracked: &TrackReport, loaded: &[usize], present: &[usize]) -> Result<Option<TrackingReport>, SequenceEvalError> {
+    let predicted: Vec<TrackPoint> = tracked
+        .points
+        .iter()
+        .flat_map(|p| p.trajectory.iter().zip(loaded).map(|(&position, &t)| TrackPoint { id: p.id.clone(), frame: t as u32, position }))
+        .collect();
+    let truth: Vec<TrackPoint> = gt.tracks.iter().filter(|r| present.contains(&(r.frame as usize))).cloned().collect();
+    if truth.is_empty() {
+        return Ok(None);
+    }
+    let report = tracking_error(&predicted, &truth).map_err(|source| SequenceEvalError::Metric { path: gt.root.join("tracks.csv"), source })?;
+    Ok(Some(report))
+}
+
+/// Point-to-surface Chamfer of predicted frame `t` against the true mesh, scene units.
+fn chamfer_frame(pred: &Path, gt: &GroundTruth, t: usize, mesh: (&[[f32; 3]], &[[u32; 3]]), options: &SequenceEvalOptions) -> Result<super::SurfaceChamferReport, SequenceEvalError> {
+    let truth = TriMesh::read_ply(&gt.mesh_path(t))?;
+    chamfer_to_surface(mesh, (&truth.positions, &truth.faces), options.chamfer_samples, options.seed).map_err(|e| SequenceEvalError::Invalid {
+        path: predicted_mesh_path(pred, t),
+        problem: format!("against {}: {e}", gt.mesh_path(t).display()),
+    })
+}
+
+fn summarize(gt: &GroundTruth, options: &SequenceEvalOptions, tracked: &TrackReport, tracking: Option<&TrackingReport>, frames: &[FrameScores], missing_frames: Vec<usize>, train_report: Option<PathBuf>) -> SequenceSummary {
+    let bindings: Vec<f64> = tracked.points.iter().map(|p| p.binding.distance / gt.size).collect();
+    let worst = |value: &dyn Fn(&FrameScores) -> Option<f64>| {
+        frames.iter().filter_map(|f| Some(FrameValue { frame: f.frame, value: value(f)? })).max_by(|a, b| a.value.total_cmp(&b.value))
+    };
+    let (first, last) = (frames.first().map(|f| &f.train), frames.last().map(|f| &f.train));
+    SequenceSummary {
+        size: gt.size,
+        points: bindings.len(),
+        chamfer_samples: options.chamfer_samples,
+        frames: frames.iter().map(|f| f.frame).collect(),
+        missing_frames,
+        binding_mean_over_size: bindings.iter().sum::<f64>() / bindings.len().max(1) as f64,
+        binding_max_over_size: bindings.iter().copied().fold(0.0, f64::max),
+        tracking_rmse_over_size: tracking.map(|r| r.rmse / gt.size),
+        tracking_max_over_size: tracking.map(|r| r.max / gt.size),
+        tracking_worst_frame: worst(&|f| f.tracking_rmse_over_size),
+        chamfer_mean_over_size: (!frames.is_empty()).then(|| frames.iter().map(|f| f.chamfer_over_size).sum::<f64>() / frames.len() as f64),
+        chamfer_worst_frame: worst(&|f| Some(f.chamfer_over_size)),
+        psnr_gs_first_db: first.and_then(|s| s.psnr_gs_db),
+        psnr_gs_last_db: last.and_then(|s| s.psnr_gs_db),
+        psnr_mesh_first_db: first.and_then(|s| s.psnr_mesh_db),
+        psnr_mesh_last_db: last.and_then(|s| s.psnr_mesh_db),
+        train_report,
+    }
+}
