@@ -203,7 +203,7 @@ fn nerfstudio_monocular_and_bad_input() {
 fn own_layout_with_a_bounded_cache() {
     use tagsplat::synth::{generate, SubjectSource, SynthOptions};
     let dir = temp("own");
-    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 2 }, views: 9, frames: 2, resolution: 16, seed: 4, samples: 1, track_vertices: 3, track_surface: 3 };
+    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 2 }, views: 9, frames: 2, resolution: 16, seed: 4, samples: 1, track_vertices: 3, track_surface: 3, ..Default::default() };
     generate(&o, &dir).unwrap();
     let budget = 3 * 16 * 16 * 3 * 4; // three RGB images of f32
     let d = Dataset::load(&dir).unwrap().with_cache_bytes(budget);

@@ -217,7 +217,7 @@ fn vertex_count_follows_the_target() {
 #[test]
 fn articulated_subject_is_closed_and_near_its_hull_bound() {
     let dir = temp("articulated");
-    let options = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 4 }, views: 8, frames: 1, resolution: 96, seed: 3, samples: 2, track_vertices: 0, track_surface: 0 };
+    let options = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 4 }, views: 8, frames: 1, resolution: 96, seed: 3, samples: 2, track_vertices: 0, track_surface: 0, ..Default::default() };
     generate(&options, &dir).unwrap();
     let data = Dataset::load(&dir).unwrap();
     let built = init_mesh(&data, 0, &InitOptions::default()).unwrap();

@@ -22,7 +22,7 @@ fn temp(name: &str) -> PathBuf {
 
 /// 8 views at 96², three frames of the procedural subject.
 fn sequence(dir: &Path) {
-    let options = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 8, frames: 3, resolution: 96, seed: 5, samples: 2, track_vertices: 100, track_surface: 200 };
+    let options = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 8, frames: 3, resolution: 96, seed: 5, samples: 2, track_vertices: 100, track_surface: 200, ..Default::default() };
     generate(&options, dir).unwrap();
 }
 

@@ -1,6 +1,6 @@
 //! The generator's ground truth checked against independent computations: manifold and
 //! topology-consistent meshes, masks that agree with ray casts against the meshes, trajectories
-//! that follow their bindings, determinism, glTF skinning against a hand-computed pose, and
+//! that follow their bindings, motion presets as fast as the benchmarks', determinism, glTF skinning against a hand-computed pose, and
 //! bad glTF input.
 
 use glam::{DMat4, DQuat, DVec3};
@@ -12,7 +12,7 @@ use tagsplat::io::image::read_image;
 use tagsplat::mesh::TriMesh;
 use tagsplat::synth::gltf::load_gltf;
 use tagsplat::synth::manifold::closed_manifold_problem;
-use tagsplat::synth::{generate, SubjectSource, SynthOptions};
+use tagsplat::synth::{generate, MotionPreset, SubjectSource, SynthOptions};
 
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("tagsplat-synth-{name}-{}", std::process::id()));
@@ -22,7 +22,7 @@ fn temp(name: &str) -> PathBuf {
 }
 
 fn small(seed: u64) -> SynthOptions {
-    SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 3, frames: 3, resolution: 48, seed, samples: 2, track_vertices: 20, track_surface: 30 }
+    SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 3, frames: 3, resolution: 48, seed, samples: 2, track_vertices: 20, track_surface: 30, ..Default::default() }
 }
 
 fn mesh(dir: &Path, t: usize) -> TriMesh {
@@ -110,6 +110,34 @@ fn meshes_masks_and_trajectories_agree() {
         }
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The largest vertex step between consecutive written meshes, over the frame-0 box's largest side.
+fn largest_step_over_size(dir: &Path, frames: usize) -> f64 {
+    let meshes: Vec<TriMesh> = (0..frames).map(|t| mesh(dir, t)).collect();
+    let (lo, hi) = tagsplat::mesh::bounding_box(&meshes[0].positions).unwrap();
+    let step = meshes.windows(2).flat_map(|w| w[0].positions.iter().zip(&w[1].positions).map(|(a, b)| (0..3).map(|k| ((b[k] - a[k]) as f64).powi(2)).sum::<f64>().sqrt()));
+    step.fold(0.0, f64::max) / (hi - lo).max_element()
+}
+
+#[test]
+fn motion_presets_move_as_fast_as_the_benchmarks() {
+    // fox_walk's largest vertex step is 0.115 of its size, fox_run's 0.126 (the benchmarks'
+    // README); walk and run must be in that class, gentle well below it.
+    let mut largest = Vec::new();
+    for motion in [MotionPreset::Gentle, MotionPreset::Walk, MotionPreset::Run] {
+        let dir = temp(&format!("motion-{motion:?}"));
+        let report = generate(&SynthOptions { frames: 8, motion, ..small(4) }, &dir).unwrap();
+        let measured = largest_step_over_size(&dir, 8);
+        // The report's statistics describe the meshes written (f32 rounding apart).
+        assert!((report.motion_per_frame.max - measured).abs() < 1e-4, "{motion:?}: report {} vs meshes {measured}", report.motion_per_frame.max);
+        assert!(report.motion_per_frame.mean <= report.motion_per_frame.p90 && report.motion_per_frame.p90 <= measured);
+        largest.push(measured);
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+    let [gentle, walk, run] = largest[..] else { unreachable!() };
+    assert!(gentle < 0.05, "gentle {gentle}");
+    assert!((0.08..0.2).contains(&walk) && (0.08..0.25).contains(&run) && run > walk, "walk {walk}, run {run}");
 }
 
 #[test]

@@ -16,7 +16,7 @@ fn temp(name: &str) -> PathBuf {
 
 /// 8 views of the procedural subject at 64², one frame.
 fn small_dataset(dir: &Path) {
-    let options = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 8, frames: 1, resolution: 64, seed: 3, samples: 2, track_vertices: 5, track_surface: 5 };
+    let options = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 8, frames: 1, resolution: 64, seed: 3, samples: 2, track_vertices: 5, track_surface: 5, ..Default::default() };
     generate(&options, dir).unwrap();
 }
 

@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use std::path::PathBuf;
-use tagsplat::synth::{generate, SubjectSource, SynthOptions};
+use tagsplat::synth::{generate, MotionPreset, SubjectSource, SynthOptions};
 
 #[derive(clap::Args)]
 pub struct SynthArgs {
@@ -35,6 +35,10 @@ pub struct SynthArgs {
     track_vertices: usize,
     #[arg(long, default_value_t = 200)]
     track_surface: usize,
+    /// How fast the subject moves per frame: gentle (the animation's speed), walk (4×) or run
+    /// (5×), as at capture frame rates.
+    #[arg(long, default_value = "gentle", value_parser = MotionPreset::from_name)]
+    motion: MotionPreset,
     #[arg(long)]
     json: bool,
 }
@@ -44,7 +48,7 @@ pub fn run(a: SynthArgs) -> Result<()> {
         "procedural" => SubjectSource::Procedural { subdivisions: a.subdivisions },
         path => SubjectSource::Gltf { path: path.into(), animation: a.animation.clone() },
     };
-    let options = SynthOptions { subject, views: a.views, frames: a.frames, resolution: a.resolution, seed: a.seed, samples: a.samples, track_vertices: a.track_vertices, track_surface: a.track_surface };
+    let options = SynthOptions { subject, views: a.views, frames: a.frames, resolution: a.resolution, seed: a.seed, samples: a.samples, track_vertices: a.track_vertices, track_surface: a.track_surface, motion: a.motion };
     let start = std::time::Instant::now();
     let report = generate(&options, &a.out).with_context(|| format!("synth --out {}", a.out.display()))?;
     let seconds = start.elapsed().as_secs_f64();
@@ -54,6 +58,8 @@ pub fn run(a: SynthArgs) -> Result<()> {
     }
     println!("wrote {}: {} views × {} frames at {}² px, {} vertices / {} faces, {} tracked points, subject radius {:.4} scene units, {:.2} s",
         a.out.display(), report.views, report.frames, report.resolution, report.vertices, report.faces, report.tracked_points, report.radius, seconds);
+    let m = report.motion_per_frame;
+    println!("vertex motion per frame ({:?}): mean {:.3}, 90th percentile {:.3}, max {:.3} of the subject's size", report.motion, m.mean, m.p90, m.max);
     if let Some(problem) = &report.manifold_problem {
         println!("warning: the glTF mesh is not a closed manifold ({problem})");
     }

@@ -15,6 +15,7 @@
 //! and `dataset.json` is written last, so a folder without it is an incomplete run.
 
 use super::gltf::{load_gltf, GltfError};
+use super::motion_stats::{motion_stats, MotionStats};
 use super::manifold::closed_manifold_problem;
 use super::raster::{render, RenderError};
 use super::texture::Texture;
@@ -38,6 +39,41 @@ pub enum SubjectSource {
     Gltf { path: PathBuf, animation: Option<String> },
 }
 
+/// How fast the subject moves per captured frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MotionPreset {
+    /// The animation at its own speed (the procedural body: one cycle in 48 frames).
+    #[default]
+    Gentle,
+    /// Four times as fast: the procedural body's cycle in 12 frames, limbs moving up to about a
+    /// tenth of the subject's size per frame, as a walk at capture frame rates.
+    Walk,
+    /// Five times as fast: the cycle in 9.6 frames, as a run.
+    Run,
+}
+
+impl MotionPreset {
+    /// The preset named `gentle`, `walk` or `run`.
+    pub fn from_name(name: &str) -> Result<Self, String> {
+        match name {
+            "gentle" => Ok(MotionPreset::Gentle),
+            "walk" => Ok(MotionPreset::Walk),
+            "run" => Ok(MotionPreset::Run),
+            other => Err(format!("unknown motion '{other}' (gentle, walk or run)")),
+        }
+    }
+
+    /// Animation frames per captured frame.
+    pub fn pace(self) -> f64 {
+        match self {
+            MotionPreset::Gentle => 1.0,
+            MotionPreset::Walk => 4.0,
+            MotionPreset::Run => 5.0,
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct SynthOptions {
     pub subject: SubjectSource,
@@ -51,11 +87,12 @@ pub struct SynthOptions {
     /// Tracked points: this many random vertices and this many random surface points.
     pub track_vertices: usize,
     pub track_surface: usize,
+    pub motion: MotionPreset,
 }
 
 impl Default for SynthOptions {
     fn default() -> Self {
-        Self { subject: SubjectSource::Procedural { subdivisions: 4 }, views: 8, frames: 8, resolution: 256, seed: 0, samples: 4, track_vertices: 100, track_surface: 200 }
+        Self { subject: SubjectSource::Procedural { subdivisions: 4 }, views: 8, frames: 8, resolution: 256, seed: 0, samples: 4, track_vertices: 100, track_surface: 200, motion: MotionPreset::Gentle }
     }
 }
 
@@ -93,6 +130,9 @@ pub struct SynthReport {
     pub manifold_problem: Option<String>,
     /// Bounding-sphere radius of the subject over all frames, scene units.
     pub radius: f64,
+    pub motion: MotionPreset,
+    /// Vertex motion between consecutive frames, fractions of the subject's size.
+    pub motion_per_frame: MotionStats,
 }
 
 /// Loads the subject the options name.
@@ -107,7 +147,7 @@ pub fn load_subject(source: &SubjectSource) -> Result<Subject, SynthError> {
 /// Generates the dataset into `out` (created if needed).
 pub fn generate(options: &SynthOptions, out: &Path) -> Result<SynthReport, SynthError> {
     check_options(options)?;
-    let subject = load_subject(&options.subject)?;
+    let subject = Subject { pace: options.motion.pace(), ..load_subject(&options.subject)? };
     let manifold_problem = closed_manifold_problem(subject.rest.len(), &subject.faces);
     if let (Some(problem), SubjectSource::Procedural { .. }) = (&manifold_problem, &options.subject) {
         return Err(SynthError::Subject(problem.clone()));
@@ -157,6 +197,8 @@ pub fn generate(options: &SynthOptions, out: &Path) -> Result<SynthReport, Synth
         tracked_points: tracks.len(),
         manifold_problem,
         radius,
+        motion: options.motion,
+        motion_per_frame: motion_stats(&frames),
     })
 }
 

@@ -94,7 +94,7 @@ pub fn load_gltf(path: &Path, animation: Option<&str>) -> Result<Subject, GltfEr
         animation: chosen.name().map(str::to_owned).unwrap_or_else(|| format!("#{}", chosen.index())),
         duration,
     };
-    Ok(Subject { rest, faces, skin: weights, motion: super::Motion::Gltf(rig) })
+    Ok(Subject { rest, faces, skin: weights, motion: super::Motion::Gltf(rig), pace: 1.0 })
 }
 
 /// The binary chunk of a `.glb`, or files named by relative URIs.
@@ -254,8 +254,8 @@ impl Channel {
 
 impl GltfRig {
     /// Skinning matrices at `frame` (time `frame / FPS` seconds, wrapped at the duration).
-    pub fn joint_matrices(&self, frame: usize) -> Vec<DMat4> {
-        let time = if self.duration > 0.0 { (frame as f64 / FPS) % self.duration } else { 0.0 } as f32;
+    pub fn joint_matrices(&self, frame: f64) -> Vec<DMat4> {
+        let time = if self.duration > 0.0 { (frame / FPS) % self.duration } else { 0.0 } as f32;
         let mut trs = self.rest.clone();
         for c in &self.channels {
             let v = c.sample(time);

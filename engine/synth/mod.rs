@@ -11,12 +11,13 @@ pub mod generate;
 pub mod gltf;
 pub mod icosphere;
 pub mod manifold;
+pub mod motion_stats;
 pub mod procedural;
 pub mod raster;
 pub mod skinning;
 pub mod texture;
 
-pub use generate::{generate, SynthOptions, SynthReport, SubjectSource};
+pub use generate::{generate, MotionPreset, SynthOptions, SynthReport, SubjectSource};
 pub use raster::{render, Render, RenderError};
 pub use skinning::{skin, SkinWeights};
 pub use texture::Texture;
@@ -30,6 +31,8 @@ pub struct Subject {
     pub faces: Vec<[u32; 3]>,
     pub skin: SkinWeights,
     pub motion: Motion,
+    /// Animation frames per captured frame (1: the animation's own speed).
+    pub pace: f64,
 }
 
 /// Where the skinning matrices of a frame come from.
@@ -45,14 +48,15 @@ impl Subject {
     /// The procedural body with `subdivisions` levels of icosphere refinement.
     pub fn procedural(subdivisions: u32) -> Self {
         let (rest, faces, skin) = procedural::procedural_subject(subdivisions);
-        Self { rest, faces, skin, motion: Motion::Procedural }
+        Self { rest, faces, skin, motion: Motion::Procedural, pace: 1.0 }
     }
 
-    /// Skinning matrices at `frame`.
+    /// Skinning matrices at captured frame `frame` (animation time `frame × pace`).
     pub fn joint_matrices(&self, frame: usize) -> Vec<DMat4> {
+        let time = frame as f64 * self.pace;
         match &self.motion {
-            Motion::Procedural => procedural::procedural_pose(frame),
-            Motion::Gltf(rig) => rig.joint_matrices(frame),
+            Motion::Procedural => procedural::procedural_pose(time),
+            Motion::Gltf(rig) => rig.joint_matrices(time),
         }
     }
 

@@ -125,12 +125,12 @@ pub fn procedural_subject(subdivisions: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>, S
     (positions, faces, skin)
 }
 
-/// Skinning matrices of the 11 joints at `frame` (rest pose = identity matrices, so no inverse
-/// bind matrices are needed): the root turns about y and bobs; each limb swings at its
-/// shoulder (left and right in opposite phase) and bends at its elbow, about an axis across
-/// the limb. Frame 0 is the rest pose.
-pub fn procedural_pose(frame: usize) -> Vec<DMat4> {
-    let phi = std::f64::consts::TAU * frame as f64 / CYCLE_FRAMES;
+/// Skinning matrices of the 11 joints at animation time `time` (in cycle frames, fractional;
+/// rest pose = identity matrices, so no inverse bind matrices are needed): the root turns about
+/// y and bobs; each limb swings at its shoulder (left and right in opposite phase) and bends at
+/// its elbow, about an axis across the limb. Time 0 is the rest pose.
+pub fn procedural_pose(time: f64) -> Vec<DMat4> {
+    let phi = std::f64::consts::TAU * time / CYCLE_FRAMES;
     let root = DMat4::from_translation(DVec3::new(0.0, 0.06 * (2.0 * phi).sin(), 0.0)) * DMat4::from_rotation_y(0.3 * phi.sin());
     let mut joints = vec![root];
     let about = |pivot: DVec3, axis: DVec3, angle: f64| {
@@ -162,7 +162,7 @@ mod tests {
             assert!((ws.iter().sum::<f32>() - 1.0).abs() < 1e-6 && ws.iter().all(|&x| x >= 0.0));
         }
         // Frame 0 has zero swing and zero bend, only the root transform (identity at phi = 0).
-        let posed = skin(&p, &w, &procedural_pose(0));
+        let posed = skin(&p, &w, &procedural_pose(0.0));
         for (a, b) in p.iter().zip(&posed) {
             assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-6));
         }
@@ -174,7 +174,7 @@ mod tests {
     #[test]
     fn limbs_move_and_rigid_parts_stay_rigid() {
         let (p, _, w) = procedural_subject(3);
-        let posed = skin(&p, &w, &procedural_pose(12));
+        let posed = skin(&p, &w, &procedural_pose(12.0));
         let moved = p.iter().zip(&posed).filter(|(a, b)| (0..3).any(|k| (a[k] - b[k]).abs() > 0.05)).count();
         assert!(moved > p.len() / 4);
         // Two body vertices (root weight 1) keep their distance.
