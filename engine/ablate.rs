@@ -24,11 +24,14 @@ pub fn temporal_ablations() -> Vec<Ablation> {
             name: "w/o adaptive iterations",
             apply: |c| (c.temporal.min_iterations, c.temporal.graph.min_iterations) = (c.temporal.iterations, c.temporal.graph.iterations),
         },
-        Ablation {
-            name: "previous temporal stage",
-            apply: |c| (c.temporal.graph.nodes, c.temporal.silhouette, c.temporal.coverage, c.temporal.iterations, c.temporal.min_iterations) = (0, 0.0, 0.0, 300, 300),
-        },
+        Ablation { name: "previous temporal stage", apply: previous_temporal_stage },
     ]
+}
+
+/// The temporal stage before the deformation graph, the silhouette and coverage terms and the
+/// adaptive stop: 300 per-vertex iterations per frame from the extrapolated pose.
+pub fn previous_temporal_stage(c: &mut TrainConfig) {
+    (c.temporal.graph.nodes, c.temporal.silhouette, c.temporal.coverage, c.temporal.iterations, c.temporal.min_iterations) = (0, 0.0, 0.0, 300, 300);
 }
 
 pub struct TemporalAblationJob {
@@ -97,9 +100,9 @@ pub fn run_temporal_ablations(ctx: &Arc<GpuContext>, job: &TemporalAblationJob, 
     Ok(rows)
 }
 
-/// Frame 0 of `from` into `to` (Gaussians first: the mesh marks the frame complete), unless
-/// `to` has it already.
-fn copy_frame0(from: &Path, to: &Path) -> Result<(), AblateError> {
+/// Frame 0 of the train output `from` into the train output `to` (Gaussians first: the mesh
+/// marks the frame complete), unless `to` has it already; a run into `to` then continues it.
+pub fn copy_frame0(from: &Path, to: &Path) -> Result<(), AblateError> {
     let (source, target) = (SequenceOutput::create(from)?, SequenceOutput::create(to)?);
     if target.is_complete(0) {
         return Ok(());
