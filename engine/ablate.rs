@@ -6,7 +6,7 @@ use crate::demo::Ablation;
 use crate::eval::{evaluate_sequence, find_ground_truth, GroundTruth, SequenceEvalError, SequenceEvalOptions};
 use crate::gpu::GpuContext;
 use crate::train::output::SequenceOutput;
-use crate::train::pipeline::{run_train, TrainConfig, TrainJob, TrainProgress};
+use crate::train::pipeline::{run_train, ReferencePose, TrainConfig, TrainJob, TrainProgress};
 use crate::train::TrainError;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -17,6 +17,8 @@ pub fn temporal_ablations() -> Vec<Ablation> {
     vec![
         Ablation { name: "full model", apply: |_| {} },
         Ablation { name: "w/o deformation graph", apply: |c| c.temporal.graph.nodes = 0 },
+        Ablation { name: "graph on frame 0", apply: |c| c.temporal.graph.rest = ReferencePose::Frame0 },
+        Ablation { name: "regularizers against frame 0", apply: |c| c.temporal.regularizer_reference = ReferencePose::Frame0 },
         Ablation { name: "w/o coarse level", apply: |c| c.temporal.graph.levels = vec![1] },
         Ablation { name: "w/o silhouette term", apply: |c| c.temporal.silhouette = 0.0 },
         Ablation { name: "w/o coverage term", apply: |c| c.temporal.coverage = 0.0 },

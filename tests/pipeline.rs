@@ -180,5 +180,18 @@ fn frames_that_lose_the_subject_keep_going_and_say_where() {
     assert!(out.join("sequence.glb").is_file(), "the sequence is exported");
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(json["frames"][3]["stop_reason"], "no_views");
+
+    // Frame 3 is frame 2 extrapolated, with no optimisation: a range starting at 3 over a copy
+    // of frames 0-2 must start from frame 2 (and 1), giving the same file byte for byte.
+    let range = dir.join("range");
+    for t in 0..3 {
+        for kind in ["gaussians", "meshes"] {
+            std::fs::create_dir_all(range.join(kind)).unwrap();
+            std::fs::copy(out.join(format!("{kind}/{t:06}.ply")), range.join(format!("{kind}/{t:06}.ply"))).unwrap();
+        }
+    }
+    run_train(g.ctx(), &job(&data, &range, quick_config(), Some(3..4)), &mut |_| {}).unwrap();
+    let frame3 = |d: &Path| std::fs::read(d.join("meshes/000003.ply")).unwrap();
+    assert!(frame3(&range) == frame3(&out), "a run over frames 3..4 did not continue from frames 1 and 2");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -3,13 +3,15 @@
 //! its geodesically nearest nodes) with an as-rigid-as-possible term between nodes, optimised
 //! on the GPU against the same image and mask losses before the per-vertex refinement.
 //!
-//! [`graph`] builds it on the CPU from the frame's start pose, [`GraphDeformer`] runs it on the
-//! GPU, [`reference`] is the f64 CPU reference of its kernels.
+//! [`graph`] builds it on the CPU from a rest pose, [`fit`] starts its nodes from a posed copy,
+//! [`GraphDeformer`] runs it on the GPU, [`reference`] is the f64 CPU reference of its kernels.
 
+pub mod fit;
 pub mod graph;
 mod kernels;
 pub mod reference;
 
+pub use fit::fit_nodes;
 pub use graph::{build_graph, DeformGraph, NODES_PER_VERTEX};
 pub use kernels::GraphDeformer;
 pub use reference::NodeTransforms;

@@ -70,6 +70,8 @@ pub struct TemporalConfig {
     /// vertex; 0: off) and how far it searches, pixels at the level's resolution.
     pub coverage: f32,
     pub coverage_radius: u32,
+    /// The pose the temporal regularizers (edge length, rigidity, rotation) compare against.
+    pub regularizer_reference: ReferencePose,
     pub graph: GraphConfig,
 }
 
@@ -90,6 +92,20 @@ pub struct GraphConfig {
     pub rotation_lr: f32,
     /// Weight of the as-rigid-as-possible term (mean squared residual in node spacings).
     pub arap: f32,
+    /// The pose the graph deforms and its rigidity term holds to: `previous` (the extrapolated
+    /// previous frame, nodes at identity) or `frame0` (frame 0's surface, each node started at
+    /// the best rigid fit of its vertices to the extrapolated previous frame).
+    pub rest: ReferencePose,
+}
+
+/// The pose a later frame's graph or temporal regularizers compare against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ReferencePose {
+    /// Frame t − 1.
+    Previous,
+    /// Frame 0: shape errors of earlier frames do not carry over.
+    Frame0,
 }
 
 /// Loss weights and the temporal falloff λ_w (per mean edge length). MISSION.md's table, but
@@ -154,13 +170,13 @@ impl Default for CanonicalConfig {
 
 impl Default for TemporalConfig {
     fn default() -> Self {
-        Self { iterations: 300, min_iterations: 60, tolerance: 0.005, freeze_appearance: true, silhouette: 10.0, coverage: 0.01, coverage_radius: 24, graph: GraphConfig::default() }
+        Self { iterations: 300, min_iterations: 60, tolerance: 0.005, freeze_appearance: true, silhouette: 10.0, coverage: 0.01, coverage_radius: 24, regularizer_reference: ReferencePose::Previous, graph: GraphConfig::default() }
     }
 }
 
 impl Default for GraphConfig {
     fn default() -> Self {
-        Self { nodes: 200, levels: vec![2, 1], iterations: 150, min_iterations: 30, translation_lr: 2e-3, rotation_lr: 5e-3, arap: 1.0 }
+        Self { nodes: 200, levels: vec![2, 1], iterations: 150, min_iterations: 30, translation_lr: 2e-3, rotation_lr: 5e-3, arap: 1.0, rest: ReferencePose::Previous }
     }
 }
 

@@ -3,7 +3,7 @@
 //! rendered and scored for colour and mask, the regularizers (temporal ones against the
 //! previous frame) — then Adam. Frame 0 also densifies and prunes through the topology.
 
-use super::config::TrainConfig;
+use super::config::{ReferencePose, TrainConfig};
 use super::graph_stage::{solve_graph, GraphInput, GraphReport, ImageWeights};
 use super::plateau::{Plateau, StopReason};
 use crate::eval::psnr;
@@ -64,6 +64,8 @@ pub struct FrameTask<'a> {
     pub mesh: &'a mut ManifoldMesh,
     /// Frame t − 1's Gaussians for the temporal terms (None on frame 0).
     pub previous: Option<&'a GaussianScene>,
+    /// Frame 0's Gaussians, which the deformation graph may deform (None on frame 0).
+    pub frame0: Option<&'a GaussianScene>,
 }
 
 /// The optimised Gaussians (or, after a non-finite loss, the error naming it). Later frames
@@ -97,7 +99,7 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
             }
         };
         let (faces, neighbourhoods) = (task.mesh.live_faces(), Neighbourhoods::from_mesh(task.mesh));
-        let input = GraphInput { train: task.train, start: &start, faces: &faces, neighbourhoods: &neighbourhoods, silhouette };
+        let input = GraphInput { train: task.train, start: &start, frame0: task.frame0.unwrap_or(&start), faces: &faces, neighbourhoods: &neighbourhoods, silhouette };
         let (moved, graph) = solve_graph(ctx, &input, config, weights, &settings, &mut rng)?;
         (start, report.graph, train_s) = (moved, Some(graph), t0.elapsed().as_secs_f64());
     }
@@ -107,7 +109,11 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
     let mut mesh_term = MeshTerm::new(ctx, &start.positions, &task.mesh.live_faces(), first.camera.width, first.camera.height)?;
     let mut regs = Regularizers::new(ctx)?;
     regs.upload(&Neighbourhoods::from_mesh(task.mesh))?;
-    let previous = task.previous.map(|p| GaussianBuffers::from_scene(ctx, p)).transpose()?;
+    let reference = match t.regularizer_reference {
+        ReferencePose::Previous => task.previous,
+        ReferencePose::Frame0 => task.frame0,
+    };
+    let reference = reference.map(|p| GaussianBuffers::from_scene(ctx, p)).transpose()?;
     let pixels = task.train.iter().map(|v| v.target.len()).max().unwrap_or(0);
     let coverage = if canonical { None } else { Some(CoverageTerm::new(ctx, start.len(), pixels, t.coverage_radius)?) };
 
@@ -131,7 +137,7 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
         trainer.record_splat(&mut rec, view, &frame, weights.gaussians)?;
         mesh_term.record(&mut rec, trainer.params(), trainer.grads(), trainer.camera(view), trainer.target(view), weights.mesh, bg)?;
         rec.begin_pass("regularizers");
-        regs.record(&mut rec, trainer.params(), trainer.grads(), &w.regularizers(trainer.gaussians()), previous.as_ref().map(Temporal::of))?;
+        regs.record(&mut rec, trainer.params(), trainer.grads(), &w.regularizers(trainer.gaussians()), reference.as_ref().map(Temporal::of))?;
         if let Some(s) = &silhouette {
             s.record(&mut rec, &trainer.params().positions, &trainer.grads().positions, t.silhouette, settings.near)?;
         }

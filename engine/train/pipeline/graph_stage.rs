@@ -3,9 +3,9 @@
 //! moves alone. Each level renders the training views downsampled by its factor, so a limb
 //! that moved many pixels is within reach of the loss; every level stops at its plateau.
 
-use super::config::TrainConfig;
+use super::config::{ReferencePose, TrainConfig};
 use super::plateau::{Plateau, StopReason};
-use crate::deform::{build_graph, GraphDeformer};
+use crate::deform::{build_graph, fit_nodes, GraphDeformer};
 use crate::gpu::{GpuContext, Recorder};
 use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm};
 use crate::mesh::bounding_diagonal;
@@ -37,10 +37,11 @@ pub struct GraphReport {
 }
 
 /// What the stage works on: the frame's training views, where it starts (the extrapolated
-/// previous frame), the topology, and the silhouette term of the training views.
+/// previous frame), frame 0's surface, the topology, and the silhouette term of the training views.
 pub struct GraphInput<'a> {
     pub train: &'a [ViewTarget],
     pub start: &'a GaussianScene,
+    pub frame0: &'a GaussianScene,
     pub faces: &'a [[u32; 3]],
     pub neighbourhoods: &'a Neighbourhoods,
     pub silhouette: &'a SilhouetteTerm,
@@ -57,8 +58,15 @@ pub struct ImageWeights {
 /// unchanged) and what each level did.
 pub fn solve_graph(ctx: &Arc<GpuContext>, input: &GraphInput, config: &TrainConfig, weights: ImageWeights, settings: &RenderSettings, rng: &mut SplitMix64) -> Result<(GaussianScene, GraphReport), TrainError> {
     let g = &config.temporal.graph;
-    let graph = build_graph(&input.start.positions, |i| input.neighbourhoods.neighbours(i), g.nodes as usize);
-    let deformer = GraphDeformer::new(ctx, &graph, input.start, g.arap).map_err(|e| TrainError::Input(format!("deformation graph: {e}")))?;
+    let rest = match g.rest {
+        ReferencePose::Frame0 => input.frame0,
+        ReferencePose::Previous => input.start,
+    };
+    let graph = build_graph(&rest.positions, |i| input.neighbourhoods.neighbours(i), g.nodes as usize);
+    let mut deformer = GraphDeformer::new(ctx, &graph, rest, g.arap).map_err(|e| TrainError::Input(format!("deformation graph: {e}")))?;
+    if g.rest == ReferencePose::Frame0 {
+        deformer.write_nodes(&fit_nodes(&rest.positions, &input.start.positions, &graph))?;
+    }
     let diagonal = bounding_diagonal(&input.start.positions) as f32;
     let mut report = GraphReport { nodes: deformer.nodes(), levels: Vec::new() };
     let mut moved = input.start.clone();

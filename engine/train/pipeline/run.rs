@@ -81,8 +81,14 @@ pub fn run_train(ctx: &Arc<GpuContext>, job: &TrainJob, progress: &mut dyn FnMut
         outputs: vec![job.out.join("meshes"), job.out.join("gaussians")],
     };
     let (mut mesh, mut previous) = canonical_start(ctx, &dataset, job, &out, &mut report, progress)?;
+    let frame0 = previous.clone();
+    // A range that starts after frame 1 continues from the frame before it (checked above).
+    let first = 1.max(frames.start);
+    if first > 1 {
+        previous = out.read_frame(first - 1)?.1;
+    }
     let mut before_previous: Option<GaussianScene> = None;
-    for t in 1.max(frames.start)..frames.end {
+    for t in first..frames.end {
         if out.is_complete(t) {
             before_previous = Some(std::mem::replace(&mut previous, out.read_frame(t)?.1));
             continue;
@@ -104,7 +110,7 @@ pub fn run_train(ctx: &Arc<GpuContext>, job: &TrainJob, progress: &mut dyn FnMut
             mesh.positions = start.positions.clone();
             (start, report)
         } else {
-            let task = FrameTask { frame: t, train: &train, eval: &eval, start, mesh: &mut mesh, previous: Some(&previous) };
+            let task = FrameTask { frame: t, train: &train, eval: &eval, start, mesh: &mut mesh, previous: Some(&previous), frame0: Some(&frame0) };
             let (scene, report) = optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| progress(TrainProgress { frame: t, frames_end: frames.end, iteration, iterations }))?;
             (scene, FrameReport { lost_views, ..report })
         };
@@ -132,7 +138,7 @@ fn canonical_start(ctx: &Arc<GpuContext>, dataset: &Dataset, job: &TrainJob, out
     let start = gaussians_from_mesh(&mesh, &colors, &init);
     let (train, eval) = views(dataset, 0, &job.config)?;
     let frames = job.frames.clone().unwrap_or(0..dataset.frames.len());
-    let task = FrameTask { frame: 0, train: &train, eval: &eval, start, mesh: &mut mesh, previous: None };
+    let task = FrameTask { frame: 0, train: &train, eval: &eval, start, mesh: &mut mesh, previous: None, frame0: None };
     let (scene, frame_report) = optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| progress(TrainProgress { frame: 0, frames_end: frames.end, iteration, iterations }))?;
     write_frame(out, 0, &mesh, &scene)?;
     report.frames.push(frame_report);
