@@ -52,7 +52,6 @@ fn members_of(graph: &DeformGraph) -> Members {
 /// one row per node (translation in `positions`, rotation in `rotations`, the other groups
 /// unused at learning rate 0), so the fused Adam serves them unchanged.
 pub struct GraphDeformer {
-    ctx: Arc<GpuContext>,
     blend: ComputePipeline,
     node_gradients: ComputePipeline,
     rest_positions: GpuBuffer<f32>,
@@ -118,7 +117,6 @@ impl GraphDeformer {
             nodes,
             losses: GpuBuffer::from_slice(ctx, "deform ARAP loss", &[0.0])?,
             push: Push { vertices: n as u32, nodes: m as u32, arap_scale: arap_weight / (directed_edges * spacing * spacing), unused: 0 },
-            ctx: ctx.clone(),
         })
     }
 
@@ -172,11 +170,7 @@ impl GraphDeformer {
 
     /// The ARAP energy summed since the last call (which restarts the sum).
     pub fn take_arap_loss(&self) -> GpuResult<f32> {
-        let value = self.losses.read()?[0];
-        let mut rec = Recorder::new(&self.ctx)?;
-        rec.fill_buffer(&self.losses, 0);
-        rec.submit_and_wait()?;
-        Ok(value)
+        Ok(self.losses.take()?[0])
     }
 
     /// The node transforms and their last gradients, read back.

@@ -129,6 +129,15 @@ impl<T: Pod> GpuBuffer<T> {
         Ok(())
     }
 
+    /// Reads the whole buffer, then zeroes it: an accumulator's sum since the last take.
+    pub fn take(&self) -> GpuResult<Vec<T>> {
+        let values = self.read()?;
+        let mut recorder = Recorder::new(&self.ctx)?;
+        recorder.fill_buffer(self, 0);
+        recorder.submit_and_wait()?;
+        Ok(values)
+    }
+
     /// Reads the whole buffer.
     pub fn read(&self) -> GpuResult<Vec<T>> {
         self.read_prefix(self.len)

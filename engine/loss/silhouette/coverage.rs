@@ -27,7 +27,6 @@ struct Push {
 }
 
 pub struct CoverageTerm {
-    ctx: Arc<GpuContext>,
     seed: ComputePipeline,
     pull: ComputePipeline,
     projected: GpuBuffer<[f32; 2]>,
@@ -47,7 +46,6 @@ impl CoverageTerm {
             seeds: GpuBuffer::new(ctx, "coverage seeds", pixels)?,
             losses: GpuBuffer::from_slice(ctx, "coverage loss", &[0.0])?,
             radius,
-            ctx: ctx.clone(),
         })
     }
 
@@ -93,10 +91,6 @@ impl CoverageTerm {
 
     /// The weighted loss summed since the last call (which restarts the sum).
     pub fn take_loss(&self) -> GpuResult<f32> {
-        let value = self.losses.read()?[0];
-        let mut rec = Recorder::new(&self.ctx)?;
-        rec.fill_buffer(&self.losses, 0);
-        rec.submit_and_wait()?;
-        Ok(value)
+        Ok(self.losses.take()?[0])
     }
 }

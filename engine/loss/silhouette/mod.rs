@@ -54,7 +54,6 @@ impl SilhouetteView {
 }
 
 pub struct SilhouetteTerm {
-    ctx: Arc<GpuContext>,
     pipeline: ComputePipeline,
     views: GpuBuffer<GpuView>,
     fields: GpuBuffer<f32>,
@@ -89,7 +88,6 @@ impl SilhouetteTerm {
             view_count: views.len(),
             with_mask: views.len() - without_mask.len(),
             without_mask,
-            ctx: ctx.clone(),
         })
     }
 
@@ -113,10 +111,6 @@ impl SilhouetteTerm {
 
     /// The weighted loss summed since the last call (which restarts the sum).
     pub fn take_loss(&self) -> GpuResult<f32> {
-        let value = self.losses.read()?[0];
-        let mut rec = Recorder::new(&self.ctx)?;
-        rec.fill_buffer(&self.losses, 0);
-        rec.submit_and_wait()?;
-        Ok(value)
+        Ok(self.losses.take()?[0])
     }
 }
