@@ -1,7 +1,8 @@
 //! The coarse stage of a later frame: the embedded deformation graph (`crate::deform`) solved
-//! coarse to fine against the frame's image, mask and silhouette losses, before any vertex
-//! moves alone. Each level renders the training views downsampled by its factor, so a limb
-//! that moved many pixels is within reach of the loss; every level stops at its plateau.
+//! against the frame's image, mask, silhouette and coverage losses before any vertex moves
+//! alone, level by level. A level renders the training views downsampled by its factor (coarse
+//! to fine when configured, so a limb that moved many pixels is within reach of the loss);
+//! every level stops at its plateau.
 
 use super::config::{ReferencePose, TrainConfig};
 use super::plateau::{Plateau, StopReason};

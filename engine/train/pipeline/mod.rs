@@ -1,9 +1,8 @@
 //! The reconstruction pipeline (`tagsplat train`): multi-view video in, a topology-consistent
 //! mesh sequence and per-frame Gaussians out. The canonical stage fits frame 0 with the
 //! Gaussians on a manifold mesh (densified and pruned through the topology); the temporal stage
-//! moves that mesh through every later frame with its topology frozen: a deformation graph of
-//! frame 0's surface solved coarse to fine first, then every vertex refined, each stage until its loss stops
-//! improving.
+//! moves that mesh through every later frame with its topology frozen: a deformation graph
+//! solved first, then every vertex refined, each stage until its loss stops improving.
 
 pub mod config;
 mod frame;
