@@ -135,6 +135,6 @@ mod tests {
         assert!(same.translations.iter().flatten().all(|t| t.abs() < 1e-6));
         let collapsed = vec![[0.5f32, 0.5, 0.5]; rest.len()];
         let nodes = fit_nodes(&rest, &collapsed, &graph);
-        assert!(nodes.rotations.iter().chain(&nodes.translations.iter().map(|t| [t[0], t[1], t[2], 0.0]).collect::<Vec<_>>()).flatten().all(|v| v.is_finite()));
+        assert!(nodes.rotations.iter().flatten().chain(nodes.translations.iter().flatten()).all(|v| v.is_finite()));
     }
 }

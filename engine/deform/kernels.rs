@@ -185,7 +185,7 @@ impl GraphDeformer {
         Ok((read(&self.nodes)?, read(&self.node_grads)?))
     }
 
-    /// Replaces the node transforms (tests; moments are kept).
+    /// Replaces the node transforms (a starting pose, or a test's; Adam's moments are kept).
     pub fn write_nodes(&mut self, nodes: &NodeTransforms) -> GpuResult<()> {
         let t: Vec<f32> = nodes.translations.iter().flatten().map(|&v| v as f32).collect();
         self.nodes.positions.write(&t)?;

@@ -10,6 +10,11 @@ use crate::mesh::TriMesh;
 use crate::splat::GaussianScene;
 use std::path::{Path, PathBuf};
 
+/// `root/meshes/<t>.ply`: frame `t`'s mesh in an output folder (also where `eval` reads it).
+pub fn mesh_path(root: &Path, t: usize) -> PathBuf {
+    root.join("meshes").join(format!("{}.ply", frame_name(t)))
+}
+
 pub struct SequenceOutput {
     root: PathBuf,
 }
@@ -32,7 +37,7 @@ impl SequenceOutput {
     }
 
     pub fn mesh_path(&self, t: usize) -> PathBuf {
-        self.root.join("meshes").join(format!("{}.ply", frame_name(t)))
+        mesh_path(&self.root, t)
     }
 
     pub fn gaussians_path(&self, t: usize) -> PathBuf {

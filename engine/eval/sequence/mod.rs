@@ -20,10 +20,10 @@ pub use ground_truth::{find_ground_truth, GroundTruth};
 pub use train_report::{read_train_report, FrameTrainStats};
 
 use super::{chamfer_to_surface, tracking_error, EvalError, TrackPoint, TrackingReport};
-use crate::io::dataset::own::frame_name;
 use crate::io::sequence::{check_same_topology, MeshSequence, SequenceError};
 use crate::mesh::{MeshError, TriMesh};
 use crate::track::{track, Queries, TrackError, TrackReport};
+use crate::train::output::mesh_path;
 use serde::Serialize;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -122,17 +122,12 @@ pub struct SequenceEval {
     pub frames: Vec<FrameScores>,
 }
 
-/// `OUT/meshes/FFFFFF.ply` of frame `t`.
-pub fn predicted_mesh_path(pred: &Path, t: usize) -> PathBuf {
-    pred.join("meshes").join(format!("{}.ply", frame_name(t)))
-}
-
 /// Scores the prediction folder `pred` against `gt` (see the module docs). Errors name the
 /// file: no predicted frame 0, a frame whose vertex count or faces differ from frame 0's, an
 /// unreadable mesh or report, a range past the ground truth.
 pub fn evaluate_sequence(pred: &Path, gt: &GroundTruth, options: &SequenceEvalOptions) -> Result<SequenceEval, SequenceEvalError> {
     let range = frame_range(gt, options)?;
-    let (present, missing): (Vec<usize>, Vec<usize>) = range.partition(|&t| predicted_mesh_path(pred, t).is_file());
+    let (present, missing): (Vec<usize>, Vec<usize>) = range.partition(|&t| mesh_path(pred, t).is_file());
     // Frame 0 binds the points even when the range starts later.
     let loaded: Vec<usize> = std::iter::once(0).chain(present.iter().copied().filter(|&t| t > 0)).collect();
     let sequence = read_predicted(pred, &loaded)?;
@@ -171,13 +166,13 @@ fn frame_range(gt: &GroundTruth, options: &SequenceEvalOptions) -> Result<Range<
 /// The predicted meshes of `frames` (frame 0 first) as one sequence: frame 0's faces, and
 /// every frame with its vertex count and faces.
 fn read_predicted(pred: &Path, frames: &[usize]) -> Result<MeshSequence, SequenceEvalError> {
-    let first = predicted_mesh_path(pred, 0);
+    let first = mesh_path(pred, 0);
     if !first.is_file() {
         return Err(SequenceEvalError::Invalid { path: first, problem: "missing: frame 0 binds the ground-truth points".into() });
     }
     let mut sequence = MeshSequence::default();
     for &t in frames {
-        let path = predicted_mesh_path(pred, t);
+        let path = mesh_path(pred, t);
         let mesh = TriMesh::read_ply(&path)?;
         if sequence.frames.is_empty() {
             sequence.faces = mesh.faces;
@@ -191,7 +186,7 @@ fn read_predicted(pred: &Path, frames: &[usize]) -> Result<MeshSequence, Sequenc
 
 /// Every ground-truth point bound to the predicted frame 0 and followed through the sequence.
 fn bind_points(pred: &Path, gt: &GroundTruth, sequence: &MeshSequence) -> Result<TrackReport, SequenceEvalError> {
-    let frame0 = predicted_mesh_path(pred, 0);
+    let frame0 = mesh_path(pred, 0);
     let queries = Queries::Points(gt.points.clone());
     // No distance limit: a point far from the predicted surface is an error to score, not to drop.
     let tracked = track(&sequence.faces, &sequence.frames, &queries, f64::INFINITY).map_err(|e| SequenceEvalError::Invalid { path: frame0.clone(), problem: e.to_string() })?;
@@ -221,7 +216,7 @@ fn tracking_scores(gt: &GroundTruth, tracked: &TrackReport, loaded: &[usize], pr
 fn chamfer_frame(pred: &Path, gt: &GroundTruth, t: usize, mesh: (&[[f32; 3]], &[[u32; 3]]), options: &SequenceEvalOptions) -> Result<super::SurfaceChamferReport, SequenceEvalError> {
     let truth = TriMesh::read_ply(&gt.mesh_path(t))?;
     chamfer_to_surface(mesh, (&truth.positions, &truth.faces), options.chamfer_samples, options.seed).map_err(|e| SequenceEvalError::Invalid {
-        path: predicted_mesh_path(pred, t),
+        path: mesh_path(pred, t),
         problem: format!("against {}: {e}", gt.mesh_path(t).display()),
     })
 }

@@ -108,6 +108,17 @@ pub enum ReferencePose {
     Frame0,
 }
 
+impl ReferencePose {
+    /// `previous` or `frame0`, whichever this names.
+    #[inline]
+    pub fn pick<T>(self, previous: T, frame0: T) -> T {
+        match self {
+            ReferencePose::Previous => previous,
+            ReferencePose::Frame0 => frame0,
+        }
+    }
+}
+
 /// Loss weights and the temporal falloff λ_w (per mean edge length). MISSION.md's table, but
 /// the temporal terms at a tenth of it (edge length 0.4, rigidity 0.4, rotation 2): measured on
 /// the demo sequence, the table's 4/4/20 held the surface back (tracking RMSE 0.059 scene units),

@@ -3,7 +3,7 @@
 //! rendered and scored for colour and mask, the regularizers (temporal ones against the
 //! previous frame) — then Adam. Frame 0 also densifies and prunes through the topology.
 
-use super::config::{ReferencePose, TrainConfig};
+use super::config::TrainConfig;
 use super::graph_stage::{solve_graph, GraphInput, GraphReport, ImageWeights};
 use super::plateau::{Plateau, StopReason};
 use crate::eval::psnr;
@@ -64,7 +64,8 @@ pub struct FrameTask<'a> {
     pub mesh: &'a mut ManifoldMesh,
     /// Frame t − 1's Gaussians for the temporal terms (None on frame 0).
     pub previous: Option<&'a GaussianScene>,
-    /// Frame 0's Gaussians, which the deformation graph may deform (None on frame 0).
+    /// Frame 0's Gaussians, for a graph or regularizers configured against frame 0 (None on
+    /// frame 0).
     pub frame0: Option<&'a GaussianScene>,
 }
 
@@ -109,11 +110,7 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
     let mut mesh_term = MeshTerm::new(ctx, &start.positions, &task.mesh.live_faces(), first.camera.width, first.camera.height)?;
     let mut regs = Regularizers::new(ctx)?;
     regs.upload(&Neighbourhoods::from_mesh(task.mesh))?;
-    let reference = match t.regularizer_reference {
-        ReferencePose::Previous => task.previous,
-        ReferencePose::Frame0 => task.frame0,
-    };
-    let reference = reference.map(|p| GaussianBuffers::from_scene(ctx, p)).transpose()?;
+    let reference = t.regularizer_reference.pick(task.previous, task.frame0).map(|p| GaussianBuffers::from_scene(ctx, p)).transpose()?;
     let pixels = task.train.iter().map(|v| v.target.len()).max().unwrap_or(0);
     let coverage = if canonical { None } else { Some(CoverageTerm::new(ctx, start.len(), pixels, t.coverage_radius)?) };
 

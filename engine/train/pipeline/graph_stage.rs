@@ -59,10 +59,7 @@ pub struct ImageWeights {
 /// unchanged) and what each level did.
 pub fn solve_graph(ctx: &Arc<GpuContext>, input: &GraphInput, config: &TrainConfig, weights: ImageWeights, settings: &RenderSettings, rng: &mut SplitMix64) -> Result<(GaussianScene, GraphReport), TrainError> {
     let g = &config.temporal.graph;
-    let rest = match g.rest {
-        ReferencePose::Frame0 => input.frame0,
-        ReferencePose::Previous => input.start,
-    };
+    let rest = g.rest.pick(input.start, input.frame0);
     let graph = build_graph(&rest.positions, |i| input.neighbourhoods.neighbours(i), g.nodes as usize);
     let mut deformer = GraphDeformer::new(ctx, &graph, rest, g.arap).map_err(|e| TrainError::Input(format!("deformation graph: {e}")))?;
     if g.rest == ReferencePose::Frame0 {
