@@ -33,14 +33,24 @@ fn bench_views(c: &mut Criterion, ctx: &Arc<GpuContext>) -> Result<(), RasterErr
     let camera = ring_cameras(8, RESOLUTION)[1];
     let settings = RasterSettings::scaled_to(&mesh.positions);
     let pixels = (RESOLUTION * RESOLUTION) as usize;
-    let (grad_color, grad_mask) = (vec![[1.0 / pixels as f32; 3]; pixels], vec![1.0 / pixels as f32; pixels]);
+    let (grad_color, grad_mask) =
+        (vec![[1.0 / pixels as f32; 3]; pixels], vec![1.0 / pixels as f32; pixels]);
     let mut group = c.benchmark_group("mesh_256_20k");
-    group.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(5));
-    group.bench_function("forward", |b| b.iter(|| rasterizer.render(&camera, &settings).expect("forward")));
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(5));
+    group.bench_function("forward", |b| {
+        b.iter(|| rasterizer.render(&camera, &settings).expect("forward"))
+    });
     group.bench_function("forward_backward", |b| {
         b.iter(|| {
             rasterizer.render(&camera, &settings).expect("forward");
-            black_box(rasterizer.gradients(&camera, &settings, &grad_color, &grad_mask).expect("backward"))
+            black_box(
+                rasterizer
+                    .gradients(&camera, &settings, &grad_color, &grad_mask)
+                    .expect("backward"),
+            )
         })
     });
     group.finish();

@@ -33,8 +33,14 @@ fn benches(c: &mut Criterion) {
         eprintln!("note: the validation layer is on (TAGSPLAT_VALIDATION=1); timings include its overhead");
     }
     report(bench_scan(c, &ctx), "scan");
-    report(bench_sort::<u32>(c, &ctx, "radix_sort_u32", &SORT_U32_SIZES, 32, |x| (x >> 32) as u32), "radix_sort_u32");
-    report(bench_sort::<u64>(c, &ctx, "radix_sort_u64", &SORT_U64_SIZES, SORT_U64_BITS, |x| x), "radix_sort_u64");
+    report(
+        bench_sort::<u32>(c, &ctx, "radix_sort_u32", &SORT_U32_SIZES, 32, |x| (x >> 32) as u32),
+        "radix_sort_u32",
+    );
+    report(
+        bench_sort::<u64>(c, &ctx, "radix_sort_u64", &SORT_U64_SIZES, SORT_U64_BITS, |x| x),
+        "radix_sort_u64",
+    );
 }
 
 /// A GPU error while setting a group up (out of memory, a missing feature) skips the rest of
@@ -91,7 +97,9 @@ fn bench_sort<K: RadixKey>(
             b.iter(|| {
                 let mut recorder = Recorder::new(ctx).expect("command recorder");
                 recorder.copy_buffer(&pristine_keys, &key_buffer, n);
-                sorter.record(&mut recorder, &key_buffer, &value_buffer, n, bits).expect("record radix sort");
+                sorter
+                    .record(&mut recorder, &key_buffer, &value_buffer, n, bits)
+                    .expect("record radix sort");
                 black_box(recorder.submit_and_wait().expect("radix sort submission"))
             })
         });

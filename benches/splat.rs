@@ -33,8 +33,13 @@ fn bench_views(c: &mut Criterion, ctx: &Arc<GpuContext>) -> Result<(), SplatErro
     let settings = RenderSettings::default();
     let mut splatter = Splatter::new(ctx)?;
     let mut group = c.benchmark_group("splat_256_20k_sh3");
-    group.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(5));
-    group.bench_function("forward", |b| b.iter(|| splatter.forward(&work.scene, &camera, &settings).expect("forward")));
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(5));
+    group.bench_function("forward", |b| {
+        b.iter(|| splatter.forward(&work.scene, &camera, &settings).expect("forward"))
+    });
     group.bench_function("forward_backward", |b| {
         b.iter(|| {
             splatter.forward(&work.scene, &camera, &settings).expect("forward");

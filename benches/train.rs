@@ -28,26 +28,41 @@ fn benches(c: &mut Criterion) {
     }
 }
 
-fn bench_kernels(c: &mut Criterion, ctx: &Arc<GpuContext>) -> Result<(), Box<dyn std::error::Error>> {
+fn bench_kernels(
+    c: &mut Criterion,
+    ctx: &Arc<GpuContext>,
+) -> Result<(), Box<dyn std::error::Error>> {
     let pixels = (RESOLUTION * RESOLUTION) as usize;
     let mut rng = SplitMix64::new(7);
-    let mut image = || (0..pixels).map(|_| [0; 4].map(|_| rng.next_f64() as f32)).collect::<Vec<[f32; 4]>>();
+    let mut image =
+        || (0..pixels).map(|_| [0; 4].map(|_| rng.next_f64() as f32)).collect::<Vec<[f32; 4]>>();
     let render = GpuBuffer::from_slice(ctx, "render", &image())?;
     let target = GpuBuffer::from_slice(ctx, "target", &image())?;
     let terms = GpuBuffer::<f32>::new(ctx, "terms", 8)?;
     let gradient = GpuBuffer::<[f32; 4]>::new(ctx, "gradient", pixels)?;
     let mut loss = ImageLoss::new(ctx)?;
     loss.reserve(pixels)?;
-    let params = LossParams::new(RESOLUTION, RESOLUTION, [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0], false);
+    let params =
+        LossParams::new(RESOLUTION, RESOLUTION, [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0], false);
 
     let scene = random_scene(GAUSSIANS, 3, 0x5EED);
     let gaussians = GaussianBuffers::from_scene(ctx, &scene)?;
     let grads = GaussianBuffers::from_scene(ctx, &random_scene(GAUSSIANS, 3, 1))?;
     let adam = Adam::new(ctx, &gaussians)?;
-    let rates = LearningRates { positions: 1e-4, log_scales: 5e-3, rotations: 1e-3, opacity_logits: 0.05, sh_dc: 2.5e-3, sh_rest: 1.25e-4 };
+    let rates = LearningRates {
+        positions: 1e-4,
+        log_scales: 5e-3,
+        rotations: 1e-3,
+        opacity_logits: 0.05,
+        sh_dc: 2.5e-3,
+        sh_rest: 1.25e-4,
+    };
 
     let mut group = c.benchmark_group("train_kernels");
-    group.sample_size(20).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(4));
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4));
     group.bench_function("image_loss_256", |b| {
         b.iter(|| {
             let mut rec = Recorder::new(ctx)?;
@@ -58,7 +73,12 @@ fn bench_kernels(c: &mut Criterion, ctx: &Arc<GpuContext>) -> Result<(), Box<dyn
     group.bench_function("adam_20k_sh3", |b| {
         b.iter(|| {
             let mut rec = Recorder::new(ctx)?;
-            adam.record_step(&mut rec, &gaussians, &grads, &AdamParams::new(&rates, 10, GAUSSIANS, 3))?;
+            adam.record_step(
+                &mut rec,
+                &gaussians,
+                &grads,
+                &AdamParams::new(&rates, 10, GAUSSIANS, 3),
+            )?;
             rec.submit_and_wait()
         })
     });

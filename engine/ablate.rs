@@ -3,7 +3,9 @@
 //! one finished frame 0, so the rows differ only in what happens after it.
 
 use crate::demo::Ablation;
-use crate::eval::{evaluate_sequence, find_ground_truth, GroundTruth, SequenceEvalError, SequenceEvalOptions};
+use crate::eval::{
+    evaluate_sequence, find_ground_truth, GroundTruth, SequenceEvalError, SequenceEvalOptions,
+};
 use crate::gpu::GpuContext;
 use crate::train::output::SequenceOutput;
 use crate::train::pipeline::{run_train, ReferencePose, TrainConfig, TrainJob, TrainProgress};
@@ -17,14 +19,23 @@ pub fn temporal_ablations() -> Vec<Ablation> {
     vec![
         Ablation { name: "full model", apply: |_| {} },
         Ablation { name: "w/o deformation graph", apply: |c| c.temporal.graph.nodes = 0 },
-        Ablation { name: "graph on frame 0", apply: |c| c.temporal.graph.rest = ReferencePose::Frame0 },
-        Ablation { name: "regularizers against frame 0", apply: |c| c.temporal.regularizer_reference = ReferencePose::Frame0 },
+        Ablation {
+            name: "graph on frame 0",
+            apply: |c| c.temporal.graph.rest = ReferencePose::Frame0,
+        },
+        Ablation {
+            name: "regularizers against frame 0",
+            apply: |c| c.temporal.regularizer_reference = ReferencePose::Frame0,
+        },
         Ablation { name: "w/o coarse level", apply: |c| c.temporal.graph.levels = vec![1] },
         Ablation { name: "w/o silhouette term", apply: |c| c.temporal.silhouette = 0.0 },
         Ablation { name: "w/o coverage term", apply: |c| c.temporal.coverage = 0.0 },
         Ablation {
             name: "w/o adaptive iterations",
-            apply: |c| (c.temporal.min_iterations, c.temporal.graph.min_iterations) = (c.temporal.iterations, c.temporal.graph.iterations),
+            apply: |c| {
+                (c.temporal.min_iterations, c.temporal.graph.min_iterations) =
+                    (c.temporal.iterations, c.temporal.graph.iterations)
+            },
         },
         Ablation { name: "previous temporal stage", apply: previous_temporal_stage },
     ]
@@ -33,7 +44,13 @@ pub fn temporal_ablations() -> Vec<Ablation> {
 /// The temporal stage before the deformation graph, the silhouette and coverage terms and the
 /// adaptive stop: 300 per-vertex iterations per frame from the extrapolated pose.
 pub fn previous_temporal_stage(c: &mut TrainConfig) {
-    (c.temporal.graph.nodes, c.temporal.silhouette, c.temporal.coverage, c.temporal.iterations, c.temporal.min_iterations) = (0, 0.0, 0.0, 300, 300);
+    (
+        c.temporal.graph.nodes,
+        c.temporal.silhouette,
+        c.temporal.coverage,
+        c.temporal.iterations,
+        c.temporal.min_iterations,
+    ) = (0, 0.0, 0.0, 300, 300);
 }
 
 pub struct TemporalAblationJob {
@@ -75,18 +92,41 @@ pub enum AblateError {
 
 /// Runs every variant into `out/<n>_<name>/` (a finished variant is resumed, not redone) and
 /// writes `out/ablation.md` and `out/ablation.json`.
-pub fn run_temporal_ablations(ctx: &Arc<GpuContext>, job: &TemporalAblationJob, progress: &mut dyn FnMut(&str, TrainProgress)) -> Result<Vec<TemporalRow>, AblateError> {
-    let gt = GroundTruth::read(&find_ground_truth(&job.data).ok_or_else(|| AblateError::NoGroundTruth(job.data.clone()))?)?;
+pub fn run_temporal_ablations(
+    ctx: &Arc<GpuContext>,
+    job: &TemporalAblationJob,
+    progress: &mut dyn FnMut(&str, TrainProgress),
+) -> Result<Vec<TemporalRow>, AblateError> {
+    let gt = GroundTruth::read(
+        &find_ground_truth(&job.data)
+            .ok_or_else(|| AblateError::NoGroundTruth(job.data.clone()))?,
+    )?;
     let mut rows = Vec::new();
     for (i, ablation) in temporal_ablations().iter().enumerate() {
         let mut config = job.base.clone();
         (ablation.apply)(&mut config);
         let dir = job.out.join(format!("{i}_{}", ablation.name.replace(['/', ' '], "_")));
         copy_frame0(&job.frame0, &dir)?;
-        let train = run_train(ctx, &TrainJob { data: job.data.clone(), out: dir.clone(), mesh: None, config, frames: Some(job.frames.clone()) }, &mut |p| progress(ablation.name, p))?;
-        let eval = evaluate_sequence(&dir, &gt, &SequenceEvalOptions { frames: Some(job.frames.clone()), ..Default::default() })?;
+        let train = run_train(
+            ctx,
+            &TrainJob {
+                data: job.data.clone(),
+                out: dir.clone(),
+                mesh: None,
+                config,
+                frames: Some(job.frames.clone()),
+            },
+            &mut |p| progress(ablation.name, p),
+        )?;
+        let eval = evaluate_sequence(
+            &dir,
+            &gt,
+            &SequenceEvalOptions { frames: Some(job.frames.clone()), ..Default::default() },
+        )?;
         let later: Vec<_> = train.frames.iter().filter(|f| f.frame > 0).collect();
-        let mean = |v: &dyn Fn(&crate::train::pipeline::FrameReport) -> f64| later.iter().map(|f| v(f)).sum::<f64>() / later.len().max(1) as f64;
+        let mean = |v: &dyn Fn(&crate::train::pipeline::FrameReport) -> f64| {
+            later.iter().map(|f| v(f)).sum::<f64>() / later.len().max(1) as f64
+        };
         let s = &eval.summary;
         rows.push(TemporalRow {
             variant: ablation.name.to_string(),
@@ -95,7 +135,12 @@ pub fn run_temporal_ablations(ctx: &Arc<GpuContext>, job: &TemporalAblationJob, 
             chamfer_worst_frame: s.chamfer_worst_frame.map_or(f64::NAN, |v| v.value),
             psnr_mesh_last_db: s.psnr_mesh_last_db.unwrap_or(f64::NAN),
             seconds_per_frame: mean(&|f| f.wall_s),
-            iterations_per_frame: mean(&|f| f.iterations as f64 + f.graph.as_ref().map_or(0.0, |g| g.levels.iter().map(|l| l.iterations as f64).sum())),
+            iterations_per_frame: mean(&|f| {
+                f.iterations as f64
+                    + f.graph
+                        .as_ref()
+                        .map_or(0.0, |g| g.levels.iter().map(|l| l.iterations as f64).sum())
+            }),
         });
     }
     write_tables(&job.out, &rows)?;
@@ -112,8 +157,14 @@ pub fn copy_frame0(from: &Path, to: &Path) -> Result<(), AblateError> {
     if !source.is_complete(0) {
         return Err(AblateError::NoFrame0(from.to_owned()));
     }
-    for (a, b) in [(source.gaussians_path(0), target.gaussians_path(0)), (source.mesh_path(0), target.mesh_path(0))] {
-        crate::io::write_atomically(&b, |w| std::io::copy(&mut std::fs::File::open(&a)?, w).map(drop)).map_err(|source| AblateError::Io { path: b.clone(), source })?;
+    for (a, b) in [
+        (source.gaussians_path(0), target.gaussians_path(0)),
+        (source.mesh_path(0), target.mesh_path(0)),
+    ] {
+        crate::io::write_atomically(&b, |w| {
+            std::io::copy(&mut std::fs::File::open(&a)?, w).map(drop)
+        })
+        .map_err(|source| AblateError::Io { path: b.clone(), source })?;
     }
     Ok(())
 }
@@ -134,7 +185,11 @@ fn write_tables(out: &Path, rows: &[TemporalRow]) -> Result<(), AblateError> {
     }
     let io = |path: PathBuf| move |source| AblateError::Io { path, source };
     let md = out.join("ablation.md");
-    crate::io::write_atomically(&md, |w| std::io::Write::write_all(w, table.as_bytes())).map_err(io(md.clone()))?;
+    crate::io::write_atomically(&md, |w| std::io::Write::write_all(w, table.as_bytes()))
+        .map_err(io(md.clone()))?;
     let json = out.join("ablation.json");
-    crate::io::write_atomically(&json, |w| serde_json::to_writer_pretty(w, rows).map_err(std::io::Error::other)).map_err(io(json.clone()))
+    crate::io::write_atomically(&json, |w| {
+        serde_json::to_writer_pretty(w, rows).map_err(std::io::Error::other)
+    })
+    .map_err(io(json.clone()))
 }

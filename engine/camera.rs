@@ -47,7 +47,15 @@ struct CameraJson {
 impl Camera {
     /// A checked camera: positive size and focal lengths, finite numbers, and a rigid
     /// `world_to_camera` (orthonormal rotation with determinant +1, last row 0 0 0 1).
-    pub fn new(width: u32, height: u32, fx: f64, fy: f64, cx: f64, cy: f64, world_to_camera: DMat4) -> Result<Self, CameraError> {
+    pub fn new(
+        width: u32,
+        height: u32,
+        fx: f64,
+        fy: f64,
+        cx: f64,
+        cy: f64,
+        world_to_camera: DMat4,
+    ) -> Result<Self, CameraError> {
         let invalid = |problem: String| Err(CameraError::Invalid(problem));
         if width == 0 || height == 0 {
             return invalid(format!("image size {width}x{height} is empty"));
@@ -63,19 +71,33 @@ impl Camera {
             return invalid("world_to_camera has a non-finite entry".into());
         }
         let rotation = DMat3::from_mat4(world_to_camera);
-        let error = (rotation * rotation.transpose() - DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |m, e| m.max(e.abs()));
+        let error = (rotation * rotation.transpose() - DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, e| m.max(e.abs()));
         if !(error < RIGID_TOLERANCE && rotation.determinant() > 0.0) {
             return invalid(format!("world_to_camera is not rigid (rotation orthonormality error {error:.2e}, determinant {:.4})", rotation.determinant()));
         }
         if world_to_camera.row(3) != DVec4::W {
-            return invalid(format!("world_to_camera's last row is {:?}, not 0 0 0 1", world_to_camera.row(3).to_array()));
+            return invalid(format!(
+                "world_to_camera's last row is {:?}, not 0 0 0 1",
+                world_to_camera.row(3).to_array()
+            ));
         }
         Ok(Self { width, height, fx, fy, cx, cy, world_to_camera })
     }
 
     /// From an OpenGL/Blender camera-to-world matrix (x right, y up, z backward), the
     /// convention of nerfstudio and D-NeRF: flip y and z, then invert.
-    pub fn from_opengl_camera_to_world(width: u32, height: u32, fx: f64, fy: f64, cx: f64, cy: f64, camera_to_world: DMat4) -> Result<Self, CameraError> {
+    pub fn from_opengl_camera_to_world(
+        width: u32,
+        height: u32,
+        fx: f64,
+        fy: f64,
+        cx: f64,
+        cy: f64,
+        camera_to_world: DMat4,
+    ) -> Result<Self, CameraError> {
         let opencv_to_opengl = DMat4::from_diagonal(DVec4::new(1.0, -1.0, -1.0, 1.0));
         let world_to_camera = rigid_inverse(camera_to_world * opencv_to_opengl);
         Self::new(width, height, fx, fy, cx, cy, world_to_camera)
@@ -84,7 +106,17 @@ impl Camera {
     /// A camera at `eye` looking at `target`, with `up` pointing up in the image (the image y
     /// axis points down, along −up). `eye − target` must not be parallel to `up`.
     #[allow(clippy::too_many_arguments)]
-    pub fn look_at(width: u32, height: u32, fx: f64, fy: f64, cx: f64, cy: f64, eye: DVec3, target: DVec3, up: DVec3) -> Result<Self, CameraError> {
+    pub fn look_at(
+        width: u32,
+        height: u32,
+        fx: f64,
+        fy: f64,
+        cx: f64,
+        cy: f64,
+        eye: DVec3,
+        target: DVec3,
+        up: DVec3,
+    ) -> Result<Self, CameraError> {
         let forward = (target - eye).normalize();
         let right = forward.cross(up).normalize();
         let down = forward.cross(right);
@@ -95,10 +127,13 @@ impl Camera {
 
     pub fn load_json(path: &Path) -> Result<Self, CameraError> {
         let file_error = |problem: String| CameraError::File { path: path.to_path_buf(), problem };
-        let text = std::fs::read_to_string(path).map_err(|e| file_error(format!("cannot read: {e}")))?;
-        let json: CameraJson = serde_json::from_str(&text).map_err(|e| file_error(format!("not a camera JSON: {e}")))?;
+        let text =
+            std::fs::read_to_string(path).map_err(|e| file_error(format!("cannot read: {e}")))?;
+        let json: CameraJson = serde_json::from_str(&text)
+            .map_err(|e| file_error(format!("not a camera JSON: {e}")))?;
         let world_to_camera = DMat4::from_cols_array(&json.world_to_camera).transpose();
-        Self::new(json.width, json.height, json.fx, json.fy, json.cx, json.cy, world_to_camera).map_err(|e| file_error(e.to_string()))
+        Self::new(json.width, json.height, json.fx, json.fy, json.cx, json.cy, world_to_camera)
+            .map_err(|e| file_error(e.to_string()))
     }
 
     /// Writes `cam.json` atomically.
@@ -114,7 +149,10 @@ impl Camera {
         };
         let text = serde_json::to_string_pretty(&json).expect("a camera always serializes");
         crate::io::write_atomically(path, |w| std::io::Write::write_all(w, text.as_bytes()))
-            .map_err(|e| CameraError::File { path: path.to_path_buf(), problem: format!("cannot write: {e}") })
+            .map_err(|e| CameraError::File {
+                path: path.to_path_buf(),
+                problem: format!("cannot write: {e}"),
+            })
     }
 
     /// A world point in camera coordinates (z is the depth along the optical axis).
@@ -127,7 +165,8 @@ impl Camera {
     #[inline]
     pub fn project(&self, world: DVec3) -> Option<DVec2> {
         let p = self.to_camera(world);
-        (p.z > 0.0).then(|| DVec2::new(self.fx * p.x / p.z + self.cx, self.fy * p.y / p.z + self.cy))
+        (p.z > 0.0)
+            .then(|| DVec2::new(self.fx * p.x / p.z + self.cx, self.fy * p.y / p.z + self.cy))
     }
 
     /// The camera centre in world coordinates.
@@ -139,7 +178,10 @@ impl Camera {
     pub fn pixel_ray(&self, u: f64, v: f64) -> (DVec3, DVec3) {
         let camera_to_world = rigid_inverse(self.world_to_camera);
         let direction = DVec3::new((u - self.cx) / self.fx, (v - self.cy) / self.fy, 1.0);
-        (camera_to_world.w_axis.truncate(), camera_to_world.transform_vector3(direction).normalize())
+        (
+            camera_to_world.w_axis.truncate(),
+            camera_to_world.transform_vector3(direction).normalize(),
+        )
     }
 }
 
@@ -147,7 +189,12 @@ impl Camera {
 fn rigid_inverse(m: DMat4) -> DMat4 {
     let rotation_t = DMat3::from_mat4(m).transpose();
     let translation = -(rotation_t * m.w_axis.truncate());
-    DMat4::from_cols(rotation_t.x_axis.extend(0.0), rotation_t.y_axis.extend(0.0), rotation_t.z_axis.extend(0.0), translation.extend(1.0))
+    DMat4::from_cols(
+        rotation_t.x_axis.extend(0.0),
+        rotation_t.y_axis.extend(0.0),
+        rotation_t.z_axis.extend(0.0),
+        translation.extend(1.0),
+    )
 }
 
 /// The point with the least summed squared distance to every ray (origin, unit direction):
@@ -173,7 +220,16 @@ mod tests {
 
     fn look_from_minus_z() -> Camera {
         // Camera at (0, 0, -4) looking along +z: world_to_camera is a translation by +4 in z.
-        Camera::new(64, 48, 50.0, 50.0, 32.0, 24.0, DMat4::from_translation(DVec3::new(0.0, 0.0, 4.0))).unwrap()
+        Camera::new(
+            64,
+            48,
+            50.0,
+            50.0,
+            32.0,
+            24.0,
+            DMat4::from_translation(DVec3::new(0.0, 0.0, 4.0)),
+        )
+        .unwrap()
     }
 
     #[test]
@@ -187,7 +243,16 @@ mod tests {
 
     #[test]
     fn pixel_ray_hits_the_projected_point() {
-        let cam = Camera::new(80, 60, 70.0, 65.0, 41.0, 29.0, DMat4::from_rotation_y(0.3) * DMat4::from_translation(DVec3::new(0.2, -0.1, 5.0))).unwrap();
+        let cam = Camera::new(
+            80,
+            60,
+            70.0,
+            65.0,
+            41.0,
+            29.0,
+            DMat4::from_rotation_y(0.3) * DMat4::from_translation(DVec3::new(0.2, -0.1, 5.0)),
+        )
+        .unwrap();
         let point = DVec3::new(0.3, 0.2, -0.4);
         let pixel = cam.project(point).unwrap();
         let (origin, direction) = cam.pixel_ray(pixel.x, pixel.y);
@@ -198,8 +263,22 @@ mod tests {
     #[test]
     fn look_at_centres_the_target() {
         let eye = DVec3::new(3.0, 1.0, -2.0);
-        let cam = Camera::look_at(64, 48, 50.0, 50.0, 32.0, 24.0, eye, DVec3::new(0.5, 0.2, 0.1), DVec3::Y).unwrap();
-        assert!((cam.project(DVec3::new(0.5, 0.2, 0.1)).unwrap() - DVec2::new(32.0, 24.0)).length() < 1e-9);
+        let cam = Camera::look_at(
+            64,
+            48,
+            50.0,
+            50.0,
+            32.0,
+            24.0,
+            eye,
+            DVec3::new(0.5, 0.2, 0.1),
+            DVec3::Y,
+        )
+        .unwrap();
+        assert!(
+            (cam.project(DVec3::new(0.5, 0.2, 0.1)).unwrap() - DVec2::new(32.0, 24.0)).length()
+                < 1e-9
+        );
         assert!((cam.center() - eye).length() < 1e-12);
         // Up in the world is up in the image (smaller v).
         assert!(cam.project(DVec3::new(0.5, 1.2, 0.1)).unwrap().y < 24.0);
@@ -220,15 +299,29 @@ mod tests {
     fn json_round_trip_and_bad_cameras() {
         let dir = std::env::temp_dir();
         let path = dir.join(format!("tagsplat-cam-{}.json", std::process::id()));
-        let cam = Camera::new(67, 33, 40.0, 41.0, 33.5, 16.5, DMat4::from_rotation_x(0.7) * DMat4::from_translation(DVec3::new(1.0, 2.0, 3.0))).unwrap();
+        let cam = Camera::new(
+            67,
+            33,
+            40.0,
+            41.0,
+            33.5,
+            16.5,
+            DMat4::from_rotation_x(0.7) * DMat4::from_translation(DVec3::new(1.0, 2.0, 3.0)),
+        )
+        .unwrap();
         cam.save_json(&path).unwrap();
         let back = Camera::load_json(&path).unwrap();
-        assert!(back.world_to_camera.abs_diff_eq(cam.world_to_camera, 1e-15) && back.fx == cam.fx && back.width == 67);
+        assert!(
+            back.world_to_camera.abs_diff_eq(cam.world_to_camera, 1e-15)
+                && back.fx == cam.fx
+                && back.width == 67
+        );
         let scaled = DMat4::from_scale(DVec3::splat(2.0));
         let reflected = DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0));
         let mut nan = DMat4::IDENTITY;
         nan.w_axis.x = f64::NAN;
-        for (m, expected) in [(scaled, "not rigid"), (reflected, "not rigid"), (nan, "non-finite")] {
+        for (m, expected) in [(scaled, "not rigid"), (reflected, "not rigid"), (nan, "non-finite")]
+        {
             let message = Camera::new(4, 4, 1.0, 1.0, 2.0, 2.0, m).unwrap_err().to_string();
             assert!(message.contains(expected), "{message}");
         }
@@ -236,7 +329,10 @@ mod tests {
         assert!(Camera::new(0, 4, 1.0, 1.0, 2.0, 2.0, DMat4::IDENTITY).is_err());
         std::fs::write(&path, r#"{"width": 4, "height": 4, "fx": 1, "fy": 1, "cx": 2, "cy": 2, "world_to_camera": [2,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}"#).unwrap();
         let message = Camera::load_json(&path).unwrap_err().to_string();
-        assert!(message.contains(&path.display().to_string()) && message.contains("not rigid"), "{message}");
+        assert!(
+            message.contains(&path.display().to_string()) && message.contains("not rigid"),
+            "{message}"
+        );
         std::fs::write(&path, r#"{"width": 4}"#).unwrap();
         assert!(Camera::load_json(&path).unwrap_err().to_string().contains("missing field"));
         std::fs::remove_file(&path).unwrap();

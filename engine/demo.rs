@@ -26,7 +26,13 @@ pub struct DemoOptions {
 
 impl Default for DemoOptions {
     fn default() -> Self {
-        Self { views: 10, frames: 5, resolution: 128, canonical_iterations: 600, temporal_iterations: 200 }
+        Self {
+            views: 10,
+            frames: 5,
+            resolution: 128,
+            canonical_iterations: 600,
+            temporal_iterations: 200,
+        }
     }
 }
 
@@ -74,10 +80,21 @@ pub enum DemoError {
 
 /// Runs the demo in `dir` (`data/`, `out/`, `out/trajectories.csv`, `demo.json`). A finished
 /// reconstruction in `dir/out` is resumed, not redone.
-pub fn run_demo(ctx: &Arc<GpuContext>, dir: &Path, options: &DemoOptions, progress: &mut dyn FnMut(TrainProgress)) -> Result<DemoReport, DemoError> {
+pub fn run_demo(
+    ctx: &Arc<GpuContext>,
+    dir: &Path,
+    options: &DemoOptions,
+    progress: &mut dyn FnMut(TrainProgress),
+) -> Result<DemoReport, DemoError> {
     let (data, out) = (dir.join("data"), dir.join("out"));
     if !data.join("dataset.json").is_file() {
-        let synth = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: options.views, frames: options.frames, resolution: options.resolution, ..Default::default() };
+        let synth = SynthOptions {
+            subject: SubjectSource::Procedural { subdivisions: 3 },
+            views: options.views,
+            frames: options.frames,
+            resolution: options.resolution,
+            ..Default::default()
+        };
         generate(&synth, &data)?;
     }
     let mut config = TrainConfig { sh_degree: 0, ..Default::default() };
@@ -92,18 +109,33 @@ pub fn run_demo(ctx: &Arc<GpuContext>, dir: &Path, options: &DemoOptions, progre
 
 /// Reconstructs `data` into `out` (resuming what is there), tracks the ground-truth points
 /// (`data/points.csv`) into `out/trajectories.csv`, and scores the result against `data`.
-pub fn train_and_score(ctx: &Arc<GpuContext>, data: &Path, out: &Path, config: TrainConfig, progress: &mut dyn FnMut(TrainProgress)) -> Result<(TrainReport, Scores), DemoError> {
+pub fn train_and_score(
+    ctx: &Arc<GpuContext>,
+    data: &Path,
+    out: &Path,
+    config: TrainConfig,
+    progress: &mut dyn FnMut(TrainProgress),
+) -> Result<(TrainReport, Scores), DemoError> {
     let started = std::time::Instant::now();
-    let train = run_train(ctx, &TrainJob { data: data.to_owned(), out: out.to_owned(), mesh: None, config, frames: None }, progress)?;
+    let train = run_train(
+        ctx,
+        &TrainJob { data: data.to_owned(), out: out.to_owned(), mesh: None, config, frames: None },
+        progress,
+    )?;
     let sequence = MeshSequence::read(&out.join("meshes"))?;
     let queries = Queries::Points(read_points(&data.join("points.csv"))?);
     // Bind within 5% of the extent: the reconstruction is not the ground-truth surface.
     let tracked = track(&sequence.faces, &sequence.frames, &queries, 0.05)?;
     write_tracks_csv(&out.join("trajectories.csv"), &tracked.points)?;
-    let eval = evaluate_folders(out, data, &FolderOptions { chamfer_samples: 20_000, emd_samples: 500, seed: 0 })?;
+    let eval = evaluate_folders(
+        out,
+        data,
+        &FolderOptions { chamfer_samples: 20_000, emd_samples: 500, seed: 0 },
+    )?;
     let truth = MeshSequence::read(&data.join("meshes"))?;
     let (lo, hi) = crate::mesh::bounding_box(&truth.frames[0]).unwrap_or_default();
-    let (diagonal, height) = (lo.distance(hi).max(f64::MIN_POSITIVE), (hi.y - lo.y).max(f64::MIN_POSITIVE));
+    let (diagonal, height) =
+        (lo.distance(hi).max(f64::MIN_POSITIVE), (hi.y - lo.y).max(f64::MIN_POSITIVE));
     let frames = train.frames.len().max(1) as f64;
     let tracking = eval.tracking.as_ref();
     let scores = Scores {
@@ -131,10 +163,16 @@ pub struct Ablation {
 pub fn paper_ablations() -> Vec<Ablation> {
     vec![
         Ablation { name: "full model", apply: |_| {} },
-        Ablation { name: "w/o mesh loss", apply: |c| (c.loss.mesh_color, c.loss.mesh_mask) = (0.0, 0.0) },
+        Ablation {
+            name: "w/o mesh loss",
+            apply: |c| (c.loss.mesh_color, c.loss.mesh_mask) = (0.0, 0.0),
+        },
         Ablation { name: "w/o normal loss", apply: |c| c.loss.normal = 0.0 },
         Ablation { name: "w/o smoothness loss", apply: |c| c.loss.laplacian = 0.0 },
-        Ablation { name: "w/o topology D&P", apply: |c| c.canonical.densify_from = c.canonical.densify_until },
+        Ablation {
+            name: "w/o topology D&P",
+            apply: |c| c.canonical.densify_from = c.canonical.densify_until,
+        },
         Ablation { name: "w/o length loss", apply: |c| c.loss.edge_length = 0.0 },
         Ablation { name: "w/o rigid loss", apply: |c| c.loss.rigidity = 0.0 },
         Ablation { name: "w/o rotation loss", apply: |c| c.loss.rotation = 0.0 },
@@ -143,30 +181,47 @@ pub fn paper_ablations() -> Vec<Ablation> {
 
 /// Runs every ablation of `base` on `data` into `out/<n>_<name>/` and writes `out/ablation.md`
 /// and `out/ablation.json`; returns the rows.
-pub fn run_ablations(ctx: &Arc<GpuContext>, data: &Path, out: &Path, base: &TrainConfig, progress: &mut dyn FnMut(&str, TrainProgress)) -> Result<Vec<(String, Scores)>, DemoError> {
+pub fn run_ablations(
+    ctx: &Arc<GpuContext>,
+    data: &Path,
+    out: &Path,
+    base: &TrainConfig,
+    progress: &mut dyn FnMut(&str, TrainProgress),
+) -> Result<Vec<(String, Scores)>, DemoError> {
     let mut rows = Vec::new();
     for (i, ablation) in paper_ablations().iter().enumerate() {
         let mut config = base.clone();
         (ablation.apply)(&mut config);
         let dir = out.join(format!("{i}_{}", ablation.name.replace(['/', ' ', '&'], "_")));
-        let (_, scores) = train_and_score(ctx, data, &dir, config, &mut |p| progress(ablation.name, p))?;
+        let (_, scores) =
+            train_and_score(ctx, data, &dir, config, &mut |p| progress(ablation.name, p))?;
         rows.push((ablation.name.to_string(), scores));
     }
     let mut table = String::from("| variant | PSNR gs (dB) | PSNR mesh (dB) | Chamfer / diagonal | EMD / diagonal | tracking MSE | tracking RMSE / height | seconds |\n|---|---|---|---|---|---|---|---|\n");
     for (name, s) in &rows {
         table += &format!(
             "| {name} | {:.2} | {:.2} | {:.5} | {:.5} | {:.3e} | {:.5} | {:.0} |\n",
-            s.psnr_gs, s.psnr_mesh, s.chamfer_per_diagonal, s.emd_per_diagonal, s.tracking_mse, s.tracking_rmse_per_height, s.seconds
+            s.psnr_gs,
+            s.psnr_mesh,
+            s.chamfer_per_diagonal,
+            s.emd_per_diagonal,
+            s.tracking_mse,
+            s.tracking_rmse_per_height,
+            s.seconds
         );
     }
     let path = out.join("ablation.md");
-    crate::io::write_atomically(&path, |w| std::io::Write::write_all(w, table.as_bytes())).map_err(|error| crate::train::TrainError::Io { path, error })?;
-    let json: Vec<_> = rows.iter().map(|(name, s)| serde_json::json!({ "variant": name, "scores": s })).collect();
+    crate::io::write_atomically(&path, |w| std::io::Write::write_all(w, table.as_bytes()))
+        .map_err(|error| crate::train::TrainError::Io { path, error })?;
+    let json: Vec<_> =
+        rows.iter().map(|(name, s)| serde_json::json!({ "variant": name, "scores": s })).collect();
     write_json(&out.join("ablation.json"), &json)?;
     Ok(rows)
 }
 
 fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), DemoError> {
-    crate::io::write_atomically(path, |w| serde_json::to_writer_pretty(w, value).map_err(std::io::Error::other))
-        .map_err(|error| crate::train::TrainError::Io { path: path.to_owned(), error }.into())
+    crate::io::write_atomically(path, |w| {
+        serde_json::to_writer_pretty(w, value).map_err(std::io::Error::other)
+    })
+    .map_err(|error| crate::train::TrainError::Io { path: path.to_owned(), error }.into())
 }

@@ -39,14 +39,14 @@ pub mod loss;
 pub mod mesh;
 pub mod optim;
 pub mod raster;
+pub mod regularize;
 pub mod rng;
 pub mod sort;
-pub mod regularize;
 pub mod splat;
+pub mod synth;
 pub mod topology;
 pub mod track;
 pub mod train;
-pub mod synth;
 
 /// SPIR-V of every compute shader, compiled from `shaders/` by `build.rs`.
 pub mod shaders {

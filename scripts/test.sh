@@ -9,5 +9,11 @@ bash scripts/setup.sh
 . scripts/env.sh
 export TAGSPLAT_VALIDATION=1
 
+# Formatting is part of the check (rustfmt.toml); a minimal toolchain profile may lack rustfmt.
+if ! cargo fmt --version >/dev/null 2>&1; then
+    rustup component add rustfmt
+fi
+cargo fmt --check
+
 cargo test --lib --bins --tests "$@"
 cargo build --benches

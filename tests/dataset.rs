@@ -16,7 +16,16 @@ fn temp(name: &str) -> PathBuf {
 
 fn png(path: &Path, w: u32, h: u32, channels: u8, value: f32) {
     std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-    write_png(path, &Image { width: w, height: h, channels, data: vec![value; (w * h * channels as u32) as usize] }).unwrap();
+    write_png(
+        path,
+        &Image {
+            width: w,
+            height: h,
+            channels,
+            data: vec![value; (w * h * channels as u32) as usize],
+        },
+    )
+    .unwrap();
 }
 
 /// A rigid world-to-camera: rotation about y by `angle`, then a translation.
@@ -32,8 +41,16 @@ fn rows(m: DMat4) -> Vec<Vec<f64>> {
 fn panoptic(dir: &Path, file: &str, frames: usize, ids: &[i64]) {
     let (mut k, mut w, mut f, mut c) = (vec![], vec![], vec![], vec![]);
     for t in 0..frames {
-        k.push(ids.iter().map(|_| json!([[10.0, 0.0, 4.0], [0.0, 12.0, 3.0], [0.0, 0.0, 1.0]])).collect::<Vec<_>>());
-        w.push(ids.iter().map(|&id| json!(rows(w2c(0.3 * id as f64, [0.1 * id as f64, 0.0, 5.0])))).collect::<Vec<_>>());
+        k.push(
+            ids.iter()
+                .map(|_| json!([[10.0, 0.0, 4.0], [0.0, 12.0, 3.0], [0.0, 0.0, 1.0]]))
+                .collect::<Vec<_>>(),
+        );
+        w.push(
+            ids.iter()
+                .map(|&id| json!(rows(w2c(0.3 * id as f64, [0.1 * id as f64, 0.0, 5.0]))))
+                .collect::<Vec<_>>(),
+        );
         f.push(ids.iter().map(|&id| json!(format!("{id}/{t:06}.jpg"))).collect::<Vec<_>>());
         c.push(ids.to_vec());
         for &id in ids {
@@ -41,7 +58,11 @@ fn panoptic(dir: &Path, file: &str, frames: usize, ids: &[i64]) {
             png(&dir.join(format!("seg/{id}/{t:06}.png")), 8, 6, 1, 1.0);
         }
     }
-    std::fs::write(dir.join(file), json!({"w": 8, "h": 6, "k": k, "w2c": w, "fn": f, "cam_id": c}).to_string()).unwrap();
+    std::fs::write(
+        dir.join(file),
+        json!({"w": 8, "h": 6, "k": k, "w2c": w, "fn": f, "cam_id": c}).to_string(),
+    )
+    .unwrap();
 }
 
 #[test]
@@ -83,7 +104,8 @@ fn panoptic_bad_input_is_named() {
     assert!(e.contains("000001.jpg") && e.contains("9×6") && e.contains("8×6"), "{e}");
     // Corrupt PNG.
     std::fs::write(&gone, b"\x89PNG\r\n\x1a\n\0\0\0\rIHDRtruncated").unwrap();
-    let problems: Vec<String> = Dataset::load(&dir).unwrap().check().iter().map(ToString::to_string).collect();
+    let problems: Vec<String> =
+        Dataset::load(&dir).unwrap().check().iter().map(ToString::to_string).collect();
     assert!(problems.iter().any(|p| p.contains("000001.jpg")), "{problems:?}");
     // Empty masks in every view of frame 0.
     png(&gone, 8, 6, 3, 0.5);
@@ -97,12 +119,14 @@ fn panoptic_bad_input_is_named() {
     let dir = temp("panoptic-bad2");
     panoptic(&dir, "train_meta.json", 2, &[0, 1]);
     let meta = dir.join("train_meta.json");
-    let mut j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&meta).unwrap()).unwrap();
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&meta).unwrap()).unwrap();
     j["w2c"][1][1][0][0] = json!(2.0);
     std::fs::write(&meta, j.to_string()).unwrap();
     let e = Dataset::load(&dir).unwrap_err().to_string();
     assert!(e.contains("train_meta.json") && e.contains("camera 1") && e.contains("rigid"), "{e}");
-    let mut j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&meta).unwrap()).unwrap();
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&meta).unwrap()).unwrap();
     j["w2c"][1][1] = j["w2c"][0][1].clone();
     for key in ["k", "w2c", "fn", "cam_id"] {
         j[key][1].as_array_mut().unwrap().pop();
@@ -131,7 +155,8 @@ fn nerfstudio(dir: &Path, file: &str, times: &[f64], eyes: &[DVec3], prefix: &st
             frames.push(json!({"file_path": format!("./{name}"), "time": time, "transform_matrix": rows(gl_c2w(eye))}));
         }
     }
-    std::fs::write(dir.join(file), json!({"camera_angle_x": 0.8, "frames": frames}).to_string()).unwrap();
+    std::fs::write(dir.join(file), json!({"camera_angle_x": 0.8, "frames": frames}).to_string())
+        .unwrap();
 }
 
 #[test]
@@ -142,7 +167,13 @@ fn nerfstudio_opengl_cameras_project_known_points() {
     // A test camera seen at time 0 only: the frames' camera sets differ.
     nerfstudio(&dir, "transforms_test.json", &[0.0], &[DVec3::new(-3.0, 0.0, 1.0)], "test");
     assert!(matches!(Dataset::load(&dir), Err(DatasetError::CameraSets { frame: 1, .. })));
-    nerfstudio(&dir, "transforms_test.json", &[1.0, 0.0, 0.5], &[DVec3::new(-3.0, 0.0, 1.0)], "test");
+    nerfstudio(
+        &dir,
+        "transforms_test.json",
+        &[1.0, 0.0, 0.5],
+        &[DVec3::new(-3.0, 0.0, 1.0)],
+        "test",
+    );
     let d = Dataset::load(&dir).unwrap();
     assert_eq!(d.format, Format::Nerfstudio);
     assert_eq!(d.cameras.len(), 3);
@@ -172,18 +203,31 @@ fn nerfstudio_monocular_and_bad_input() {
         png(&dir.join(format!("train/r_{t:03}.png")), 6, 6, 4, 1.0);
         frames.push(json!({"file_path": format!("./train/r_{t:03}"), "time": t as f64 / 2.0, "transform_matrix": rows(gl_c2w(DVec3::new(t as f64, 1.0, 4.0)))}));
     }
-    std::fs::write(dir.join("transforms_train.json"), json!({"camera_angle_x": 0.7, "frames": frames}).to_string()).unwrap();
+    std::fs::write(
+        dir.join("transforms_train.json"),
+        json!({"camera_angle_x": 0.7, "frames": frames}).to_string(),
+    )
+    .unwrap();
     let d = Dataset::load(&dir).unwrap();
     assert_eq!((d.frames.len(), d.cameras.len()), (3, 3));
     // Different camera sets in a multi-view file.
     frames.push(json!({"file_path": "./train/r_000", "time": 0.0, "transform_matrix": rows(gl_c2w(DVec3::new(5.0, 1.0, 4.0)))}));
-    std::fs::write(dir.join("transforms_train.json"), json!({"camera_angle_x": 0.7, "frames": frames}).to_string()).unwrap();
+    std::fs::write(
+        dir.join("transforms_train.json"),
+        json!({"camera_angle_x": 0.7, "frames": frames}).to_string(),
+    )
+    .unwrap();
     assert!(matches!(Dataset::load(&dir), Err(DatasetError::CameraSets { .. })));
     // Non-finite intrinsics, a non-rigid matrix, an image without alpha, a missing image.
     let one = |extra: serde_json::Value, m: DMat4| {
-        let mut frame = json!({"file_path": "./train/r_000", "time": 0.0, "transform_matrix": rows(m)});
+        let mut frame =
+            json!({"file_path": "./train/r_000", "time": 0.0, "transform_matrix": rows(m)});
         frame.as_object_mut().unwrap().extend(extra.as_object().unwrap().clone());
-        std::fs::write(dir.join("transforms_train.json"), json!({"camera_angle_x": 0.7, "frames": [frame]}).to_string()).unwrap();
+        std::fs::write(
+            dir.join("transforms_train.json"),
+            json!({"camera_angle_x": 0.7, "frames": [frame]}).to_string(),
+        )
+        .unwrap();
         Dataset::load(&dir)
     };
     let e = one(json!({"fl_x": "x"}), gl_c2w(DVec3::Z * 3.0)).unwrap_err().to_string();
@@ -193,7 +237,8 @@ fn nerfstudio_monocular_and_bad_input() {
     png(&dir.join("train/r_000.png"), 6, 6, 3, 1.0);
     let d = one(json!({}), gl_c2w(DVec3::Z * 3.0)).unwrap();
     assert!(matches!(d.mask(0, 0), Err(DatasetError::NoMask(_))));
-    let e = one(json!({"file_path": "./train/gone"}), gl_c2w(DVec3::Z * 3.0)).unwrap_err().to_string();
+    let e =
+        one(json!({"file_path": "./train/gone"}), gl_c2w(DVec3::Z * 3.0)).unwrap_err().to_string();
     assert!(e.contains("gone.png"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
     assert!(matches!(Dataset::load(&temp("empty")), Err(DatasetError::Unknown(_))));
@@ -203,7 +248,17 @@ fn nerfstudio_monocular_and_bad_input() {
 fn own_layout_with_a_bounded_cache() {
     use tagsplat::synth::{generate, SubjectSource, SynthOptions};
     let dir = temp("own");
-    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 2 }, views: 9, frames: 2, resolution: 16, seed: 4, samples: 1, track_vertices: 3, track_surface: 3, ..Default::default() };
+    let o = SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 2 },
+        views: 9,
+        frames: 2,
+        resolution: 16,
+        seed: 4,
+        samples: 1,
+        track_vertices: 3,
+        track_surface: 3,
+        ..Default::default()
+    };
     generate(&o, &dir).unwrap();
     let budget = 3 * 16 * 16 * 3 * 4; // three RGB images of f32
     let d = Dataset::load(&dir).unwrap().with_cache_bytes(budget);
@@ -217,7 +272,8 @@ fn own_layout_with_a_bounded_cache() {
     }
     // A camera file that is not rigid: named in the error.
     let cam = dir.join("cameras/cam004.json");
-    let mut j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&cam).unwrap()).unwrap();
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cam).unwrap()).unwrap();
     j["world_to_camera"][0] = json!(3.0);
     std::fs::write(&cam, j.to_string()).unwrap();
     let e = Dataset::load(&dir).unwrap_err().to_string();

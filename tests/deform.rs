@@ -38,9 +38,16 @@ fn random_vectors(n: usize, r: &mut SplitMix64) -> Vec<[f64; 3]> {
 }
 
 /// E = Σ_i ⟨a_i, p_i⟩ + ARAP: the energy whose gradient `node_gradients` returns.
-fn energy(scene: &GaussianScene, graph: &DeformGraph, nodes: &NodeTransforms, adjoint: &[[f64; 3]], c: f64) -> f64 {
+fn energy(
+    scene: &GaussianScene,
+    graph: &DeformGraph,
+    nodes: &NodeTransforms,
+    adjoint: &[[f64; 3]],
+    c: f64,
+) -> f64 {
     let (positions, _) = blend((&scene.positions, &scene.rotations), graph, nodes);
-    positions.iter().zip(adjoint).map(|(p, a)| p[0] * a[0] + p[1] * a[1] + p[2] * a[2]).sum::<f64>() + arap_energy(&scene.positions, graph, nodes, c)
+    positions.iter().zip(adjoint).map(|(p, a)| p[0] * a[0] + p[1] * a[1] + p[2] * a[2]).sum::<f64>()
+        + arap_energy(&scene.positions, graph, nodes, c)
 }
 
 #[test]
@@ -58,12 +65,19 @@ fn reference_gradients_match_central_differences() {
         for a in 0..7 {
             let shifted = |delta: f64| {
                 let mut n = nodes.clone();
-                if a < 3 { n.translations[k][a] += delta } else { n.rotations[k][a - 3] += delta }
+                if a < 3 {
+                    n.translations[k][a] += delta
+                } else {
+                    n.rotations[k][a - 3] += delta
+                }
                 energy(&scene, &graph, &n, &adjoint, c)
             };
             let numeric = (shifted(h) - shifted(-h)) / (2.0 * h);
             let analytic = if a < 3 { gt[k][a] } else { gq[k][a - 3] };
-            assert!((numeric - analytic).abs() < 1e-5 * (1.0 + numeric.abs()), "node {k} component {a}: {analytic} vs {numeric}");
+            assert!(
+                (numeric - analytic).abs() < 1e-5 * (1.0 + numeric.abs()),
+                "node {k} component {a}: {analytic} vs {numeric}"
+            );
         }
     }
 }
@@ -79,7 +93,12 @@ fn gpu_matches_reference() {
     let mut deformer = GraphDeformer::new(ctx, &graph, &scene, 2.0).unwrap();
     deformer.write_nodes(&nodes).unwrap();
     let target = GaussianBuffers::from_scene(ctx, &scene).unwrap();
-    let grads = GpuBuffer::from_slice(ctx, "vertex gradients", &vertex_grads.iter().flatten().map(|&v| v as f32).collect::<Vec<_>>()).unwrap();
+    let grads = GpuBuffer::from_slice(
+        ctx,
+        "vertex gradients",
+        &vertex_grads.iter().flatten().map(|&v| v as f32).collect::<Vec<_>>(),
+    )
+    .unwrap();
     let mut rec = Recorder::new(ctx).unwrap();
     deformer.record_blend(&mut rec, &target).unwrap();
     deformer.record_gradients(&mut rec, &grads).unwrap();
@@ -92,18 +111,33 @@ fn gpu_matches_reference() {
             assert!((got.positions[i][a] as f64 - positions[i][a]).abs() < 1e-5, "vertex {i}");
         }
         for a in 0..4 {
-            assert!((got.rotations[i][a] as f64 - rotations[i][a]).abs() < 1e-5, "vertex {i} rotation");
+            assert!(
+                (got.rotations[i][a] as f64 - rotations[i][a]).abs() < 1e-5,
+                "vertex {i} rotation"
+            );
         }
     }
-    let (gt, gq, arap) = node_gradients(&scene.positions, &graph, &nodes, &vertex_grads, deformer.arap_scale() as f64);
+    let (gt, gq, arap) = node_gradients(
+        &scene.positions,
+        &graph,
+        &nodes,
+        &vertex_grads,
+        deformer.arap_scale() as f64,
+    );
     let (_, node_grads) = deformer.read_nodes().unwrap();
     let scale = gt.iter().flatten().chain(gq.iter().flatten()).fold(0.0f64, |m, v| m.max(v.abs()));
     for k in 0..40 {
         for a in 0..3 {
-            assert!((node_grads.translations[k][a] - gt[k][a]).abs() < 1e-4 * scale, "node {k} translation");
+            assert!(
+                (node_grads.translations[k][a] - gt[k][a]).abs() < 1e-4 * scale,
+                "node {k} translation"
+            );
         }
         for a in 0..4 {
-            assert!((node_grads.rotations[k][a] - gq[k][a]).abs() < 1e-4 * scale, "node {k} rotation");
+            assert!(
+                (node_grads.rotations[k][a] - gq[k][a]).abs() < 1e-4 * scale,
+                "node {k} rotation"
+            );
         }
     }
     let gpu_arap = deformer.take_arap_loss().unwrap() as f64;
@@ -120,15 +154,27 @@ fn solver_reaches_a_rigidly_moved_target() {
     let (scene, graph) = sphere(30);
     let motion = glam::Quat::from_rotation_z(0.3);
     let shift = glam::Vec3::new(0.2, -0.1, 0.05);
-    let goal: Vec<glam::Vec3> = scene.positions.iter().map(|p| motion * glam::Vec3::from(*p) + shift).collect();
+    let goal: Vec<glam::Vec3> =
+        scene.positions.iter().map(|p| motion * glam::Vec3::from(*p) + shift).collect();
     let deformer = GraphDeformer::new(ctx, &graph, &scene, 1.0).unwrap();
     let target = GaussianBuffers::from_scene(ctx, &scene).unwrap();
     let mut grads = GpuBuffer::<f32>::new(ctx, "vertex gradients", 3 * scene.len()).unwrap();
-    let error = |positions: &[[f32; 3]]| positions.iter().zip(&goal).map(|(p, g)| (glam::Vec3::from(*p) - *g).length()).fold(0.0f32, f32::max);
+    let error = |positions: &[[f32; 3]]| {
+        positions
+            .iter()
+            .zip(&goal)
+            .map(|(p, g)| (glam::Vec3::from(*p) - *g).length())
+            .fold(0.0f32, f32::max)
+    };
     let start = error(&scene.positions);
     for step in 1..=300 {
         let now = target.to_scene().unwrap();
-        let g: Vec<f32> = now.positions.iter().zip(&goal).flat_map(|(p, t)| (glam::Vec3::from(*p) - *t).to_array()).collect();
+        let g: Vec<f32> = now
+            .positions
+            .iter()
+            .zip(&goal)
+            .flat_map(|(p, t)| (glam::Vec3::from(*p) - *t).to_array())
+            .collect();
         grads.write(&g).unwrap();
         let mut rec = Recorder::new(ctx).unwrap();
         deformer.record_gradients(&mut rec, &grads).unwrap();
@@ -137,5 +183,8 @@ fn solver_reaches_a_rigidly_moved_target() {
         rec.submit_and_wait().unwrap();
     }
     let end = error(&target.to_scene().unwrap().positions);
-    assert!(end < 0.03 * start, "largest distance to the target: {start} at the start, {end} after 300 steps");
+    assert!(
+        end < 0.03 * start,
+        "largest distance to the target: {start} at the start, {end} after 300 steps"
+    );
 }

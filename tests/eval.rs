@@ -90,13 +90,27 @@ fn cube(scale: f32, offset: [f32; 3]) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
             q[d] += offset[d];
         }
     }
-    let f = vec![[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4], [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]];
+    let f = vec![
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ];
     (p, f)
 }
 
 /// A flat n×n grid of unit squares in the z = `z` plane.
 fn plane(n: u32, z: f32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-    let p = (0..(n + 1) * (n + 1)).map(|i| [(i % (n + 1)) as f32, (i / (n + 1)) as f32, z]).collect();
+    let p =
+        (0..(n + 1) * (n + 1)).map(|i| [(i % (n + 1)) as f32, (i / (n + 1)) as f32, z]).collect();
     let mut f = Vec::new();
     for y in 0..n {
         for x in 0..n {
@@ -127,7 +141,10 @@ fn plane_shifted_by_d_gives_d_squared() {
     let d = d as f64;
     assert!((c.squared - d * d).abs() < 1e-12, "{}", c.squared);
     assert!((c.mean - d).abs() < 1e-12);
-    assert!((c.mean_fraction - d / (72.0f64).sqrt()).abs() < 1e-3, "diagonal of the sampled points is close to the plane's");
+    assert!(
+        (c.mean_fraction - d / (72.0f64).sqrt()).abs() < 1e-3,
+        "diagonal of the sampled points is close to the plane's"
+    );
     let e = emd_meshes((&b, &f), (&a, &f), 400, 1).unwrap();
     assert!((e.mean - d).abs() < 1e-12, "{}", e.mean);
 }
@@ -146,13 +163,25 @@ fn cube_and_a_scaled_cube_are_close_to_the_analytic_distance() {
 
 #[test]
 fn folders_compare_meshes_trajectories_and_images() {
-    use tagsplat::eval::{evaluate_folders, read_trajectories_csv, write_trajectories_csv, FolderOptions};
+    use tagsplat::eval::{
+        evaluate_folders, read_trajectories_csv, write_trajectories_csv, FolderOptions,
+    };
     use tagsplat::mesh::TriMesh;
     use tagsplat::synth::{generate, SubjectSource, SynthOptions};
     let root = std::env::temp_dir().join(format!("tagsplat-eval-folders-{}", std::process::id()));
     let (gt, pred) = (root.join("gt"), root.join("pred"));
     std::fs::create_dir_all(pred.join("meshes")).unwrap();
-    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 2 }, views: 2, frames: 2, resolution: 24, seed: 1, samples: 1, track_vertices: 5, track_surface: 5, ..Default::default() };
+    let o = SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 2 },
+        views: 2,
+        frames: 2,
+        resolution: 24,
+        seed: 1,
+        samples: 1,
+        track_vertices: 5,
+        track_surface: 5,
+        ..Default::default()
+    };
     generate(&o, &gt).unwrap();
     let options = FolderOptions { chamfer_samples: 2000, emd_samples: 200, seed: 3 };
     let same = evaluate_folders(&gt, &gt, &options).unwrap();
@@ -162,12 +191,19 @@ fn folders_compare_meshes_trajectories_and_images() {
     assert!((same.images.as_ref().unwrap().ssim - 1.0).abs() < 1e-12);
 
     // Prediction: trajectories moved by (0.03, 0.04, 0): RMSE 0.05 exactly (up to f64 text).
-    let shifted: Vec<_> = read_trajectories_csv(&gt.join("trajectories.csv")).unwrap().into_iter().map(|mut p| {
-        p.position[0] += 0.03;
-        p.position[1] += 0.04;
-        p
-    }).collect();
-    tagsplat::io::write_atomically(&pred.join("trajectories.csv"), |w| write_trajectories_csv(w, &shifted)).unwrap();
+    let shifted: Vec<_> = read_trajectories_csv(&gt.join("trajectories.csv"))
+        .unwrap()
+        .into_iter()
+        .map(|mut p| {
+            p.position[0] += 0.03;
+            p.position[1] += 0.04;
+            p
+        })
+        .collect();
+    tagsplat::io::write_atomically(&pred.join("trajectories.csv"), |w| {
+        write_trajectories_csv(w, &shifted)
+    })
+    .unwrap();
     // Frame 0 only: frame 1 is missing and named.
     std::fs::copy(gt.join("meshes/000000.ply"), pred.join("meshes/000000.ply")).unwrap();
     let e = evaluate_folders(&pred, &gt, &options).unwrap_err().to_string();
@@ -196,15 +232,32 @@ fn tracker_output_on_generated_ground_truth_scores_near_zero() {
     let root = std::env::temp_dir().join(format!("tagsplat-eval-e2e-{}", std::process::id()));
     let (gt, pred) = (root.join("gt"), root.join("pred"));
     std::fs::create_dir_all(&pred).unwrap();
-    let o = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 1, frames: 4, resolution: 16, seed: 5, samples: 1, track_vertices: 20, track_surface: 40, ..Default::default() };
+    let o = SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 3 },
+        views: 1,
+        frames: 4,
+        resolution: 16,
+        seed: 5,
+        samples: 1,
+        track_vertices: 20,
+        track_surface: 40,
+        ..Default::default()
+    };
     let report = generate(&o, &gt).unwrap();
-    let meshes: Vec<TriMesh> = (0..4).map(|t| TriMesh::read_ply(&gt.join(format!("meshes/{t:06}.ply"))).unwrap()).collect();
+    let meshes: Vec<TriMesh> = (0..4)
+        .map(|t| TriMesh::read_ply(&gt.join(format!("meshes/{t:06}.ply"))).unwrap())
+        .collect();
     let frames: Vec<Vec<[f32; 3]>> = meshes.iter().map(|m| m.positions.clone()).collect();
     let queries = Queries::Points(read_points(&gt.join("points.csv")).unwrap());
     let tracked = track(&meshes[0].faces, &frames, &queries, 1e-4).unwrap();
     assert!(tracked.unbound.is_empty());
     write_tracks_csv(&pred.join("trajectories.csv"), &tracked.points).unwrap();
-    let r = evaluate_folders(&pred, &gt, &FolderOptions { chamfer_samples: 10, emd_samples: 10, seed: 0 }).unwrap();
+    let r = evaluate_folders(
+        &pred,
+        &gt,
+        &FolderOptions { chamfer_samples: 10, emd_samples: 10, seed: 0 },
+    )
+    .unwrap();
     let t = r.tracking.unwrap();
     assert_eq!((t.points, t.frames, t.ignored), (60, 4, 0));
     // Both sides place the same barycentric point (f32 mesh, f64 arithmetic): far below the
@@ -245,12 +298,17 @@ fn write_gt(root: &std::path::Path, frames: usize) -> Vec<tagsplat::mesh::TriMes
     std::fs::create_dir_all(gt.join("meshes")).unwrap();
     let (p, f) = plane(4, 0.0);
     let meshes: Vec<TriMesh> = (0..frames)
-        .map(|t| TriMesh { positions: p.iter().map(|v| [v[0] + 0.1 * t as f32, v[1], v[2]]).collect(), faces: f.clone(), colors: None })
+        .map(|t| TriMesh {
+            positions: p.iter().map(|v| [v[0] + 0.1 * t as f32, v[1], v[2]]).collect(),
+            faces: f.clone(),
+            colors: None,
+        })
         .collect();
     for (t, m) in meshes.iter().enumerate() {
         m.write_ply(&gt.join(format!("meshes/{t:06}.ply"))).unwrap();
     }
-    let points: Vec<[f64; 3]> = vec![[0.0, 0.0, 0.0], [2.0, 3.0, 0.0], [1.25, 0.5, 0.0], [3.5, 3.75, 0.0], [0.3, 2.6, 0.0]];
+    let points: Vec<[f64; 3]> =
+        vec![[0.0, 0.0, 0.0], [2.0, 3.0, 0.0], [1.25, 0.5, 0.0], [3.5, 3.75, 0.0], [0.3, 2.6, 0.0]];
     let mut csv = String::from("id,x,y,z\n");
     let mut tracks = String::from("id,frame,x,y,z\n");
     for (i, q) in points.iter().enumerate() {
@@ -274,7 +332,9 @@ fn temp(name: &str) -> std::path::PathBuf {
 
 #[test]
 fn benchmark_ground_truth_scores_a_perfect_and_an_offset_prediction() {
-    use tagsplat::eval::{evaluate_sequence, find_ground_truth, write_sequence_eval, GroundTruth, SequenceEvalOptions};
+    use tagsplat::eval::{
+        evaluate_sequence, find_ground_truth, write_sequence_eval, GroundTruth, SequenceEvalOptions,
+    };
     let root = temp("sequence");
     let meshes = write_gt(&root, 4);
     let gt = GroundTruth::read(&find_ground_truth(&root).unwrap()).unwrap();
@@ -285,7 +345,12 @@ fn benchmark_ground_truth_scores_a_perfect_and_an_offset_prediction() {
     // The ground truth as its own prediction: every score 0.
     let same = evaluate_sequence(&root.join("gt"), &gt, &options).unwrap();
     assert_eq!(same.summary.frames, [0, 1, 2, 3]);
-    assert!(same.summary.tracking_rmse_over_size.unwrap() < 1e-7 && same.summary.chamfer_mean_over_size.unwrap() < 1e-12, "{:?}", same.summary);
+    assert!(
+        same.summary.tracking_rmse_over_size.unwrap() < 1e-7
+            && same.summary.chamfer_mean_over_size.unwrap() < 1e-12,
+        "{:?}",
+        same.summary
+    );
 
     // Frames 1.. moved by d along the patch's normal, frame 2 missing, a training report with
     // some fields: tracking and Chamfer are d / size on the moved frames.
@@ -300,17 +365,33 @@ fn benchmark_ground_truth_scores_a_perfect_and_an_offset_prediction() {
     std::fs::write(pred.join("report.json"), r#"{"frames": [{"frame": 0, "psnr_gs": 30.5, "iterations": 50, "wall_s": 2.0}, {"frame": 3, "psnr_mesh": 21.0, "stop_reason": "plateau", "extra": 1}]}"#).unwrap();
     let e = evaluate_sequence(&pred, &gt, &options).unwrap();
     let s = &e.summary;
-    assert_eq!((s.frames.as_slice(), s.missing_frames.as_slice()), ([0, 1, 3].as_slice(), [2].as_slice()));
+    assert_eq!(
+        (s.frames.as_slice(), s.missing_frames.as_slice()),
+        ([0, 1, 3].as_slice(), [2].as_slice())
+    );
     let expect = d / 5.0;
     for f in &e.frames {
         let want = if f.frame == 0 { 0.0 } else { expect };
-        assert!((f.tracking_rmse_over_size.unwrap() - want).abs() < 1e-6 && (f.tracking_max_over_size.unwrap() - want).abs() < 1e-6, "{f:?}");
+        assert!(
+            (f.tracking_rmse_over_size.unwrap() - want).abs() < 1e-6
+                && (f.tracking_max_over_size.unwrap() - want).abs() < 1e-6,
+            "{f:?}"
+        );
         assert!((f.chamfer_over_size - want).abs() < 1e-6, "{f:?}");
     }
     // Over 5 points × 3 frames, two of them off by d.
-    assert!((s.tracking_rmse_over_size.unwrap() - expect * (2.0f64 / 3.0).sqrt()).abs() < 1e-6, "{s:?}");
-    assert_eq!((s.psnr_gs_first_db, s.psnr_gs_last_db, s.psnr_mesh_last_db), (Some(30.5), None, Some(21.0)));
-    assert_eq!((e.frames[0].train.iterations, e.frames[2].train.stop_reason.as_deref()), (Some(50), Some("plateau")));
+    assert!(
+        (s.tracking_rmse_over_size.unwrap() - expect * (2.0f64 / 3.0).sqrt()).abs() < 1e-6,
+        "{s:?}"
+    );
+    assert_eq!(
+        (s.psnr_gs_first_db, s.psnr_gs_last_db, s.psnr_mesh_last_db),
+        (Some(30.5), None, Some(21.0))
+    );
+    assert_eq!(
+        (e.frames[0].train.iterations, e.frames[2].train.stop_reason.as_deref()),
+        (Some(50), Some("plateau"))
+    );
     assert_eq!(e.frames[1].train, Default::default(), "frame 1 is not in the report: all absent");
 
     let files = write_sequence_eval(&root.join("scores"), &e).unwrap();
@@ -361,7 +442,9 @@ fn bad_benchmark_input_names_the_file() {
     std::fs::remove_file(pred.join("meshes/000001.ply")).unwrap();
     let e = evaluate_sequence(&pred, &gt, &options).unwrap_err().to_string();
     assert!(e.contains("report.json") && e.contains("not JSON"), "{e}");
-    let e = evaluate_sequence(&pred, &gt, &SequenceEvalOptions { frames: Some(0..5), ..options }).unwrap_err().to_string();
+    let e = evaluate_sequence(&pred, &gt, &SequenceEvalOptions { frames: Some(0..5), ..options })
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("0..5") && e.contains("0..2"), "{e}");
     std::fs::remove_dir_all(&root).unwrap();
 }

@@ -62,13 +62,17 @@ fn oversized_buffer_is_refused_with_the_limit_named() {
     let err = GpuBuffer::<u32>::new(gpu.ctx(), "huge keys", len).err().expect("must be refused");
     let text = err.to_string();
     assert!(text.contains("huge keys") && text.contains("maxStorageBufferRange"), "{text}");
-    let err = GpuBuffer::<u64>::new(gpu.ctx(), "overflow", usize::MAX).err().expect("must be refused");
+    let err =
+        GpuBuffer::<u64>::new(gpu.ctx(), "overflow", usize::MAX).err().expect("must be refused");
     assert!(matches!(err, GpuError::BufferTooLarge { .. }));
 }
 
 #[test]
 fn unknown_device_is_a_named_error() {
-    let options = tagsplat::gpu::ContextOptions { device: Some("no such device 42".into()), validation: Some(false) };
+    let options = tagsplat::gpu::ContextOptions {
+        device: Some("no such device 42".into()),
+        validation: Some(false),
+    };
     let err = GpuContext::new(&options).err().expect("must fail");
     assert!(err.to_string().contains("no such device 42"), "{err}");
 }

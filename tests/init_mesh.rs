@@ -30,7 +30,10 @@ fn temp(name: &str) -> PathBuf {
 /// The ellipsoid subject: semi-axes 1, 0.7, 0.55 about (0.3, −0.2, 0.1), 2562 vertices.
 fn ellipsoid() -> TriMesh {
     let (p, faces) = icosphere(4);
-    let positions = p.iter().map(|q| [(0.3 + q[0]) as f32, (-0.2 + 0.7 * q[1]) as f32, (0.1 + 0.55 * q[2]) as f32]).collect();
+    let positions = p
+        .iter()
+        .map(|q| [(0.3 + q[0]) as f32, (-0.2 + 0.7 * q[1]) as f32, (0.1 + 0.55 * q[2]) as f32])
+        .collect();
     TriMesh { positions, faces, colors: None }
 }
 
@@ -43,8 +46,23 @@ fn ring(views: usize, resolution: u32, center: DVec3, radius: f64) -> Vec<Camera
         .map(|k| {
             let azimuth = std::f64::consts::TAU * (k as f64 + 0.3) / views as f64;
             let elevation = if k % 2 == 0 { 25f64 } else { -25.0 }.to_radians();
-            let dir = DVec3::new(elevation.cos() * azimuth.sin(), elevation.sin(), elevation.cos() * azimuth.cos());
-            Camera::look_at(resolution, resolution, focal, focal, half, half, center + distance * dir, center, DVec3::Y).unwrap()
+            let dir = DVec3::new(
+                elevation.cos() * azimuth.sin(),
+                elevation.sin(),
+                elevation.cos() * azimuth.cos(),
+            );
+            Camera::look_at(
+                resolution,
+                resolution,
+                focal,
+                focal,
+                half,
+                half,
+                center + distance * dir,
+                center,
+                DVec3::Y,
+            )
+            .unwrap()
         })
         .collect()
 }
@@ -61,10 +79,25 @@ fn write_dataset(dir: &Path, mesh: &TriMesh, cameras: &[Camera]) -> Texture {
         std::fs::create_dir_all(dir.join("cameras")).unwrap();
         camera.save_json(&own::camera_path(dir, name)).unwrap();
         let r = render(camera, &mesh.positions, &mesh.positions, &mesh.faces, &texture, 3).unwrap();
-        write_png(&own::image_path(dir, name, 0), &Image { width: r.width, height: r.height, channels: 3, data: r.rgb }).unwrap();
-        write_png(&own::mask_path(dir, name, 0), &Image { width: r.width, height: r.height, channels: 1, data: r.alpha }).unwrap();
+        write_png(
+            &own::image_path(dir, name, 0),
+            &Image { width: r.width, height: r.height, channels: 3, data: r.rgb },
+        )
+        .unwrap();
+        write_png(
+            &own::mask_path(dir, name, 0),
+            &Image { width: r.width, height: r.height, channels: 1, data: r.alpha },
+        )
+        .unwrap();
     }
-    let meta = OwnMeta { format: own::FORMAT_NAME.into(), version: 1, frames: 1, fps: 30.0, cameras: names, test_cameras: vec![] };
+    let meta = OwnMeta {
+        format: own::FORMAT_NAME.into(),
+        version: 1,
+        frames: 1,
+        fps: 30.0,
+        cameras: names,
+        test_cameras: vec![],
+    };
     std::fs::write(dir.join(own::META), serde_json::to_string(&meta).unwrap()).unwrap();
     texture
 }
@@ -80,7 +113,12 @@ fn ellipsoid_dataset(name: &str, views: usize) -> (PathBuf, TriMesh, Texture) {
 fn views(dir: &Path) -> Vec<HullView> {
     let data = Dataset::load(dir).unwrap();
     (0..data.frames[0].views.len())
-        .map(|k| HullView { name: data.camera_names[k].clone(), camera: data.cameras[k], mask: data.mask(0, k).unwrap(), image: Some(data.image(0, k).unwrap()) })
+        .map(|k| HullView {
+            name: data.camera_names[k].clone(),
+            camera: data.cameras[k],
+            mask: data.mask(0, k).unwrap(),
+            image: Some(data.image(0, k).unwrap()),
+        })
         .collect()
 }
 
@@ -117,7 +155,11 @@ fn components(faces: &[[u32; 3]]) -> usize {
 
 /// V − E + F.
 fn euler(mesh: &TriMesh) -> i64 {
-    let edges: HashSet<(u32, u32)> = mesh.faces.iter().flat_map(|f| (0..3).map(move |k| (f[k].min(f[(k + 1) % 3]), f[k].max(f[(k + 1) % 3])))).collect();
+    let edges: HashSet<(u32, u32)> = mesh
+        .faces
+        .iter()
+        .flat_map(|f| (0..3).map(move |k| (f[k].min(f[(k + 1) % 3]), f[k].max(f[(k + 1) % 3]))))
+        .collect();
     mesh.positions.len() as i64 - edges.len() as i64 + mesh.faces.len() as i64
 }
 
@@ -127,7 +169,15 @@ fn min_angles(mesh: &TriMesh) -> Vec<f64> {
     let mut angles: Vec<f64> = mesh
         .faces
         .iter()
-        .map(|f| (0..3).map(|k| (p(f[(k + 1) % 3]) - p(f[k])).angle_between(p(f[(k + 2) % 3]) - p(f[k])).to_degrees()).fold(180.0, f64::min))
+        .map(|f| {
+            (0..3)
+                .map(|k| {
+                    (p(f[(k + 1) % 3]) - p(f[k]))
+                        .angle_between(p(f[(k + 2) % 3]) - p(f[k]))
+                        .to_degrees()
+                })
+                .fold(180.0, f64::min)
+        })
         .collect();
     angles.sort_by(f64::total_cmp);
     angles
@@ -140,20 +190,33 @@ fn check_and_chamfer(built: &InitMesh, truth: &TriMesh) -> f64 {
     assert_eq!(closed_manifold_problem(m.positions.len(), &m.faces), None);
     assert_eq!(components(&m.faces), 1);
     assert_eq!(built.report.vertices, m.positions.len());
-    chamfer_meshes((&m.positions, &m.faces), (&truth.positions, &truth.faces), 20_000, 7).unwrap().mean_fraction
+    chamfer_meshes((&m.positions, &m.faces), (&truth.positions, &truth.faces), 20_000, 7)
+        .unwrap()
+        .mean_fraction
 }
 
 /// Mean absolute colour error (per channel, [0, 1]) of the vertices against the texture at
 /// the closest true surface point, for vertices whose normal faces some camera within 60°
 /// of its view direction (the regions the views see well).
-fn color_error(built: &InitMesh, truth: &TriMesh, texture: &Texture, cameras: &[Camera]) -> (f64, f64, usize) {
+fn color_error(
+    built: &InitMesh,
+    truth: &TriMesh,
+    texture: &Texture,
+    cameras: &[Camera],
+) -> (f64, f64, usize) {
     let bvh = SurfaceBvh::build(&truth.positions, &truth.faces).unwrap();
     let m = &built.mesh;
     let colors = m.colors.as_ref().unwrap();
     let normals = vertex_normals(&ManifoldMesh::new(m.positions.clone(), m.faces.clone()).unwrap());
     let (mut err, mut flat, mut n) = (0.0, 0.0, 0);
-    let truths: Vec<[f32; 3]> = m.positions.iter().map(|p| texture.color(bvh.closest_point(DVec3::from(p.map(f64::from))).unwrap().position)).collect();
-    let mean: Vec<f64> = (0..3).map(|c| truths.iter().map(|t| t[c] as f64).sum::<f64>() / truths.len() as f64).collect();
+    let truths: Vec<[f32; 3]> = m
+        .positions
+        .iter()
+        .map(|p| texture.color(bvh.closest_point(DVec3::from(p.map(f64::from))).unwrap().position))
+        .collect();
+    let mean: Vec<f64> = (0..3)
+        .map(|c| truths.iter().map(|t| t[c] as f64).sum::<f64>() / truths.len() as f64)
+        .collect();
     for (v, p) in m.positions.iter().enumerate() {
         let p = DVec3::from(p.map(f64::from));
         let normal = DVec3::from(normals[v].map(f64::from));
@@ -178,13 +241,24 @@ fn ellipsoid_is_closed_genus_zero_near_the_truth_and_coloured() {
     assert_eq!(euler(&built.mesh), 2, "genus 0");
     // Remeshing against the raw marching-tetrahedra mesh: far fewer thin triangles, about the
     // same distance to the truth.
-    let raw = init_mesh(&data, 0, &InitOptions { remesh_rounds: 0, colors: false, ..InitOptions::default() }).unwrap();
+    let raw = init_mesh(
+        &data,
+        0,
+        &InitOptions { remesh_rounds: 0, colors: false, ..InitOptions::default() },
+    )
+    .unwrap();
     let raw_chamfer = check_and_chamfer(&raw, &truth);
     let (a, b) = (min_angles(&built.mesh), min_angles(&raw.mesh));
     let fifth = |v: &[f64]| v[v.len() / 20];
     let thin = |v: &[f64]| v.iter().filter(|&&x| x < 20.0).count() as f64 / v.len() as f64;
     eprintln!("raw: {} vertices, chamfer {raw_chamfer:.5}, 5th-percentile smallest angle {:.1}°, {:.3} of faces under 20°; remeshed {:.1}°, {:.3}", raw.mesh.positions.len(), fifth(&b), thin(&b), fifth(&a), thin(&a));
-    assert!(fifth(&a) > 30.0 && thin(&a) < 0.01 && thin(&b) > 0.1, "remeshed {} / {}, raw {}", fifth(&a), thin(&a), thin(&b));
+    assert!(
+        fifth(&a) > 30.0 && thin(&a) < 0.01 && thin(&b) > 0.1,
+        "remeshed {} / {}, raw {}",
+        fifth(&a),
+        thin(&a),
+        thin(&b)
+    );
     assert!(chamfer < raw_chamfer * 1.2);
     let (err, flat, n) = color_error(&built, &truth, &texture, &data.cameras);
     eprintln!("ellipsoid: {:?}\n  chamfer mean / diagonal {chamfer:.5}, colour error {err:.4} (flat mean colour {flat:.4}) over {n} vertices", built.report);
@@ -202,12 +276,20 @@ fn vertex_count_follows_the_target() {
     let (dir, truth, _) = ellipsoid_dataset("target", 6);
     let data = Dataset::load(&dir).unwrap();
     for target in [1500, 6000] {
-        let options = InitOptions { vertices: Some(target), colors: false, ..InitOptions::default() };
+        let options =
+            InitOptions { vertices: Some(target), colors: false, ..InitOptions::default() };
         let built = init_mesh(&data, 0, &options).unwrap();
         let chamfer = check_and_chamfer(&built, &truth);
         let ratio = built.mesh.positions.len() as f64 / target as f64;
-        eprintln!("target {target}: {} vertices (ratio {ratio:.3}), chamfer / diagonal {chamfer:.5}", built.mesh.positions.len());
-        assert!((ratio - 1.0).abs() < 0.1, "{} vertices for a target of {target}", built.mesh.positions.len());
+        eprintln!(
+            "target {target}: {} vertices (ratio {ratio:.3}), chamfer / diagonal {chamfer:.5}",
+            built.mesh.positions.len()
+        );
+        assert!(
+            (ratio - 1.0).abs() < 0.1,
+            "{} vertices for a target of {target}",
+            built.mesh.positions.len()
+        );
         assert!(chamfer < 0.015, "chamfer {chamfer}");
         assert!(built.mesh.colors.is_none());
     }
@@ -217,7 +299,17 @@ fn vertex_count_follows_the_target() {
 #[test]
 fn articulated_subject_is_closed_and_near_its_hull_bound() {
     let dir = temp("articulated");
-    let options = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 4 }, views: 8, frames: 1, resolution: 96, seed: 3, samples: 2, track_vertices: 0, track_surface: 0, ..Default::default() };
+    let options = SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 4 },
+        views: 8,
+        frames: 1,
+        resolution: 96,
+        seed: 3,
+        samples: 2,
+        track_vertices: 0,
+        track_surface: 0,
+        ..Default::default()
+    };
     generate(&options, &dir).unwrap();
     let data = Dataset::load(&dir).unwrap();
     let built = init_mesh(&data, 0, &InitOptions::default()).unwrap();
@@ -251,7 +343,10 @@ fn noisy_masks_need_the_tolerance() {
     let a = init_mesh_from_views(&views, &strict).unwrap();
     let b = init_mesh_from_views(&views, &tolerant).unwrap();
     let (ca, cb) = (check_and_chamfer(&a, &truth), check_and_chamfer(&b, &truth));
-    eprintln!("noisy masks: strict chamfer {ca:.5} ({} hole pixels filled), tolerance 1: {cb:.5}", a.report.mask_hole_pixels);
+    eprintln!(
+        "noisy masks: strict chamfer {ca:.5} ({} hole pixels filled), tolerance 1: {cb:.5}",
+        a.report.mask_hole_pixels
+    );
     assert!(a.report.mask_hole_pixels > 0);
     assert_eq!(euler(&a.mesh), 2, "the specks carve no tunnels");
     // Measured: strict 0.024 (the bitten view cuts the hull), tolerant 0.011.
@@ -286,7 +381,9 @@ fn bad_input_gets_a_clear_error() {
     one_empty[2].mask.fill(0.0);
     let e = message(init_mesh_from_views(&one_empty, &options));
     assert!(e.contains("never intersect") && e.contains("empty masks in [cam02]"), "{e}");
-    assert!(init_mesh_from_views(&one_empty, &InitOptions { tolerance: 1, ..options.clone() }).is_ok());
+    assert!(
+        init_mesh_from_views(&one_empty, &InitOptions { tolerance: 1, ..options.clone() }).is_ok()
+    );
 
     let e = message(init_mesh_from_views(&good[..1], &options));
     assert!(e.contains("1 view(s) [cam00]") && e.contains("at least 2 cameras"), "{e}");
@@ -298,7 +395,12 @@ fn bad_input_gets_a_clear_error() {
     let e = message(init_mesh_from_views(&short, &options));
     assert!(e.contains("cam03") && e.contains("96×96"), "{e}");
     let mut small_image = good.clone();
-    small_image[1].image = Some(std::sync::Arc::new(Image { width: 48, height: 96, channels: 3, data: vec![0.5; 48 * 96 * 3] }));
+    small_image[1].image = Some(std::sync::Arc::new(Image {
+        width: 48,
+        height: 96,
+        channels: 3,
+        data: vec![0.5; 48 * 96 * 3],
+    }));
     let e = message(init_mesh_from_views(&small_image, &options));
     assert!(e.contains("cam01") && e.contains("48×96"), "{e}");
 

@@ -5,11 +5,11 @@
 mod common;
 
 use common::{gpu, rng};
+use std::sync::Arc;
 use tagsplat::eval::ssim;
 use tagsplat::gpu::{GpuBuffer, GpuContext, Recorder};
 use tagsplat::loss::reference::{image_loss, ReferenceLoss};
 use tagsplat::loss::{ImageLoss, LossParams, LossTerms};
-use std::sync::Arc;
 
 struct Images {
     width: usize,
@@ -25,11 +25,16 @@ fn random_images(width: usize, height: usize, weighted: bool, seed: u64) -> Imag
     let render = (0..width * height).map(|_| pixel()).collect();
     let target = (0..width * height).map(|_| pixel()).collect();
     let mut r = rng(seed + 1);
-    let weight = weighted.then(|| (0..width * height).map(|_| 0.25 + r.next_f64() as f32).collect());
+    let weight =
+        weighted.then(|| (0..width * height).map(|_| 0.25 + r.next_f64() as f32).collect());
     Images { width, height, render, target, weight }
 }
 
-fn gpu_loss(ctx: &Arc<GpuContext>, images: &Images, lambda: [f32; 4]) -> (LossTerms, Vec<[f32; 4]>) {
+fn gpu_loss(
+    ctx: &Arc<GpuContext>,
+    images: &Images,
+    lambda: [f32; 4],
+) -> (LossTerms, Vec<[f32; 4]>) {
     let pixels = images.width * images.height;
     let mut loss = ImageLoss::new(ctx).unwrap();
     loss.reserve(pixels).unwrap();
@@ -38,7 +43,8 @@ fn gpu_loss(ctx: &Arc<GpuContext>, images: &Images, lambda: [f32; 4]) -> (LossTe
     let weight = images.weight.as_ref().map(|w| GpuBuffer::from_slice(ctx, "weight", w).unwrap());
     let terms = GpuBuffer::<f32>::new(ctx, "terms", 8).unwrap();
     let gradient = GpuBuffer::<[f32; 4]>::new(ctx, "gradient", pixels).unwrap();
-    let params = LossParams::new(images.width as u32, images.height as u32, lambda, weight.is_some());
+    let params =
+        LossParams::new(images.width as u32, images.height as u32, lambda, weight.is_some());
     let mut rec = Recorder::new(ctx).unwrap();
     rec.fill_buffer(&terms, 0);
     loss.record(&mut rec, &params, &render, &target, weight.as_ref(), &terms, &gradient).unwrap();
@@ -47,7 +53,14 @@ fn gpu_loss(ctx: &Arc<GpuContext>, images: &Images, lambda: [f32; 4]) -> (LossTe
 }
 
 fn reference(images: &Images, lambda: [f32; 4]) -> ReferenceLoss {
-    image_loss(&images.render, &images.target, images.weight.as_deref(), images.width, images.height, lambda.map(f64::from))
+    image_loss(
+        &images.render,
+        &images.target,
+        images.weight.as_deref(),
+        images.width,
+        images.height,
+        lambda.map(f64::from),
+    )
 }
 
 fn max_abs(values: impl Iterator<Item = f64>) -> f64 {
@@ -63,13 +76,32 @@ fn gpu_loss_matches_the_reference() {
         let (terms, gradient) = gpu_loss(g.ctx(), &images, lambda);
         let expect = reference(&images, lambda);
         for c in 0..4 {
-            assert!((terms.l1[c] as f64 - expect.l1[c]).abs() < 1e-5, "{width}×{height} L1 channel {c}: {} vs {}", terms.l1[c], expect.l1[c]);
-            assert!((terms.dssim[c] as f64 - expect.dssim[c]).abs() < 1e-5, "{width}×{height} SSIM channel {c}: {} vs {}", terms.dssim[c], expect.dssim[c]);
+            assert!(
+                (terms.l1[c] as f64 - expect.l1[c]).abs() < 1e-5,
+                "{width}×{height} L1 channel {c}: {} vs {}",
+                terms.l1[c],
+                expect.l1[c]
+            );
+            assert!(
+                (terms.dssim[c] as f64 - expect.dssim[c]).abs() < 1e-5,
+                "{width}×{height} SSIM channel {c}: {} vs {}",
+                terms.dssim[c],
+                expect.dssim[c]
+            );
         }
         assert!((terms.total(lambda) as f64 - expect.total).abs() < 1e-5 * expect.total);
         let scale = max_abs(expect.gradient.iter().flatten().copied());
-        let error = max_abs(gradient.iter().flatten().zip(expect.gradient.iter().flatten()).map(|(&a, &b)| a as f64 - b));
-        assert!(error < 1e-4 * scale, "{width}×{height}: gradient error {error:e} of max {scale:e}");
+        let error = max_abs(
+            gradient
+                .iter()
+                .flatten()
+                .zip(expect.gradient.iter().flatten())
+                .map(|(&a, &b)| a as f64 - b),
+        );
+        assert!(
+            error < 1e-4 * scale,
+            "{width}×{height}: gradient error {error:e} of max {scale:e}"
+        );
     }
 }
 
@@ -88,14 +120,26 @@ fn reference_gradient_matches_finite_differences() {
             continue;
         }
         let at = |delta: f32| {
-            let mut moved = Images { render: images.render.clone(), target: images.target.clone(), weight: images.weight.clone(), ..images };
+            let mut moved = Images {
+                render: images.render.clone(),
+                target: images.target.clone(),
+                weight: images.weight.clone(),
+                ..images
+            };
             moved.render[p][c] += delta;
-            (reference(&moved, lambda).total, moved.render[p][c] as f64 - images.render[p][c] as f64)
+            (
+                reference(&moved, lambda).total,
+                moved.render[p][c] as f64 - images.render[p][c] as f64,
+            )
         };
         let ((plus, dp), (minus, dm)) = (at(5e-3), at(-5e-3));
         let numeric = (plus - minus) / (dp - dm);
         let error = (numeric - analytic[p][c]).abs();
-        assert!(error < 1e-6 + 1e-4 * analytic[p][c].abs(), "pixel {p} channel {c}: analytic {} numeric {numeric}", analytic[p][c]);
+        assert!(
+            error < 1e-6 + 1e-4 * analytic[p][c].abs(),
+            "pixel {p} channel {c}: analytic {} numeric {numeric}",
+            analytic[p][c]
+        );
         checked += 1;
     }
 }
@@ -107,14 +151,25 @@ fn ssim_term_is_one_minus_the_metric() {
     let (terms, _) = gpu_loss(g.ctx(), &images, [1.0; 4]);
     let channel = |img: &[[f32; 4]], c: usize| img.iter().map(|p| p[c]).collect::<Vec<f32>>();
     for c in 0..4 {
-        let metric = ssim(&channel(&images.render, c), &channel(&images.target, c), 31, 24, 1).unwrap();
-        assert!((1.0 - terms.dssim[c] as f64 - metric).abs() < 2e-6, "channel {c}: {} vs {metric}", 1.0 - terms.dssim[c]);
+        let metric =
+            ssim(&channel(&images.render, c), &channel(&images.target, c), 31, 24, 1).unwrap();
+        assert!(
+            (1.0 - terms.dssim[c] as f64 - metric).abs() < 2e-6,
+            "channel {c}: {} vs {metric}",
+            1.0 - terms.dssim[c]
+        );
     }
     // Constant images have no variance: S = (2ab + C1) / (a² + b² + C1) exactly. In f32 the
     // variance E[x²] − μ² cancels to within ~1e-7, which C2 = 9e-4 magnifies to ~1e-4 in S:
     // the price of single-pass moments, and harmless where the image is flat.
     let constant = |v: f32| vec![[v; 4]; 12 * 12];
-    let flat = Images { width: 12, height: 12, render: constant(0.25), target: constant(0.75), weight: None };
+    let flat = Images {
+        width: 12,
+        height: 12,
+        render: constant(0.25),
+        target: constant(0.75),
+        weight: None,
+    };
     let (terms, _) = gpu_loss(g.ctx(), &flat, [1.0; 4]);
     let s = (2.0 * 0.25 * 0.75 + 1e-4) / (0.25 * 0.25 + 0.75 * 0.75 + 1e-4);
     assert!((terms.dssim[0] as f64 - (1.0 - s)).abs() < 3e-4, "{} vs {}", terms.dssim[0], 1.0 - s);
@@ -135,7 +190,13 @@ fn hard_cases() {
     let (terms, gradient) = gpu_loss(g.ctx(), &small, [1.0; 4]);
     let expect = reference(&small, [1.0; 4]);
     assert_eq!(terms.dssim, [0.0; 4]);
-    let error = max_abs(gradient.iter().flatten().zip(expect.gradient.iter().flatten()).map(|(&a, &b)| a as f64 - b));
+    let error = max_abs(
+        gradient
+            .iter()
+            .flatten()
+            .zip(expect.gradient.iter().flatten())
+            .map(|(&a, &b)| a as f64 - b),
+    );
     assert!(error < 1e-7);
     // An empty image records nothing and scores nothing.
     let empty = Images { width: 0, height: 0, render: vec![], target: vec![], weight: None };
@@ -158,7 +219,10 @@ fn short_buffers_are_refused_by_name() {
     let terms = GpuBuffer::<f32>::new(ctx, "terms", 8).unwrap();
     let params = LossParams::new(10, 10, [1.0; 4], false);
     let mut rec = Recorder::new(ctx).unwrap();
-    let error = loss.record(&mut rec, &params, &render, &target, None, &terms, &render).unwrap_err().to_string();
+    let error = loss
+        .record(&mut rec, &params, &render, &target, None, &terms, &render)
+        .unwrap_err()
+        .to_string();
     assert!(error.contains("target of view 3"), "{error}");
     drop(rec);
 }

@@ -8,7 +8,14 @@ use tagsplat::gpu::{GpuContext, Recorder};
 use tagsplat::optim::{Adam, AdamParams, LearningRates, NEW_ROW};
 use tagsplat::splat::{sh_coefficients, GaussianBuffers, GaussianScene};
 
-const RATES: LearningRates = LearningRates { positions: 1e-3, log_scales: 5e-3, rotations: 1e-3, opacity_logits: 5e-2, sh_dc: 2.5e-3, sh_rest: 1.25e-4 };
+const RATES: LearningRates = LearningRates {
+    positions: 1e-3,
+    log_scales: 5e-3,
+    rotations: 1e-3,
+    opacity_logits: 5e-2,
+    sh_dc: 2.5e-3,
+    sh_rest: 1.25e-4,
+};
 
 fn random_scene(n: usize, degree: u32, seed: u64) -> GaussianScene {
     let mut r = rng(seed);
@@ -48,7 +55,13 @@ fn rate(buffer: usize, index: usize, coefficients: usize) -> f64 {
 }
 
 /// The reference: parameters, moments (m, v) per float, one step.
-fn reference_step(params: &mut [Vec<f64>], moments: &mut [Vec<[f64; 2]>], grads: &[Vec<f64>], step: i32, coefficients: usize) {
+fn reference_step(
+    params: &mut [Vec<f64>],
+    moments: &mut [Vec<[f64; 2]>],
+    grads: &[Vec<f64>],
+    step: i32,
+    coefficients: usize,
+) {
     let (b1, b2) = (0.9f64, 0.999f64);
     for k in 0..5 {
         for i in 0..params[k].len() {
@@ -62,9 +75,21 @@ fn reference_step(params: &mut [Vec<f64>], moments: &mut [Vec<[f64; 2]>], grads:
     }
 }
 
-fn gpu_step(ctx: &Arc<GpuContext>, adam: &Adam, params: &GaussianBuffers, grads: &GaussianBuffers, step: u32) {
+fn gpu_step(
+    ctx: &Arc<GpuContext>,
+    adam: &Adam,
+    params: &GaussianBuffers,
+    grads: &GaussianBuffers,
+    step: u32,
+) {
     let mut rec = Recorder::new(ctx).unwrap();
-    adam.record_step(&mut rec, params, grads, &AdamParams::new(&RATES, step, params.len(), params.sh_degree())).unwrap();
+    adam.record_step(
+        &mut rec,
+        params,
+        grads,
+        &AdamParams::new(&RATES, step, params.len(), params.sh_degree()),
+    )
+    .unwrap();
     rec.submit_and_wait().unwrap();
 }
 
@@ -72,13 +97,20 @@ fn assert_close(gpu: &[Vec<f64>], reference: &[Vec<f64>], what: &str) {
     for (k, (a, b)) in gpu.iter().zip(reference).enumerate() {
         assert_eq!(a.len(), b.len());
         for (i, (x, y)) in a.iter().zip(b).enumerate() {
-            assert!((x - y).abs() <= 1e-6 * y.abs().max(1e-2), "{what}: buffer {k} float {i}: {x} vs {y}");
+            assert!(
+                (x - y).abs() <= 1e-6 * y.abs().max(1e-2),
+                "{what}: buffer {k} float {i}: {x} vs {y}"
+            );
         }
     }
 }
 
 fn moments_f64(adam: &Adam) -> Vec<Vec<[f64; 2]>> {
-    adam.read_moments().unwrap().iter().map(|m| m.iter().map(|&[a, b]| [a as f64, b as f64]).collect()).collect()
+    adam.read_moments()
+        .unwrap()
+        .iter()
+        .map(|m| m.iter().map(|&[a, b]| [a as f64, b as f64]).collect())
+        .collect()
 }
 
 #[test]
@@ -102,12 +134,26 @@ fn steps_match_the_reference_across_a_remap() {
     assert_close(&flat(&params.to_scene().unwrap()), &expect, "after 3 steps");
 
     // Remap: drop some rows, permute, add new ones; kept rows keep their moments.
-    let old_of_new: Vec<u32> = (0..n as u32).rev().filter(|i| i % 3 != 0).chain([NEW_ROW, NEW_ROW]).collect();
+    let old_of_new: Vec<u32> =
+        (0..n as u32).rev().filter(|i| i % 3 != 0).chain([NEW_ROW, NEW_ROW]).collect();
     adam.remap(&old_of_new).unwrap();
     let widths = [3, 3, 4, 1, 3 * coefficients];
     let old_moments = &moments;
     let remapped: Vec<Vec<[f64; 2]>> = (0..5)
-        .map(|k| old_of_new.iter().flat_map(|&o| (0..widths[k]).map(move |j| if o == NEW_ROW { [0.0; 2] } else { old_moments[k][o as usize * widths[k] + j] })).collect())
+        .map(|k| {
+            old_of_new
+                .iter()
+                .flat_map(|&o| {
+                    (0..widths[k]).map(move |j| {
+                        if o == NEW_ROW {
+                            [0.0; 2]
+                        } else {
+                            old_moments[k][o as usize * widths[k] + j]
+                        }
+                    })
+                })
+                .collect()
+        })
         .collect();
     // m sums gradients of both signs, so its error is relative to the array's scale.
     let gpu_moments = moments_f64(&adam);
@@ -115,7 +161,12 @@ fn steps_match_the_reference_across_a_remap() {
         for lane in 0..2 {
             let scale = remapped[k].iter().fold(0.0f64, |s, m| s.max(m[lane].abs()));
             for (i, (a, b)) in gpu_moments[k].iter().zip(&remapped[k]).enumerate() {
-                assert!((a[lane] - b[lane]).abs() <= 1e-6 * scale, "moment {lane} of buffer {k} float {i} after remap: {} vs {}", a[lane], b[lane]);
+                assert!(
+                    (a[lane] - b[lane]).abs() <= 1e-6 * scale,
+                    "moment {lane} of buffer {k} float {i} after remap: {} vs {}",
+                    a[lane],
+                    b[lane]
+                );
             }
         }
     }
@@ -129,7 +180,8 @@ fn steps_match_the_reference_across_a_remap() {
         new_scene.log_scales[i] = gathered.log_scales[o];
         new_scene.rotations[i] = gathered.rotations[o];
         new_scene.opacity_logits[i] = gathered.opacity_logits[o];
-        new_scene.sh[i * 3 * coefficients..(i + 1) * 3 * coefficients].copy_from_slice(&gathered.sh[o * 3 * coefficients..(o + 1) * 3 * coefficients]);
+        new_scene.sh[i * 3 * coefficients..(i + 1) * 3 * coefficients]
+            .copy_from_slice(&gathered.sh[o * 3 * coefficients..(o + 1) * 3 * coefficients]);
     }
     let params = GaussianBuffers::from_scene(ctx, &new_scene).unwrap();
     let grad_scene = random_scene(old_of_new.len(), degree, 60);
@@ -149,7 +201,9 @@ fn mismatched_shapes_and_empty_sets() {
     let other = GaussianBuffers::from_scene(ctx, &random_scene(11, 0, 3)).unwrap();
     let mut adam = Adam::new(ctx, &params).unwrap();
     let mut rec = Recorder::new(ctx).unwrap();
-    assert!(adam.record_step(&mut rec, &params, &other, &AdamParams::new(&RATES, 1, 10, 0)).is_err());
+    assert!(adam
+        .record_step(&mut rec, &params, &other, &AdamParams::new(&RATES, 1, 10, 0))
+        .is_err());
     drop(rec);
     adam.remap(&[]).unwrap();
     assert!(adam.is_empty());

@@ -7,11 +7,11 @@ use common::gpu;
 use std::path::{Path, PathBuf};
 use tagsplat::eval::{chamfer_meshes, read_trajectories_csv};
 use tagsplat::io::sequence::MeshSequence;
+use tagsplat::mesh::TriMesh;
 use tagsplat::synth::manifold::closed_manifold_problem;
+use tagsplat::synth::{generate, SubjectSource, SynthOptions};
 use tagsplat::track::queries::read_points;
 use tagsplat::track::{track, Queries};
-use tagsplat::mesh::TriMesh;
-use tagsplat::synth::{generate, SubjectSource, SynthOptions};
 use tagsplat::train::pipeline::{run_train, TrainConfig, TrainJob};
 
 fn temp(name: &str) -> PathBuf {
@@ -22,7 +22,17 @@ fn temp(name: &str) -> PathBuf {
 
 /// 8 views at 96², three frames of the procedural subject.
 fn sequence(dir: &Path) {
-    let options = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 8, frames: 3, resolution: 96, seed: 5, samples: 2, track_vertices: 100, track_surface: 200, ..Default::default() };
+    let options = SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 3 },
+        views: 8,
+        frames: 3,
+        resolution: 96,
+        seed: 5,
+        samples: 2,
+        track_vertices: 100,
+        track_surface: 200,
+        ..Default::default()
+    };
     generate(&options, dir).unwrap();
 }
 
@@ -37,7 +47,12 @@ fn quick_config() -> TrainConfig {
     config
 }
 
-fn job(data: &Path, out: &Path, config: TrainConfig, frames: Option<std::ops::Range<usize>>) -> TrainJob {
+fn job(
+    data: &Path,
+    out: &Path,
+    config: TrainConfig,
+    frames: Option<std::ops::Range<usize>>,
+) -> TrainJob {
     TrainJob { data: data.to_owned(), out: out.to_owned(), mesh: None, config, frames }
 }
 
@@ -47,35 +62,59 @@ fn a_sequence_is_reconstructed_then_resumed_with_one_face_list() {
     let dir = temp("run");
     sequence(&dir.join("data"));
     let out = dir.join("out");
-    let first = run_train(g.ctx(), &job(&dir.join("data"), &out, quick_config(), Some(0..2)), &mut |_| {}).unwrap();
+    let first =
+        run_train(g.ctx(), &job(&dir.join("data"), &out, quick_config(), Some(0..2)), &mut |_| {})
+            .unwrap();
     assert_eq!(first.frames.iter().map(|f| f.frame).collect::<Vec<_>>(), vec![0, 1]);
     assert!(first.resumed_frames.is_empty());
     assert!(!out.join("sequence.glb").exists(), "no export before every frame is done");
     assert!(!first.frames[0].topology_steps.is_empty(), "frame 0 densifies and prunes");
     // Measured on lavapipe: Gaussian PSNR 24.9 dB and mesh PSNR 26.8 dB on frame 0.
-    assert!(first.frames[0].psnr_gs > 20.0 && first.frames[0].psnr_mesh > 22.0, "{:?}", first.frames[0]);
+    assert!(
+        first.frames[0].psnr_gs > 20.0 && first.frames[0].psnr_mesh > 22.0,
+        "{:?}",
+        first.frames[0]
+    );
 
-    let second = run_train(g.ctx(), &job(&dir.join("data"), &out, quick_config(), None), &mut |_| {}).unwrap();
+    let second =
+        run_train(g.ctx(), &job(&dir.join("data"), &out, quick_config(), None), &mut |_| {})
+            .unwrap();
     assert_eq!(second.resumed_frames, vec![0, 1]);
     assert_eq!(second.frames.iter().map(|f| f.frame).collect::<Vec<_>>(), vec![2]);
-    let meshes: Vec<TriMesh> = (0..3).map(|t| TriMesh::read_ply(&out.join(format!("meshes/{t:06}.ply"))).unwrap()).collect();
-    assert!(meshes.iter().all(|m| m.faces == meshes[0].faces && m.positions.len() == second.vertices));
+    let meshes: Vec<TriMesh> = (0..3)
+        .map(|t| TriMesh::read_ply(&out.join(format!("meshes/{t:06}.ply"))).unwrap())
+        .collect();
+    assert!(meshes
+        .iter()
+        .all(|m| m.faces == meshes[0].faces && m.positions.len() == second.vertices));
     assert_ne!(meshes[0].positions, meshes[2].positions, "the surface follows the motion");
     let glb = MeshSequence::read(&out.join("sequence.glb")).unwrap();
     assert_eq!((glb.frames.len(), glb.faces.len()), (3, second.faces));
     assert_eq!(MeshSequence::read(&out.join("sequence.pc2")).unwrap().frames.len(), 3);
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    assert!(report["total_wall_s"].as_f64().unwrap() > 0.0 && report["frames"][0]["psnr_mesh"].is_number());
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert!(
+        report["total_wall_s"].as_f64().unwrap() > 0.0
+            && report["frames"][0]["psnr_mesh"].is_number()
+    );
     for (t, m) in meshes.iter().enumerate() {
         assert_eq!(closed_manifold_problem(m.positions.len(), &m.faces), None, "frame {t}");
     }
     beats_the_unchanged_mesh(&dir.join("data"), &meshes);
 
     // An uninterrupted run produces the same frames and files.
-    let whole = run_train(g.ctx(), &job(&dir.join("data"), &dir.join("whole"), quick_config(), None), &mut |_| {}).unwrap();
+    let whole = run_train(
+        g.ctx(),
+        &job(&dir.join("data"), &dir.join("whole"), quick_config(), None),
+        &mut |_| {},
+    )
+    .unwrap();
     assert_eq!(whole.frames.iter().map(|f| f.frame).collect::<Vec<_>>(), vec![0, 1, 2]);
     for t in 0..3 {
-        assert!(dir.join(format!("whole/meshes/{t:06}.ply")).is_file() && dir.join(format!("whole/gaussians/{t:06}.ply")).is_file());
+        assert!(
+            dir.join(format!("whole/meshes/{t:06}.ply")).is_file()
+                && dir.join(format!("whole/gaussians/{t:06}.ply")).is_file()
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -85,29 +124,54 @@ fn a_sequence_is_reconstructed_then_resumed_with_one_face_list() {
 /// (predicted minus true displacement from frame 0, so the binding offset shared by both
 /// cancels) fall well below those of the unchanged mesh.
 fn beats_the_unchanged_mesh(data: &Path, meshes: &[TriMesh]) {
-    let truth: Vec<TriMesh> = (0..3).map(|t| TriMesh::read_ply(&data.join(format!("meshes/{t:06}.ply"))).unwrap()).collect();
-    let chamfer = |m: &TriMesh, t: usize| chamfer_meshes((&m.positions, &m.faces), (&truth[t].positions, &truth[t].faces), 5000, 1).unwrap().mean;
+    let truth: Vec<TriMesh> = (0..3)
+        .map(|t| TriMesh::read_ply(&data.join(format!("meshes/{t:06}.ply"))).unwrap())
+        .collect();
+    let chamfer = |m: &TriMesh, t: usize| {
+        chamfer_meshes((&m.positions, &m.faces), (&truth[t].positions, &truth[t].faces), 5000, 1)
+            .unwrap()
+            .mean
+    };
     let base = chamfer(&meshes[0], 0);
     let moving = chamfer(&meshes[2], 2) - base;
     let still = chamfer(&meshes[0], 2) - base;
     // Measured on lavapipe: −0.0007 against 0.0127 scene units.
-    assert!(moving < 0.5 * still, "Chamfer gained by frame 2: {moving} against {still} for the unchanged mesh");
+    assert!(
+        moving < 0.5 * still,
+        "Chamfer gained by frame 2: {moving} against {still} for the unchanged mesh"
+    );
 
     let gt = read_trajectories_csv(&data.join("trajectories.csv")).unwrap();
     let queries = Queries::Points(read_points(&data.join("points.csv")).unwrap());
-    let tracked = track(&meshes[0].faces, &meshes.iter().map(|m| m.positions.clone()).collect::<Vec<_>>(), &queries, 0.05).unwrap();
-    let truth_of = |id: &str, frame: u32| gt.iter().find(|p| p.id == id && p.frame == frame).map(|p| glam::DVec3::from_array(p.position));
+    let tracked = track(
+        &meshes[0].faces,
+        &meshes.iter().map(|m| m.positions.clone()).collect::<Vec<_>>(),
+        &queries,
+        0.05,
+    )
+    .unwrap();
+    let truth_of = |id: &str, frame: u32| {
+        gt.iter()
+            .find(|p| p.id == id && p.frame == frame)
+            .map(|p| glam::DVec3::from_array(p.position))
+    };
     let (mut ours, mut unchanged, mut n) = (0.0, 0.0, 0usize);
     for point in &tracked.points {
-        let (Some(g0), Some(g2)) = (truth_of(&point.id, 0), truth_of(&point.id, 2)) else { continue };
-        let predicted = glam::DVec3::from_array(point.trajectory[2]) - glam::DVec3::from_array(point.trajectory[0]);
+        let (Some(g0), Some(g2)) = (truth_of(&point.id, 0), truth_of(&point.id, 2)) else {
+            continue;
+        };
+        let predicted = glam::DVec3::from_array(point.trajectory[2])
+            - glam::DVec3::from_array(point.trajectory[0]);
         ours += (predicted - (g2 - g0)).length_squared();
         unchanged += (g2 - g0).length_squared();
         n += 1;
     }
     let (ours, unchanged) = ((ours / n as f64).sqrt(), (unchanged / n as f64).sqrt());
     // Measured on lavapipe: 0.050 against 0.086 scene units over 300 points.
-    assert!(n > 200 && ours < 0.75 * unchanged, "motion RMSE at frame 2: {ours} against {unchanged} for the unchanged mesh ({n} points)");
+    assert!(
+        n > 200 && ours < 0.75 * unchanged,
+        "motion RMSE at frame 2: {ours} against {unchanged} for the unchanged mesh ({n} points)"
+    );
 }
 
 #[test]
@@ -116,11 +180,14 @@ fn a_non_finite_frame_stops_the_run_and_keeps_finished_frames() {
     let dir = temp("nan");
     sequence(&dir.join("data"));
     let out = dir.join("out");
-    run_train(g.ctx(), &job(&dir.join("data"), &out, quick_config(), Some(0..1)), &mut |_| {}).unwrap();
+    run_train(g.ctx(), &job(&dir.join("data"), &out, quick_config(), Some(0..1)), &mut |_| {})
+        .unwrap();
     let mut wild = quick_config();
     wild.learning_rates.positions = 1e30;
     wild.learning_rates.positions_final = 1e30;
-    let error = run_train(g.ctx(), &job(&dir.join("data"), &out, wild, None), &mut |_| {}).unwrap_err().to_string();
+    let error = run_train(g.ctx(), &job(&dir.join("data"), &out, wild, None), &mut |_| {})
+        .unwrap_err()
+        .to_string();
     assert!(error.contains("frame 1") && error.contains("non-finite"), "{error}");
     assert!(out.join("meshes/000000.ply").is_file() && !out.join("meshes/000001.ply").exists());
     let _ = std::fs::remove_dir_all(&dir);
@@ -132,14 +199,33 @@ fn bad_inputs_are_named() {
     let dir = temp("bad");
     sequence(&dir.join("data"));
     // A frame range whose predecessor is missing.
-    let error = run_train(g.ctx(), &job(&dir.join("data"), &dir.join("out"), quick_config(), Some(1..2)), &mut |_| {}).unwrap_err().to_string();
+    let error = run_train(
+        g.ctx(),
+        &job(&dir.join("data"), &dir.join("out"), quick_config(), Some(1..2)),
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
     assert!(error.contains("need frame 0"), "{error}");
-    let error = run_train(g.ctx(), &job(&dir.join("data"), &dir.join("out"), quick_config(), Some(0..9)), &mut |_| {}).unwrap_err().to_string();
+    let error = run_train(
+        g.ctx(),
+        &job(&dir.join("data"), &dir.join("out"), quick_config(), Some(0..9)),
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
     assert!(error.contains("0..9"), "{error}");
     // A given mesh with an edge shared by three faces.
     let bad = dir.join("fin.obj");
-    std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1 1 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\nf 3 4 5\n").unwrap();
-    let with_mesh = TrainJob { mesh: Some(bad), ..job(&dir.join("data"), &dir.join("out2"), quick_config(), None) };
+    std::fs::write(
+        &bad,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1 1 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\nf 3 4 5\n",
+    )
+    .unwrap();
+    let with_mesh = TrainJob {
+        mesh: Some(bad),
+        ..job(&dir.join("data"), &dir.join("out2"), quick_config(), None)
+    };
     let error = run_train(g.ctx(), &with_mesh, &mut |_| {}).unwrap_err().to_string();
     assert!(error.contains("fin.obj") && error.contains("non-manifold"), "{error}");
     let _ = std::fs::remove_dir_all(&dir);
@@ -152,12 +238,32 @@ fn frames_that_lose_the_subject_keep_going_and_say_where() {
     let g = gpu();
     let dir = temp("lost");
     let data = dir.join("data");
-    let options = SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 8, frames: 4, resolution: 96, seed: 5, samples: 2, track_vertices: 10, track_surface: 10, ..Default::default() };
+    let options = SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 3 },
+        views: 8,
+        frames: 4,
+        resolution: 96,
+        seed: 5,
+        samples: 2,
+        track_vertices: 10,
+        track_surface: 10,
+        ..Default::default()
+    };
     generate(&options, &data).unwrap();
-    let meta: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(data.join("dataset.json")).unwrap()).unwrap();
-    let test_cameras: Vec<&str> = meta["test_cameras"].as_array().unwrap().iter().map(|c| c.as_str().unwrap()).collect();
-    let train_cameras: Vec<String> = meta["cameras"].as_array().unwrap().iter().map(|c| c.as_str().unwrap().to_string()).filter(|c| !test_cameras.contains(&c.as_str())).collect();
-    let blank = |camera: &str, t: usize| image::GrayImage::new(96, 96).save(data.join(format!("masks/{camera}/{t:06}.png"))).unwrap();
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(data.join("dataset.json")).unwrap()).unwrap();
+    let test_cameras: Vec<&str> =
+        meta["test_cameras"].as_array().unwrap().iter().map(|c| c.as_str().unwrap()).collect();
+    let train_cameras: Vec<String> = meta["cameras"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_str().unwrap().to_string())
+        .filter(|c| !test_cameras.contains(&c.as_str()))
+        .collect();
+    let blank = |camera: &str, t: usize| {
+        image::GrayImage::new(96, 96).save(data.join(format!("masks/{camera}/{t:06}.png"))).unwrap()
+    };
     blank(&train_cameras[0], 2);
     blank(&train_cameras[2], 2);
     train_cameras.iter().for_each(|c| blank(c, 3));
@@ -178,7 +284,8 @@ fn frames_that_lose_the_subject_keep_going_and_say_where() {
         assert!(out.join(format!("meshes/{t:06}.ply")).is_file(), "frame {t} is written");
     }
     assert!(out.join("sequence.glb").is_file(), "the sequence is exported");
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(json["frames"][3]["stop_reason"], "no_views");
 
     // Frame 3 is frame 2 extrapolated, with no optimisation: a range starting at 3 over a copy
@@ -187,11 +294,18 @@ fn frames_that_lose_the_subject_keep_going_and_say_where() {
     for t in 0..3 {
         for kind in ["gaussians", "meshes"] {
             std::fs::create_dir_all(range.join(kind)).unwrap();
-            std::fs::copy(out.join(format!("{kind}/{t:06}.ply")), range.join(format!("{kind}/{t:06}.ply"))).unwrap();
+            std::fs::copy(
+                out.join(format!("{kind}/{t:06}.ply")),
+                range.join(format!("{kind}/{t:06}.ply")),
+            )
+            .unwrap();
         }
     }
     run_train(g.ctx(), &job(&data, &range, quick_config(), Some(3..4)), &mut |_| {}).unwrap();
     let frame3 = |d: &Path| std::fs::read(d.join("meshes/000003.ply")).unwrap();
-    assert!(frame3(&range) == frame3(&out), "a run over frames 3..4 did not continue from frames 1 and 2");
+    assert!(
+        frame3(&range) == frame3(&out),
+        "a run over frames 3..4 did not continue from frames 1 and 2"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

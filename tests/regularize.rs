@@ -21,13 +21,18 @@ fn cases() -> Vec<(&'static str, Neighbourhoods, GaussianScene, GaussianScene)> 
     let (sp, sf) = icosphere(1);
     let sphere = ManifoldMesh::new(sp.iter().map(|p| p.map(|c| c as f32)).collect(), sf).unwrap();
     let (gp, gf) = grid(4, 3);
-    let disk = ManifoldMesh::new(gp.iter().map(|p| [p[0] * 0.3, p[1] * 0.3, 0.05 * (p[0] * p[1]).sin()]).collect(), gf).unwrap();
+    let disk = ManifoldMesh::new(
+        gp.iter().map(|p| [p[0] * 0.3, p[1] * 0.3, 0.05 * (p[0] * p[1]).sin()]).collect(),
+        gf,
+    )
+    .unwrap();
     let mut r = rng(11);
     [("sphere", sphere), ("disk", disk)]
         .into_iter()
         .map(|(name, mesh)| {
             let nb = Neighbourhoods::from_mesh(&mesh);
-            let base = gaussians_from_mesh(&mesh, &[], &InitConfig { sh_degree: 0, ..Default::default() });
+            let base =
+                gaussians_from_mesh(&mesh, &[], &InitConfig { sh_degree: 0, ..Default::default() });
             let noise = 0.2 * nb.mean_edge_length;
             let current = perturb(&base, &mut r, noise);
             let previous = perturb(&base, &mut r, noise);
@@ -62,7 +67,15 @@ fn params(s: &GaussianScene) -> Params {
 
 /// Each term alone (weight 1.5), then all at their default weights.
 fn weight_sets() -> Vec<(&'static str, Weights)> {
-    let zero = Weights { scale_2d: 0.0, laplacian: 0.0, normal: 0.0, edge_length: 0.0, rigidity: 0.0, rotation: 0.0, lambda_w: 1.0 };
+    let zero = Weights {
+        scale_2d: 0.0,
+        laplacian: 0.0,
+        normal: 0.0,
+        edge_length: 0.0,
+        rigidity: 0.0,
+        rotation: 0.0,
+        lambda_w: 1.0,
+    };
     vec![
         ("scale_2d", Weights { scale_2d: 1.5, ..zero }),
         ("laplacian", Weights { laplacian: 1.5, ..zero }),
@@ -81,7 +94,14 @@ fn weighted(l: &tagsplat::regularize::Losses<f64>, w: &Weights) -> f64 {
 
 /// Every scalar parameter as (array, row, component) for finite differences.
 fn coordinates(n: usize) -> Vec<(usize, usize, usize)> {
-    (0..n).flat_map(|i| (0..3).map(move |k| (0, i, k)).chain((0..3).map(move |k| (1, i, k))).chain((0..4).map(move |k| (2, i, k)))).collect()
+    (0..n)
+        .flat_map(|i| {
+            (0..3)
+                .map(move |k| (0, i, k))
+                .chain((0..3).map(move |k| (1, i, k)))
+                .chain((0..4).map(move |k| (2, i, k)))
+        })
+        .collect()
 }
 
 fn coordinate(p: &mut Params, (array, i, k): (usize, usize, usize)) -> &mut f64 {
@@ -105,11 +125,16 @@ fn reference_gradients_match_central_differences() {
                 *coordinate(&mut plus, c) += h;
                 let mut minus = x.clone();
                 *coordinate(&mut minus, c) -= h;
-                let fd = (weighted(&evaluate(&nb, &plus, Some(&prev), &w).0, &w) - weighted(&evaluate(&nb, &minus, Some(&prev), &w).0, &w)) / (2.0 * h);
+                let fd = (weighted(&evaluate(&nb, &plus, Some(&prev), &w).0, &w)
+                    - weighted(&evaluate(&nb, &minus, Some(&prev), &w).0, &w))
+                    / (2.0 * h);
                 let analytic = *coordinate(&mut grads.clone(), c);
                 let err = (fd - analytic).abs() / (1.0 + analytic.abs());
                 worst = worst.max(err);
-                assert!(err < 1e-5, "{name} {term} {c:?}: analytic {analytic}, central difference {fd}");
+                assert!(
+                    err < 1e-5,
+                    "{name} {term} {c:?}: analytic {analytic}, central difference {fd}"
+                );
             }
             assert!(worst.is_finite());
         }
@@ -121,13 +146,22 @@ fn temporal_terms_vanish_when_nothing_moved_and_need_a_previous_frame() {
     for (name, nb, current, _) in cases() {
         let x = params(&current);
         let (still, _) = evaluate(&nb, &x, Some(&x), &Weights::default());
-        assert!([still.edge_length, still.rigidity, still.rotation].iter().all(|&l| l < 1e-12), "{name}: {still:?}");
+        assert!(
+            [still.edge_length, still.rigidity, still.rotation].iter().all(|&l| l < 1e-12),
+            "{name}: {still:?}"
+        );
         let (none, _) = evaluate(&nb, &x, None, &Weights::default());
         assert_eq!([none.edge_length, none.rigidity, none.rotation], [0.0; 3], "{name}");
         // A rigid motion of the whole frame: edge lengths and 1-ring rigidity are unchanged.
         let q = glam::DQuat::from_axis_angle(glam::DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
         let moved = Params {
-            positions: x.positions.iter().map(|p| (q * glam::DVec3::from_array(*p) + glam::DVec3::new(0.3, -0.1, 0.2)).to_array()).collect(),
+            positions: x
+                .positions
+                .iter()
+                .map(|p| {
+                    (q * glam::DVec3::from_array(*p) + glam::DVec3::new(0.3, -0.1, 0.2)).to_array()
+                })
+                .collect(),
             log_scales: x.log_scales.clone(),
             rotations: x
                 .rotations
@@ -145,7 +179,14 @@ fn temporal_terms_vanish_when_nothing_moved_and_need_a_previous_frame() {
 
 /// Runs the kernels on `scene` with gradients starting at `initial`; returns losses and the
 /// gradient buffers read back.
-fn run_gpu(ctx: &std::sync::Arc<tagsplat::gpu::GpuContext>, reg: &Regularizers, scene: &GaussianScene, previous: &GaussianScene, w: &Weights, initial: f32) -> ([f32; 6], GaussianScene) {
+fn run_gpu(
+    ctx: &std::sync::Arc<tagsplat::gpu::GpuContext>,
+    reg: &Regularizers,
+    scene: &GaussianScene,
+    previous: &GaussianScene,
+    w: &Weights,
+    initial: f32,
+) -> ([f32; 6], GaussianScene) {
     let params = GaussianBuffers::from_scene(ctx, scene).unwrap();
     let prev = GaussianBuffers::from_scene(ctx, previous).unwrap();
     let mut filled = scene.clone();
@@ -170,17 +211,33 @@ fn gpu_matches_the_reference_and_adds_to_existing_gradients() {
             let initial = 0.25;
             let (got, got_grads) = run_gpu(g.ctx(), &reg, &current, &previous, &w, initial);
             for (k, (g, r)) in got.iter().zip(want.slots()).enumerate() {
-                assert!((*g as f64 - r).abs() <= 1e-4 * (1.0 + r.abs()), "{name} {term} loss slot {k}: GPU {g}, reference {r}");
+                assert!(
+                    (*g as f64 - r).abs() <= 1e-4 * (1.0 + r.abs()),
+                    "{name} {term} loss slot {k}: GPU {g}, reference {r}"
+                );
             }
             let pairs = |a: &GaussianScene, b: &Params| -> Vec<(f64, f64)> {
-                let gpu = a.positions.iter().flatten().chain(a.log_scales.iter().flatten()).chain(a.rotations.iter().flatten());
-                let cpu = b.positions.iter().flatten().chain(b.log_scales.iter().flatten()).chain(b.rotations.iter().flatten());
+                let gpu = a
+                    .positions
+                    .iter()
+                    .flatten()
+                    .chain(a.log_scales.iter().flatten())
+                    .chain(a.rotations.iter().flatten());
+                let cpu = b
+                    .positions
+                    .iter()
+                    .flatten()
+                    .chain(b.log_scales.iter().flatten())
+                    .chain(b.rotations.iter().flatten());
                 gpu.zip(cpu).map(|(g, c)| (*g as f64 - initial as f64, *c)).collect()
             };
             let all = pairs(&got_grads, &want_grads);
             let scale = all.iter().map(|(_, c)| c.abs()).fold(0.0, f64::max);
             for (idx, (g, c)) in all.iter().enumerate() {
-                assert!((g - c).abs() <= 2e-4 * scale.max(1e-3), "{name} {term} gradient {idx}: GPU {g}, reference {c} (scale {scale})");
+                assert!(
+                    (g - c).abs() <= 2e-4 * scale.max(1e-3),
+                    "{name} {term} gradient {idx}: GPU {g}, reference {c} (scale {scale})"
+                );
             }
         }
     }
@@ -194,7 +251,14 @@ fn gpu_gradient_matches_central_differences_of_the_gpu_loss() {
         reg.upload(&nb).unwrap();
         let w = Weights::default();
         let ws = [w.scale_2d, w.laplacian, w.normal, w.edge_length, w.rigidity, w.rotation];
-        let total = |scene: &GaussianScene| run_gpu(g.ctx(), &reg, scene, &previous, &w, 0.0).0.iter().zip(ws).map(|(l, w)| (*l * w) as f64).sum::<f64>();
+        let total = |scene: &GaussianScene| {
+            run_gpu(g.ctx(), &reg, scene, &previous, &w, 0.0)
+                .0
+                .iter()
+                .zip(ws)
+                .map(|(l, w)| (*l * w) as f64)
+                .sum::<f64>()
+        };
         let (_, grads) = run_gpu(g.ctx(), &reg, &current, &previous, &w, 0.0);
         let h = 1e-2 * nb.mean_edge_length;
         // A few vertices, every parameter of each.

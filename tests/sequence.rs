@@ -13,7 +13,12 @@ use tagsplat::mesh::TriMesh;
 /// Largest |a − b| over all coordinates of all frames.
 fn max_difference(a: &MeshSequence, b: &MeshSequence) -> f32 {
     assert_eq!(a.frames.len(), b.frames.len());
-    a.frames.iter().flatten().zip(b.frames.iter().flatten()).flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs())).fold(0.0, f32::max)
+    a.frames
+        .iter()
+        .flatten()
+        .zip(b.frames.iter().flatten())
+        .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
+        .fold(0.0, f32::max)
 }
 
 fn frame0_colours_everywhere(s: &MeshSequence) -> MeshSequence {
@@ -60,7 +65,8 @@ fn glb_round_trips_to_float_precision() {
     assert_eq!(back.colors, frame0_colours_everywhere(&seq).colors);
     assert_eq!(back.frames[0], seq.frames[0], "frame 0 is the base mesh itself");
     // Frame t is base + (v(t) − base), each step rounded once in f32: a few ulps at most.
-    let extent = seq.frames.iter().flatten().flat_map(|p| p.iter()).fold(0.0f32, |m, c| m.max(c.abs()));
+    let extent =
+        seq.frames.iter().flatten().flat_map(|p| p.iter()).fold(0.0f32, |m, c| m.max(c.abs()));
     let difference = max_difference(&back, &seq);
     assert!(difference <= 4.0 * f32::EPSILON * extent, "{difference} at extent {extent}");
     // And through the other formats: GLB -> folder -> GLB keeps the faces and positions.
@@ -73,21 +79,39 @@ fn glb_round_trips_to_float_precision() {
 /// loudly when it is not; TAGSPLAT_REQUIRE_GLTF_VALIDATOR=1 turns that into a failure.
 fn validate_gltf(path: &Path) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let installed = root.join(".tools/gltf-validator/node_modules/gltf-validator/package.json").is_file();
+    let installed =
+        root.join(".tools/gltf-validator/node_modules/gltf-validator/package.json").is_file();
     let node = Command::new("node").arg("--version").output().is_ok_and(|o| o.status.success());
     if !(installed && node) {
-        let why = if node { "gltf-validator is not installed (run scripts/setup.sh)" } else { "node is not on PATH" };
+        let why = if node {
+            "gltf-validator is not installed (run scripts/setup.sh)"
+        } else {
+            "node is not on PATH"
+        };
         if std::env::var("TAGSPLAT_REQUIRE_GLTF_VALIDATOR").is_ok_and(|v| v == "1") {
             panic!("the glTF validator is required but unavailable: {why}");
         }
         // Straight to the process's stderr: libtest's capture hides eprintln! of passing tests.
-        let _ = writeln!(std::io::stderr(), "\n******** SKIPPED the Khronos glTF validator on {}: {why} ********\n", path.display());
+        let _ = writeln!(
+            std::io::stderr(),
+            "\n******** SKIPPED the Khronos glTF validator on {}: {why} ********\n",
+            path.display()
+        );
         return;
     }
-    let out = Command::new("node").arg(root.join("scripts/validate_gltf.cjs")).arg(path).output().unwrap();
+    let out = Command::new("node")
+        .arg(root.join("scripts/validate_gltf.cjs"))
+        .arg(path)
+        .output()
+        .unwrap();
     let report = String::from_utf8_lossy(&out.stdout);
     eprintln!("glTF validator: {report}");
-    assert!(out.status.success(), "the glTF validator rejects {}: {report}{}", path.display(), String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "the glTF validator rejects {}: {report}{}",
+        path.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
     let json: serde_json::Value = serde_json::from_str(report.trim()).unwrap();
     assert_eq!((json["errors"].as_u64(), json["warnings"].as_u64()), (Some(0), Some(0)));
 }
@@ -95,7 +119,10 @@ fn validate_gltf(path: &Path) {
 #[test]
 fn written_glb_passes_the_khronos_validator() {
     let dir = temp_dir("seq-validator");
-    for (name, seq) in [("colours.glb", sequence(2, 5, bend)), ("plain.glb", MeshSequence { colors: None, ..sequence(1, 1, affine) })] {
+    for (name, seq) in [
+        ("colours.glb", sequence(2, 5, bend)),
+        ("plain.glb", MeshSequence { colors: None, ..sequence(1, 1, affine) }),
+    ] {
         let path = dir.join(name);
         seq.write(&path, FrameFormat::Ply, 24.0).unwrap();
         validate_gltf(&path);
@@ -131,7 +158,11 @@ fn damaged_sequences_are_clear_errors_naming_the_frame() {
     changed.faces[7] = [changed.faces[7][1], changed.faces[7][0], changed.faces[7][2]];
     changed.write_ply(&folder.join("frame_000004.ply")).unwrap();
     let e = error_of(&folder);
-    assert!(e.contains("frame_000004.ply") && e.contains("frame 4 differs from frame 0 (frame_000000.ply) at face 7"), "{e}");
+    assert!(
+        e.contains("frame_000004.ply")
+            && e.contains("frame 4 differs from frame 0 (frame_000000.ply) at face 7"),
+        "{e}"
+    );
 
     // Fewer faces, then fewer vertices.
     let mut fewer = seq.frame_mesh(4).unwrap();
@@ -147,7 +178,10 @@ fn damaged_sequences_are_clear_errors_naming_the_frame() {
     // A missing frame file.
     std::fs::remove_file(folder.join("frame_000003.ply")).unwrap();
     let e = error_of(&folder);
-    assert!(e.contains("frame file(s) 3..3 missing between frame_000002.ply and frame_000004.ply"), "{e}");
+    assert!(
+        e.contains("frame file(s) 3..3 missing between frame_000002.ply and frame_000004.ply"),
+        "{e}"
+    );
     // A stray OBJ among PLY frames; an empty folder; no such path.
     std::fs::write(folder.join("notes.obj"), "v 0 0 0\n").unwrap();
     assert!(error_of(&folder).contains("keep one kind of frame file"));
@@ -190,7 +224,14 @@ fn cli_converts_between_every_layout() {
     let seq = sequence(2, 4, bend);
     seq.write_folder(&dir.join("a"), FrameFormat::Ply).unwrap();
     let convert = |from: &str, to: &str, extra: &[&str]| {
-        let out = Command::new(env!("CARGO_BIN_EXE_tagsplat")).args(["convert", "--sequence"]).arg(dir.join(from)).arg("--to").arg(dir.join(to)).args(extra).output().unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+            .args(["convert", "--sequence"])
+            .arg(dir.join(from))
+            .arg("--to")
+            .arg(dir.join(to))
+            .args(extra)
+            .output()
+            .unwrap();
         assert!(out.status.success(), "{from} -> {to}: {}", String::from_utf8_lossy(&out.stderr));
     };
     convert("a", "b.pc2", &[]);
@@ -199,7 +240,16 @@ fn cli_converts_between_every_layout() {
     let back = MeshSequence::read(&dir.join("d")).unwrap();
     assert_eq!(back.faces, seq.faces);
     assert!(max_difference(&back, &seq) < 1e-6);
-    let out = Command::new(env!("CARGO_BIN_EXE_tagsplat")).args(["convert", "--sequence"]).arg(dir.join("missing")).arg("--to").arg(dir.join("x.glb")).output().unwrap();
-    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("missing: no such file or folder"));
+    let out = Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+        .args(["convert", "--sequence"])
+        .arg(dir.join("missing"))
+        .arg("--to")
+        .arg(dir.join("x.glb"))
+        .output()
+        .unwrap();
+    assert!(
+        !out.status.success()
+            && String::from_utf8_lossy(&out.stderr).contains("missing: no such file or folder")
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -22,7 +22,18 @@ fn views(empty: usize) -> Vec<SilhouetteView> {
     let mut out: Vec<SilhouetteView> = eyes
         .iter()
         .map(|&eye| {
-            let camera = Camera::look_at(SIZE, SIZE, f, f, SIZE as f64 / 2.0, SIZE as f64 / 2.0, eye, DVec3::ZERO, DVec3::Z).unwrap();
+            let camera = Camera::look_at(
+                SIZE,
+                SIZE,
+                f,
+                f,
+                SIZE as f64 / 2.0,
+                SIZE as f64 / 2.0,
+                eye,
+                DVec3::ZERO,
+                DVec3::Z,
+            )
+            .unwrap();
             let mask: Vec<f32> = (0..SIZE * SIZE)
                 .map(|p| {
                     let (o, d) = camera.pixel_ray((p % SIZE) as f64 + 0.5, (p / SIZE) as f64 + 0.5);
@@ -44,10 +55,16 @@ fn views(empty: usize) -> Vec<SilhouetteView> {
 /// Points inside and around the sphere, some far outside every view.
 fn points(n: usize, seed: u64) -> Vec<[f64; 3]> {
     let mut r = rng(seed);
-    (0..n).map(|i| {
-        let spread = if i % 5 == 0 { 3.0 } else { 1.2 };
-        [spread * (r.next_f64() - 0.5), spread * (r.next_f64() - 0.5), spread * (r.next_f64() - 0.5)]
-    }).collect()
+    (0..n)
+        .map(|i| {
+            let spread = if i % 5 == 0 { 3.0 } else { 1.2 };
+            [
+                spread * (r.next_f64() - 0.5),
+                spread * (r.next_f64() - 0.5),
+                spread * (r.next_f64() - 0.5),
+            ]
+        })
+        .collect()
 }
 
 #[test]
@@ -67,7 +84,11 @@ fn reference_gradient_matches_central_differences() {
             };
             let numeric = (at(h) - at(-h)) / (2.0 * h);
             let scale = grads.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-            assert!((numeric - grads[i][a]).abs() < 1e-5 * scale, "point {i} axis {a}: {} vs {numeric}", grads[i][a]);
+            assert!(
+                (numeric - grads[i][a]).abs() < 1e-5 * scale,
+                "point {i} axis {a}: {} vs {numeric}",
+                grads[i][a]
+            );
             checked += (grads[i][a] != 0.0) as usize;
         }
     }
@@ -88,13 +109,19 @@ fn gpu_matches_reference_and_adds_to_gradients() {
     let mut rec = Recorder::new(ctx).unwrap();
     term.record(&mut rec, &positions, &grads, 3.0, 0.01).unwrap();
     rec.submit_and_wait().unwrap();
-    let pts32: Vec<[f64; 3]> = flat.chunks(3).map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]).collect();
+    let pts32: Vec<[f64; 3]> =
+        flat.chunks(3).map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]).collect();
     let (value, expect) = silhouette_loss(&pts32, &views, 3.0, 0.01);
     let got = grads.read().unwrap();
     let scale = expect.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     for (i, e) in expect.iter().enumerate() {
         for a in 0..3 {
-            assert!((got[3 * i + a] as f64 - 0.25 - e[a]).abs() < 1e-4 * scale, "point {i} axis {a}: {} vs {}", got[3 * i + a] - 0.25, e[a]);
+            assert!(
+                (got[3 * i + a] as f64 - 0.25 - e[a]).abs() < 1e-4 * scale,
+                "point {i} axis {a}: {} vs {}",
+                got[3 * i + a] - 0.25,
+                e[a]
+            );
         }
     }
     let gpu_value = term.take_loss().unwrap() as f64;
@@ -131,7 +158,8 @@ fn hard_cases() {
     let far = glam::Vec3::from_slice(&g[9..12]);
     assert!(far.dot(glam::Vec3::splat(40.0)) > 0.0, "{far}");
     // No mask anywhere: nothing to record.
-    let empty: Vec<SilhouetteView> = views.iter().map(|v| SilhouetteView { camera: v.camera, field: None }).collect();
+    let empty: Vec<SilhouetteView> =
+        views.iter().map(|v| SilhouetteView { camera: v.camera, field: None }).collect();
     let term = SilhouetteTerm::new(ctx, &empty).unwrap();
     assert_eq!(term.views_without_mask(), &[0, 1, 2]);
 }
@@ -139,8 +167,18 @@ fn hard_cases() {
 /// A 40² view of the sphere with the left half of its mask uncovered by the "render".
 fn coverage_case() -> (Camera, Vec<f32>, Vec<f32>, Vec<[f64; 3]>) {
     let view = &views(0)[1];
-    let camera = Camera { width: 40, height: 40, fx: view.camera.fx * 40.0 / SIZE as f64, fy: view.camera.fy * 40.0 / SIZE as f64, cx: 20.0, cy: 20.0, ..view.camera };
-    let mask: Vec<f32> = (0..1600).map(|p| (((p % 40) as f64 - 19.5).hypot((p / 40) as f64 - 19.5) < 12.0) as u8 as f32).collect();
+    let camera = Camera {
+        width: 40,
+        height: 40,
+        fx: view.camera.fx * 40.0 / SIZE as f64,
+        fy: view.camera.fy * 40.0 / SIZE as f64,
+        cx: 20.0,
+        cy: 20.0,
+        ..view.camera
+    };
+    let mask: Vec<f32> = (0..1600)
+        .map(|p| (((p % 40) as f64 - 19.5).hypot((p / 40) as f64 - 19.5) < 12.0) as u8 as f32)
+        .collect();
     let coverage: Vec<f32> = (0..1600).map(|p| ((p % 40) >= 20) as u8 as f32).collect();
     (camera, mask, coverage, points(300, 7))
 }
@@ -148,7 +186,8 @@ fn coverage_case() -> (Camera, Vec<f32>, Vec<f32>, Vec<[f64; 3]>) {
 #[test]
 fn coverage_reference_matches_central_differences() {
     let (camera, mask, coverage, pts) = coverage_case();
-    let (value, grads) = silhouette::reference::coverage_loss(&pts, &camera, (&mask, &coverage), 8, 2.0, 0.01);
+    let (value, grads) =
+        silhouette::reference::coverage_loss(&pts, &camera, (&mask, &coverage), 8, 2.0, 0.01);
     assert!(value > 0.0);
     let scale = grads.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     let h = 1e-7;
@@ -158,10 +197,15 @@ fn coverage_reference_matches_central_differences() {
             let at = |delta: f64| {
                 let mut p = pts.clone();
                 p[i][a] += delta;
-                silhouette::reference::coverage_loss(&p, &camera, (&mask, &coverage), 8, 2.0, 0.01).0
+                silhouette::reference::coverage_loss(&p, &camera, (&mask, &coverage), 8, 2.0, 0.01)
+                    .0
             };
             let numeric = (at(h) - at(-h)) / (2.0 * h);
-            assert!((numeric - grads[i][a]).abs() < 1e-4 * scale, "point {i} axis {a}: {} vs {numeric}", grads[i][a]);
+            assert!(
+                (numeric - grads[i][a]).abs() < 1e-4 * scale,
+                "point {i} axis {a}: {} vs {numeric}",
+                grads[i][a]
+            );
             checked += (grads[i][a] != 0.0) as usize;
         }
     }
@@ -174,21 +218,38 @@ fn coverage_gpu_matches_reference() {
     let ctx = test.ctx();
     let (camera, mask, coverage, pts) = coverage_case();
     let flat: Vec<f32> = pts.iter().flatten().map(|&v| v as f32).collect();
-    let pts32: Vec<[f64; 3]> = flat.chunks(3).map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]).collect();
+    let pts32: Vec<[f64; 3]> =
+        flat.chunks(3).map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]).collect();
     let positions = GpuBuffer::from_slice(ctx, "positions", &flat).unwrap();
     let grads = GpuBuffer::from_slice(ctx, "gradients", &vec![0.5f32; flat.len()]).unwrap();
-    let target = GpuBuffer::from_slice(ctx, "target", &mask.iter().map(|&m| [0.0, 0.0, 0.0, m]).collect::<Vec<_>>()).unwrap();
-    let render = GpuBuffer::from_slice(ctx, "render", &coverage.iter().map(|&c| [0.0, 0.0, 0.0, c]).collect::<Vec<_>>()).unwrap();
+    let target = GpuBuffer::from_slice(
+        ctx,
+        "target",
+        &mask.iter().map(|&m| [0.0, 0.0, 0.0, m]).collect::<Vec<_>>(),
+    )
+    .unwrap();
+    let render = GpuBuffer::from_slice(
+        ctx,
+        "render",
+        &coverage.iter().map(|&c| [0.0, 0.0, 0.0, c]).collect::<Vec<_>>(),
+    )
+    .unwrap();
     let term = silhouette::CoverageTerm::new(ctx, pts.len(), 1600, 8).unwrap();
     let mut rec = Recorder::new(ctx).unwrap();
     term.record(&mut rec, &camera, (&target, &render), &positions, &grads, 2.0, 0.01).unwrap();
     rec.submit_and_wait().unwrap();
-    let (value, expect) = silhouette::reference::coverage_loss(&pts32, &camera, (&mask, &coverage), 8, 2.0, 0.01);
+    let (value, expect) =
+        silhouette::reference::coverage_loss(&pts32, &camera, (&mask, &coverage), 8, 2.0, 0.01);
     let got = grads.read().unwrap();
     let scale = expect.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     for (i, e) in expect.iter().enumerate() {
         for a in 0..3 {
-            assert!((got[3 * i + a] as f64 - 0.5 - e[a]).abs() < 1e-4 * scale, "point {i} axis {a}: {} vs {}", got[3 * i + a] - 0.5, e[a]);
+            assert!(
+                (got[3 * i + a] as f64 - 0.5 - e[a]).abs() < 1e-4 * scale,
+                "point {i} axis {a}: {} vs {}",
+                got[3 * i + a] - 0.5,
+                e[a]
+            );
         }
     }
     let gpu_value = term.take_loss().unwrap() as f64;
@@ -196,5 +257,7 @@ fn coverage_gpu_matches_reference() {
     // A view larger than the buffers is refused, not overrun.
     let big = Camera { width: 41, ..camera };
     let mut rec = Recorder::new(ctx).unwrap();
-    assert!(term.record(&mut rec, &big, (&target, &render), &positions, &grads, 2.0, 0.01).is_err());
+    assert!(term
+        .record(&mut rec, &big, (&target, &render), &positions, &grads, 2.0, 0.01)
+        .is_err());
 }

@@ -20,7 +20,10 @@ fn scan_matches_cpu_at_edge_sizes() {
     let gpu = common::gpu();
     let mut rng = common::rng(1);
     // Around one and two blocks for any workgroup size the device picks, and a deep recursion.
-    for len in [0, 1, 2, 3, 255, 256, 257, 511, 512, 513, 1023, 1024, 1025, 2047, 2048, 2049, 4097, 262_145, 1_234_567] {
+    for len in [
+        0, 1, 2, 3, 255, 256, 257, 511, 512, 513, 1023, 1024, 1025, 2047, 2048, 2049, 4097,
+        262_145, 1_234_567,
+    ] {
         let data: Vec<u32> = (0..len).map(|_| rng.next_u32() % 1000).collect();
         assert_eq!(gpu_scan(&gpu, &data), exclusive_scan_cpu(&data), "len {len}");
     }
@@ -46,15 +49,29 @@ fn tunings(gpu: &common::TestGpu) -> Vec<RadixTuning> {
 
 /// Sorts on the GPU with every variant and checks against the CPU: keys equal `sort_unstable`
 /// of the masked keys, and values show the sort is stable (equal keys keep their input order).
-fn check_sort<K: RadixKey + std::fmt::Debug>(gpu: &common::TestGpu, keys: &[K], bits: u32, what: &str) {
+fn check_sort<K: RadixKey + std::fmt::Debug>(
+    gpu: &common::TestGpu,
+    keys: &[K],
+    bits: u32,
+    what: &str,
+) {
     for tuning in tunings(gpu) {
         let bucket_path = check_sort_with(gpu, keys, bits, &format!("{what} ({tuning:?})"), tuning);
-        assert!(!bucket_path || tuning.max_bucket_len() > 0, "{what}: bucket path taken with buckets capped at 0");
+        assert!(
+            !bucket_path || tuning.max_bucket_len() > 0,
+            "{what}: bucket path taken with buckets capped at 0"
+        );
     }
 }
 
 /// Returns whether the sort took the bucket path.
-fn check_sort_with<K: RadixKey + std::fmt::Debug>(gpu: &common::TestGpu, keys: &[K], bits: u32, what: &str, tuning: RadixTuning) -> bool {
+fn check_sort_with<K: RadixKey + std::fmt::Debug>(
+    gpu: &common::TestGpu,
+    keys: &[K],
+    bits: u32,
+    what: &str,
+    tuning: RadixTuning,
+) -> bool {
     let n = keys.len();
     let values: Vec<u32> = (0..n as u32).collect();
     let key_buffer = GpuBuffer::from_slice(gpu.ctx(), "keys", keys).unwrap();
@@ -99,7 +116,12 @@ fn sort_u32_partial_bits() {
     let gpu = common::gpu();
     let n = 50_000;
     for bits in [1, 13] {
-        check_sort(&gpu, &random_keys(n, bits as u64, |x| (x as u32).low_bits(bits)), bits, "in range");
+        check_sort(
+            &gpu,
+            &random_keys(n, bits as u64, |x| (x as u32).low_bits(bits)),
+            bits,
+            "in range",
+        );
         // Garbage above `bits` must not change the order.
         check_sort(&gpu, &random_keys(n, 77 + bits as u64, |x| x as u32), bits, "high garbage");
     }
@@ -111,7 +133,12 @@ fn sort_u64_keys() {
     let gpu = common::gpu();
     let n = 40_001;
     for bits in [1, 13, 32, 48, 64] {
-        check_sort(&gpu, &random_keys(n, 100 + bits as u64, |x| x.low_bits(bits)), bits, "u64 uniform");
+        check_sort(
+            &gpu,
+            &random_keys(n, 100 + bits as u64, |x| x.low_bits(bits)),
+            bits,
+            "u64 uniform",
+        );
     }
     // Tile id in the high word, depth in the low word: the binning key layout.
     check_sort(&gpu, &random_keys(n, 5, |x| ((x % 37) << 32) | (x >> 40)), 48, "few tiles");
@@ -131,11 +158,19 @@ fn sort_millions_non_power_of_two() {
 
 /// Keys whose top digit (the `bits` - 8 bits up) is 0 for `heavy` of them and spread over the
 /// other 255 values for the rest, in random order.
-fn one_heavy_bucket<K: RadixKey>(heavy: usize, rest: usize, bits: u32, seed: u64, make: impl Fn(u64) -> K) -> Vec<K> {
+fn one_heavy_bucket<K: RadixKey>(
+    heavy: usize,
+    rest: usize,
+    bits: u32,
+    seed: u64,
+    make: impl Fn(u64) -> K,
+) -> Vec<K> {
     let mut rng = common::rng(seed);
     let low_mask = (1u64 << (bits - 8)) - 1;
     let mut keys: Vec<u64> = (0..heavy).map(|_| rng.next_u64() & low_mask).collect();
-    keys.extend((0..rest).map(|_| ((1 + rng.next_u64() % 255) << (bits - 8)) | (rng.next_u64() & low_mask)));
+    keys.extend(
+        (0..rest).map(|_| ((1 + rng.next_u64() % 255) << (bits - 8)) | (rng.next_u64() & low_mask)),
+    );
     for i in (1..keys.len()).rev() {
         keys.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
     }
@@ -156,13 +191,33 @@ fn sort_bucket_at_its_limit() {
     }
     for heavy in [u32_limit, u32_limit + 1] {
         let keys = one_heavy_bucket(heavy, 60_000, 32, heavy as u64, |x| x as u32);
-        let bucket_path = check_sort_with(&gpu, &keys, 32, &format!("u32 bucket of {heavy}, limit {u32_limit}"), tuning);
-        assert_eq!(bucket_path, heavy == u32_limit, "u32 bucket of {heavy}, limit {u32_limit}: wrong path");
+        let bucket_path = check_sort_with(
+            &gpu,
+            &keys,
+            32,
+            &format!("u32 bucket of {heavy}, limit {u32_limit}"),
+            tuning,
+        );
+        assert_eq!(
+            bucket_path,
+            heavy == u32_limit,
+            "u32 bucket of {heavy}, limit {u32_limit}: wrong path"
+        );
     }
     for heavy in [u64_limit, u64_limit + 1] {
         let keys = one_heavy_bucket(heavy, 30_000, 64, heavy as u64, |x| x);
-        let bucket_path = check_sort_with(&gpu, &keys, 64, &format!("u64 bucket of {heavy}, limit {u64_limit}"), tuning);
-        assert_eq!(bucket_path, heavy == u64_limit, "u64 bucket of {heavy}, limit {u64_limit}: wrong path");
+        let bucket_path = check_sort_with(
+            &gpu,
+            &keys,
+            64,
+            &format!("u64 bucket of {heavy}, limit {u64_limit}"),
+            tuning,
+        );
+        assert_eq!(
+            bucket_path,
+            heavy == u64_limit,
+            "u64 bucket of {heavy}, limit {u64_limit}: wrong path"
+        );
     }
 }
 

@@ -19,7 +19,8 @@ fn random_camera(rng: &mut SplitMix64, width: u32, height: u32) -> Camera {
     let eye = direction * (3.0 + 1.5 * u());
     let f = width.max(height) as f64 * (0.9 + 0.6 * u());
     let (cx, cy) = (width as f64 * (0.4 + 0.2 * u()), height as f64 * (0.4 + 0.2 * u()));
-    Camera::look_at(width, height, f, f * (0.95 + 0.1 * u()), cx, cy, eye, DVec3::ZERO, DVec3::Y).unwrap()
+    Camera::look_at(width, height, f, f * (0.95 + 0.1 * u()), cx, cy, eye, DVec3::ZERO, DVec3::Y)
+        .unwrap()
 }
 
 struct GpuRender {
@@ -27,7 +28,12 @@ struct GpuRender {
     depth: Vec<f32>,
 }
 
-fn render(ctx: &Arc<GpuContext>, scene: &GaussianScene, camera: &Camera, settings: &RenderSettings) -> GpuRender {
+fn render(
+    ctx: &Arc<GpuContext>,
+    scene: &GaussianScene,
+    camera: &Camera,
+    settings: &RenderSettings,
+) -> GpuRender {
     let buffers = GaussianBuffers::from_scene(ctx, scene).unwrap();
     let mut splatter = Splatter::new(ctx).unwrap();
     splatter.forward(&buffers, camera, settings).unwrap();
@@ -38,12 +44,22 @@ fn render(ctx: &Arc<GpuContext>, scene: &GaussianScene, camera: &Camera, setting
 fn assert_matches_reference(gpu: &GpuRender, reference: &reference::Image, what: &str) {
     let mut worst = 0.0f64;
     for (p, rgba) in gpu.rgba.iter().enumerate() {
-        let expected = [reference.color[p][0], reference.color[p][1], reference.color[p][2], reference.alpha[p]];
+        let expected = [
+            reference.color[p][0],
+            reference.color[p][1],
+            reference.color[p][2],
+            reference.alpha[p],
+        ];
         for c in 0..4 {
             worst = worst.max((rgba[c] as f64 - expected[c]).abs());
         }
         let depth_error = (gpu.depth[p] as f64 - reference.depth[p]).abs();
-        assert!(depth_error <= 1e-4 * reference.depth[p].abs().max(1.0), "{what}: depth at pixel {p}: {} vs {}", gpu.depth[p], reference.depth[p]);
+        assert!(
+            depth_error <= 1e-4 * reference.depth[p].abs().max(1.0),
+            "{what}: depth at pixel {p}: {} vs {}",
+            gpu.depth[p],
+            reference.depth[p]
+        );
     }
     assert!(worst <= 1e-4, "{what}: max colour/alpha error {worst:.2e}");
 }
@@ -57,9 +73,17 @@ fn forward_matches_reference() {
         for degree in 0..=3 {
             let scene = random_scene(60 + 40 * case, degree, rng.next_u64());
             let camera = random_camera(&mut rng, width, height);
-            let settings = RenderSettings { background: [0.1, 0.5, 0.9], sh_degree: degree, ..Default::default() };
+            let settings = RenderSettings {
+                background: [0.1, 0.5, 0.9],
+                sh_degree: degree,
+                ..Default::default()
+            };
             let what = format!("{width}x{height}, SH degree {degree}");
-            assert_matches_reference(&render(gpu.ctx(), &scene, &camera, &settings), &reference::render(&scene, &camera, &settings), &what);
+            assert_matches_reference(
+                &render(gpu.ctx(), &scene, &camera, &settings),
+                &reference::render(&scene, &camera, &settings),
+                &what,
+            );
         }
     }
 }
@@ -70,9 +94,16 @@ fn mask_mode_and_lower_active_degree_match_reference() {
     let mut rng = common::rng(2);
     let scene = random_scene(80, 3, 7);
     let camera = random_camera(&mut rng, 50, 37);
-    for settings in [RenderSettings { mask_mode: true, ..Default::default() }, RenderSettings { sh_degree: 1, background: [1.0; 3], ..Default::default() }] {
+    for settings in [
+        RenderSettings { mask_mode: true, ..Default::default() },
+        RenderSettings { sh_degree: 1, background: [1.0; 3], ..Default::default() },
+    ] {
         let what = format!("{settings:?}");
-        assert_matches_reference(&render(gpu.ctx(), &scene, &camera, &settings), &reference::render(&scene, &camera, &settings), &what);
+        assert_matches_reference(
+            &render(gpu.ctx(), &scene, &camera, &settings),
+            &reference::render(&scene, &camera, &settings),
+            &what,
+        );
     }
 }
 
@@ -91,15 +122,29 @@ fn projection_and_binning_match_reference() {
     let mut expected_intersections = 0;
     for (i, splat) in splats.iter().enumerate() {
         let Some(p) = reference::project(&scene, &camera, &settings, i) else {
-            assert!(splat.touches_no_tile(), "Gaussian {i} is culled by the reference but not on the GPU");
+            assert!(
+                splat.touches_no_tile(),
+                "Gaussian {i} is culled by the reference but not on the GPU"
+            );
             continue;
         };
         let close = |a: f32, b: f64, scale: f64| (a as f64 - b).abs() <= 1e-4 * scale.max(b.abs());
-        assert!(close(splat.mean[0], p.mean[0], 100.0) && close(splat.mean[1], p.mean[1], 100.0), "mean of {i}");
-        assert!(close(splat.depth, p.depth, 1.0) && close(splat.opacity, p.opacity, 1.0), "depth/opacity of {i}");
+        assert!(
+            close(splat.mean[0], p.mean[0], 100.0) && close(splat.mean[1], p.mean[1], 100.0),
+            "mean of {i}"
+        );
+        assert!(
+            close(splat.depth, p.depth, 1.0) && close(splat.opacity, p.opacity, 1.0),
+            "depth/opacity of {i}"
+        );
         let conic_scale = p.conic.iter().fold(0.0f64, |m, c| m.max(c.abs()));
         for c in 0..3 {
-            assert!(close(splat.conic[c], p.conic[c], conic_scale), "conic of {i}: {:?} vs {:?}", splat.conic, p.conic);
+            assert!(
+                close(splat.conic[c], p.conic[c], conic_scale),
+                "conic of {i}: {:?} vs {:?}",
+                splat.conic,
+                p.conic
+            );
             assert!(close(splat.color[c], p.color[c], 1.0), "colour of {i}");
         }
         expected_intersections += reference::tiles_touched(&p, camera.width, camera.height).len();
@@ -116,15 +161,31 @@ struct LossGradients {
 
 fn random_loss_gradients(rng: &mut SplitMix64, pixels: usize) -> LossGradients {
     let mut u = || rng.next_f64() - 0.5;
-    LossGradients { color: (0..pixels).map(|_| [u(), u(), u()]).collect(), alpha: (0..pixels).map(|_| u()).collect(), depth: (0..pixels).map(|_| 0.1 * u()).collect() }
+    LossGradients {
+        color: (0..pixels).map(|_| [u(), u(), u()]).collect(),
+        alpha: (0..pixels).map(|_| u()).collect(),
+        depth: (0..pixels).map(|_| 0.1 * u()).collect(),
+    }
 }
 
 /// GPU gradients as a host scene (every parameter kind in its usual array).
-fn gpu_gradients(ctx: &Arc<GpuContext>, scene: &GaussianScene, camera: &Camera, settings: &RenderSettings, loss: &LossGradients) -> (GaussianScene, Vec<[f32; 2]>) {
+fn gpu_gradients(
+    ctx: &Arc<GpuContext>,
+    scene: &GaussianScene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    loss: &LossGradients,
+) -> (GaussianScene, Vec<[f32; 2]>) {
     let buffers = GaussianBuffers::from_scene(ctx, scene).unwrap();
     let grads = GaussianBuffers::shaped_like(ctx, &buffers).unwrap();
-    let stats = GpuBuffer::from_slice(ctx, "densify stats", &vec![[0.0f32; 2]; scene.len()]).unwrap();
-    let rgba: Vec<[f32; 4]> = loss.color.iter().zip(&loss.alpha).map(|(c, &a)| [c[0] as f32, c[1] as f32, c[2] as f32, a as f32]).collect();
+    let stats =
+        GpuBuffer::from_slice(ctx, "densify stats", &vec![[0.0f32; 2]; scene.len()]).unwrap();
+    let rgba: Vec<[f32; 4]> = loss
+        .color
+        .iter()
+        .zip(&loss.alpha)
+        .map(|(c, &a)| [c[0] as f32, c[1] as f32, c[2] as f32, a as f32])
+        .collect();
     let depth: Vec<f32> = loss.depth.iter().map(|&d| d as f32).collect();
     let grad_rgba = GpuBuffer::from_slice(ctx, "colour gradients", &rgba).unwrap();
     let grad_depth = GpuBuffer::from_slice(ctx, "depth gradients", &depth).unwrap();
@@ -143,19 +204,32 @@ fn gpu_gradients(ctx: &Arc<GpuContext>, scene: &GaussianScene, camera: &Camera, 
 fn assert_gradients_close(kind: &str, gpu: &[f32], expected: &[f64]) {
     assert_eq!(gpu.len(), expected.len(), "{kind}: lengths");
     let largest = expected.iter().fold(0.0f64, |m, g| m.max(g.abs()));
-    assert!(largest > 0.0, "{kind}: the reference gradient is zero everywhere, the test would prove nothing");
+    assert!(
+        largest > 0.0,
+        "{kind}: the reference gradient is zero everywhere, the test would prove nothing"
+    );
     for (i, (&g, &e)) in gpu.iter().zip(expected).enumerate() {
         let error = (g as f64 - e).abs();
         let allowed = if e.abs() > 1e-2 * largest { 1e-3 * e.abs() } else { 5e-5 * largest };
-        assert!(error <= allowed, "{kind}[{i}]: GPU {g:e} vs reference {e:e} (largest {largest:e})");
+        assert!(
+            error <= allowed,
+            "{kind}[{i}]: GPU {g:e} vs reference {e:e} (largest {largest:e})"
+        );
     }
 }
 
-fn check_gradients(ctx: &Arc<GpuContext>, scene: &GaussianScene, camera: &Camera, settings: &RenderSettings, rng: &mut SplitMix64) {
+fn check_gradients(
+    ctx: &Arc<GpuContext>,
+    scene: &GaussianScene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    rng: &mut SplitMix64,
+) {
     let pixels = (camera.width * camera.height) as usize;
     let loss = random_loss_gradients(rng, pixels);
     let (gpu, stats) = gpu_gradients(ctx, scene, camera, settings, &loss);
-    let expected = reference::backward(scene, camera, settings, &loss.color, &loss.alpha, &loss.depth);
+    let expected =
+        reference::backward(scene, camera, settings, &loss.color, &loss.alpha, &loss.depth);
     let flat3 = |rows: &[[f64; 3]]| rows.iter().flatten().copied().collect::<Vec<f64>>();
     assert_gradients_close("positions", &gpu.positions.concat(), &flat3(&expected.positions));
     assert_gradients_close("log_scales", &gpu.log_scales.concat(), &flat3(&expected.log_scales));
@@ -164,7 +238,9 @@ fn check_gradients(ctx: &Arc<GpuContext>, scene: &GaussianScene, camera: &Camera
         assert_gradients_close("opacity_logits", &gpu.opacity_logits, &expected.opacity_logits);
         let active = tagsplat::splat::sh_coefficients(settings.sh_degree.min(scene.sh_degree)) * 3;
         let per = scene.coefficients() * 3;
-        let pick = |all: Vec<f64>| all.chunks(per).flat_map(|c| c[..active].to_vec()).collect::<Vec<f64>>();
+        let pick = |all: Vec<f64>| {
+            all.chunks(per).flat_map(|c| c[..active].to_vec()).collect::<Vec<f64>>()
+        };
         let gpu_sh: Vec<f64> = gpu.sh.iter().map(|&g| g as f64).collect();
         let gpu_sh: Vec<f32> = pick(gpu_sh).into_iter().map(|g| g as f32).collect();
         assert_gradients_close("sh", &gpu_sh, &pick(expected.sh.clone()));
@@ -182,12 +258,19 @@ fn gradients_match_reference() {
     for degree in [0, 1, 3] {
         let scene = random_scene(40, degree, rng.next_u64());
         let camera = random_camera(&mut rng, 47, 35);
-        let settings = RenderSettings { background: [0.3, 0.2, 0.7], sh_degree: degree, ..Default::default() };
+        let settings =
+            RenderSettings { background: [0.3, 0.2, 0.7], sh_degree: degree, ..Default::default() };
         check_gradients(gpu.ctx(), &scene, &camera, &settings, &mut rng);
     }
     let scene = random_scene(40, 2, 99);
     let camera = random_camera(&mut rng, 33, 40);
-    check_gradients(gpu.ctx(), &scene, &camera, &RenderSettings { mask_mode: true, ..Default::default() }, &mut rng);
+    check_gradients(
+        gpu.ctx(),
+        &scene,
+        &camera,
+        &RenderSettings { mask_mode: true, ..Default::default() },
+        &mut rng,
+    );
 }
 
 /// A single Gaussian scene with default parameters, to be edited by each hard case.
@@ -204,7 +287,18 @@ fn one_gaussian(position: [f32; 3], log_scale: [f32; 3]) -> GaussianScene {
 
 fn front_camera(width: u32, height: u32) -> Camera {
     let f = 1.2 * width as f64;
-    Camera::look_at(width, height, f, f, width as f64 / 2.0, height as f64 / 2.0, DVec3::new(0.0, 0.0, -4.0), DVec3::ZERO, DVec3::Y).unwrap()
+    Camera::look_at(
+        width,
+        height,
+        f,
+        f,
+        width as f64 / 2.0,
+        height as f64 / 2.0,
+        DVec3::new(0.0, 0.0, -4.0),
+        DVec3::ZERO,
+        DVec3::Y,
+    )
+    .unwrap()
 }
 
 #[test]
@@ -214,9 +308,16 @@ fn empty_and_single_gaussian_scenes() {
     let settings = RenderSettings { background: [0.25, 0.5, 0.75], ..Default::default() };
     let empty = GaussianScene::default();
     let image = render(gpu.ctx(), &empty, &camera, &settings);
-    assert!(image.rgba.iter().all(|p| *p == [0.25, 0.5, 0.75, 0.0]) && image.depth.iter().all(|&d| d == 0.0));
+    assert!(
+        image.rgba.iter().all(|p| *p == [0.25, 0.5, 0.75, 0.0])
+            && image.depth.iter().all(|&d| d == 0.0)
+    );
     let single = one_gaussian([0.1, -0.05, 0.2], [-1.5; 3]);
-    assert_matches_reference(&render(gpu.ctx(), &single, &camera, &settings), &reference::render(&single, &camera, &settings), "one Gaussian");
+    assert_matches_reference(
+        &render(gpu.ctx(), &single, &camera, &settings),
+        &reference::render(&single, &camera, &settings),
+        "one Gaussian",
+    );
 }
 
 /// Hard cases: each scene renders finite pixels that match the reference, and gradients stay
@@ -238,20 +339,51 @@ fn hard_cases_stay_finite_and_match_reference() {
         ("sheet 1e6", one_gaussian([0.2, 0.1, 0.0], [0.0, 0.0, -13.8])),
         ("sub-pixel", one_gaussian([0.01, 0.02, 0.0], [-9.0; 3])),
         ("covers the whole image", one_gaussian([0.0, 0.0, 0.0], [3.0; 3])),
-        ("zero quaternion", GaussianScene { rotations: vec![[0.0; 4]], ..one_gaussian([0.0; 3], [-1.0; 3]) }),
-        ("denormal quaternion", GaussianScene { rotations: vec![[1e-40, 0.0, 1e-41, 0.0]], ..one_gaussian([0.0; 3], [-1.0; 3]) }),
-        ("tiny normal quaternion", GaussianScene { rotations: vec![[3e-30, 1e-30, 0.0, 2e-30]], ..one_gaussian([0.0; 3], [-1.0; 3]) }),
-        ("opacity logit +50", GaussianScene { opacity_logits: vec![50.0], ..one_gaussian([0.0; 3], [-1.0; 3]) }),
-        ("opacity logit -50", GaussianScene { opacity_logits: vec![-50.0], ..one_gaussian([0.0; 3], [-1.0; 3]) }),
+        (
+            "zero quaternion",
+            GaussianScene { rotations: vec![[0.0; 4]], ..one_gaussian([0.0; 3], [-1.0; 3]) },
+        ),
+        (
+            "denormal quaternion",
+            GaussianScene {
+                rotations: vec![[1e-40, 0.0, 1e-41, 0.0]],
+                ..one_gaussian([0.0; 3], [-1.0; 3])
+            },
+        ),
+        (
+            "tiny normal quaternion",
+            GaussianScene {
+                rotations: vec![[3e-30, 1e-30, 0.0, 2e-30]],
+                ..one_gaussian([0.0; 3], [-1.0; 3])
+            },
+        ),
+        (
+            "opacity logit +50",
+            GaussianScene { opacity_logits: vec![50.0], ..one_gaussian([0.0; 3], [-1.0; 3]) },
+        ),
+        (
+            "opacity logit -50",
+            GaussianScene { opacity_logits: vec![-50.0], ..one_gaussian([0.0; 3], [-1.0; 3]) },
+        ),
     ];
     for (what, scene) in cases {
         let image = render(gpu.ctx(), &scene, &camera, &settings);
-        assert!(image.rgba.iter().flatten().chain(&image.depth).all(|v| v.is_finite()), "{what}: non-finite output");
+        assert!(
+            image.rgba.iter().flatten().chain(&image.depth).all(|v| v.is_finite()),
+            "{what}: non-finite output"
+        );
         assert_matches_reference(&image, &reference::render(&scene, &camera, &settings), what);
         let pixels = (camera.width * camera.height) as usize;
         let loss = random_loss_gradients(&mut rng, pixels);
         let (grads, _) = gpu_gradients(gpu.ctx(), &scene, &camera, &settings, &loss);
-        let all = grads.positions.concat().into_iter().chain(grads.log_scales.concat()).chain(grads.rotations.concat()).chain(grads.opacity_logits).chain(grads.sh);
+        let all = grads
+            .positions
+            .concat()
+            .into_iter()
+            .chain(grads.log_scales.concat())
+            .chain(grads.rotations.concat())
+            .chain(grads.opacity_logits)
+            .chain(grads.sh);
         assert!(all.into_iter().all(f32::is_finite), "{what}: non-finite gradient");
     }
 }
@@ -290,10 +422,18 @@ fn non_finite_gaussian_never_poisons_neighbours() {
         assert_eq!(image.rgba, clean_image.rgba, "{what}: pixels changed");
         let (grads, _) = gpu_gradients(gpu.ctx(), &scene, &camera, &settings, &loss);
         // Float atomics add in any order, so equal up to rounding.
-        let same = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-5 * (1.0 + y.abs()));
-        assert!(same(&grads.positions[..last].concat(), &clean_grads.positions.concat()), "{what}: gradients changed");
+        let same = |a: &[f32], b: &[f32]| {
+            a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-5 * (1.0 + y.abs()))
+        };
+        assert!(
+            same(&grads.positions[..last].concat(), &clean_grads.positions.concat()),
+            "{what}: gradients changed"
+        );
         assert!(same(&grads.sh[..clean.sh.len()], &clean_grads.sh), "{what}: SH gradients changed");
-        assert!(grads.positions[last].iter().all(|&g| g == 0.0), "{what}: the skipped Gaussian got a gradient");
+        assert!(
+            grads.positions[last].iter().all(|&g| g == 0.0),
+            "{what}: the skipped Gaussian got a gradient"
+        );
     }
 }
 
@@ -314,7 +454,11 @@ fn tens_of_thousands_stacked_in_one_tile() {
     }
     let settings = RenderSettings::default();
     let image = render(gpu.ctx(), &scene, &camera, &settings);
-    assert_matches_reference(&image, &reference::render(&scene, &camera, &settings), "30 000 stacked Gaussians");
+    assert_matches_reference(
+        &image,
+        &reference::render(&scene, &camera, &settings),
+        "30 000 stacked Gaussians",
+    );
 }
 
 /// More Gaussians in one tile than lavapipe lets one loop walk one at a time (65 535
@@ -338,7 +482,8 @@ fn check_one_deep_tile(n: usize) {
     let opacity: f64 = 0.006;
     for i in 0..n {
         let pixel = i % 256;
-        let (origin, direction) = camera.pixel_ray((pixel % 16) as f64 + 0.5, (pixel / 16) as f64 + 0.5);
+        let (origin, direction) =
+            camera.pixel_ray((pixel % 16) as f64 + 0.5, (pixel / 16) as f64 + 0.5);
         let position = origin + direction * (3.0 + 2.0 * rng.next_f64());
         scene.positions.push(position.as_vec3().to_array());
         scene.log_scales.push([(0.002f32).ln(); 3]);
@@ -353,7 +498,8 @@ fn check_one_deep_tile(n: usize) {
 
     let loss = random_loss_gradients(&mut rng, 16 * 16);
     let (grads, _) = gpu_gradients(gpu.ctx(), &scene, &camera, &settings, &loss);
-    let expected = reference::backward(&scene, &camera, &settings, &loss.color, &loss.alpha, &loss.depth);
+    let expected =
+        reference::backward(&scene, &camera, &settings, &loss.color, &loss.alpha, &loss.depth);
     let flat3 = |rows: &[[f64; 3]]| rows.iter().flatten().copied().collect::<Vec<f64>>();
     // f32 compositing 310 deep (transmittance recovered by division) leaves errors near 1e-4
     // of the largest gradient; a Gaussian the walk never reached is off by its whole gradient.
@@ -365,8 +511,12 @@ fn check_one_deep_tile(n: usize) {
     ];
     for (kind, gpu, expected) in kinds {
         let largest = expected.iter().fold(0.0f64, |m, g| m.max(g.abs()));
-        let worst = gpu.iter().zip(&expected).fold(0.0f64, |m, (&g, e)| m.max((g as f64 - e).abs()));
-        assert!(largest > 0.0 && worst <= 1e-3 * largest, "{what}: {kind}: worst error {worst:e}, largest gradient {largest:e}");
+        let worst =
+            gpu.iter().zip(&expected).fold(0.0f64, |m, (&g, e)| m.max((g as f64 - e).abs()));
+        assert!(
+            largest > 0.0 && worst <= 1e-3 * largest,
+            "{what}: {kind}: worst error {worst:e}, largest gradient {largest:e}"
+        );
     }
 }
 
@@ -381,7 +531,9 @@ fn intersections_past_the_capacity_guess_render_again() {
     let settings = RenderSettings::default();
     let mut splatter = Splatter::new(ctx).unwrap();
     let small = one_gaussian([0.0; 3], [-3.0; 3]);
-    splatter.forward(&GaussianBuffers::from_scene(ctx, &small).unwrap(), &camera, &settings).unwrap();
+    splatter
+        .forward(&GaussianBuffers::from_scene(ctx, &small).unwrap(), &camera, &settings)
+        .unwrap();
     let mut big = GaussianScene { sh_degree: 0, ..Default::default() };
     for i in 0..12 {
         let one = one_gaussian([0.05 * i as f32 - 0.3, 0.0, -1.0 + 0.1 * i as f32], [0.7; 3]);
@@ -393,11 +545,22 @@ fn intersections_past_the_capacity_guess_render_again() {
     }
     let buffers = GaussianBuffers::from_scene(ctx, &big).unwrap();
     splatter.forward(&buffers, &camera, &settings).unwrap();
-    let expected: usize = (0..big.len()).filter_map(|i| reference::project(&big, &camera, &settings, i)).map(|p| reference::tiles_touched(&p, 256, 256).len()).sum();
-    assert!(expected > 1024, "the scene must outgrow the smallest capacity ({expected} intersections)");
+    let expected: usize = (0..big.len())
+        .filter_map(|i| reference::project(&big, &camera, &settings, i))
+        .map(|p| reference::tiles_touched(&p, 256, 256).len())
+        .sum();
+    assert!(
+        expected > 1024,
+        "the scene must outgrow the smallest capacity ({expected} intersections)"
+    );
     assert_eq!(splatter.intersections().unwrap(), expected);
-    let image = GpuRender { rgba: splatter.read_rgba().unwrap(), depth: splatter.read_depth().unwrap() };
-    assert_matches_reference(&image, &reference::render(&big, &camera, &settings), "12 screen-filling Gaussians");
+    let image =
+        GpuRender { rgba: splatter.read_rgba().unwrap(), depth: splatter.read_depth().unwrap() };
+    assert_matches_reference(
+        &image,
+        &reference::render(&big, &camera, &settings),
+        "12 screen-filling Gaussians",
+    );
 }
 
 #[test]
@@ -412,7 +575,10 @@ fn ply_round_trip_renders_identically() {
     assert_eq!(back, scene);
     let camera = random_camera(&mut rng, 40, 30);
     let settings = RenderSettings::default();
-    assert_eq!(render(gpu.ctx(), &back, &camera, &settings).rgba, render(gpu.ctx(), &scene, &camera, &settings).rgba);
+    assert_eq!(
+        render(gpu.ctx(), &back, &camera, &settings).rgba,
+        render(gpu.ctx(), &scene, &camera, &settings).rgba
+    );
 }
 
 /// `tagsplat render` writes the PNG, alpha and depth it is asked for, and bad inputs get an
@@ -451,7 +617,10 @@ fn render_cli_outputs_and_bad_inputs() {
         let output = run(&[args[0], args[1], &dir.join("never.png")]);
         let stderr = String::from_utf8_lossy(&output.stderr);
         assert_eq!(output.status.code(), Some(1), "{stderr}");
-        assert!(stderr.contains(&named.display().to_string()) && !stderr.contains("panicked"), "{stderr}");
+        assert!(
+            stderr.contains(&named.display().to_string()) && !stderr.contains("panicked"),
+            "{stderr}"
+        );
         assert!(!dir.join("never.png").exists());
     }
     std::fs::remove_dir_all(&dir).unwrap();

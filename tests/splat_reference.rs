@@ -6,8 +6,12 @@ use glam::{DMat4, DVec3, DVec4};
 use std::path::PathBuf;
 use tagsplat::camera::Camera;
 use tagsplat::rng::SplitMix64;
-use tagsplat::splat::reference::{backward, contributions, project, render, tiles_touched, Gradients, Image, Projected};
-use tagsplat::splat::{sh_coefficients, GaussianScene, RenderSettings, ALPHA_MAX, ALPHA_MIN, TRANSMITTANCE_MIN};
+use tagsplat::splat::reference::{
+    backward, contributions, project, render, tiles_touched, Gradients, Image, Projected,
+};
+use tagsplat::splat::{
+    sh_coefficients, GaussianScene, RenderSettings, ALPHA_MAX, ALPHA_MIN, TRANSMITTANCE_MIN,
+};
 
 // ---------------------------------------------------------------------------------------------
 // Scenes, cameras and the loss.
@@ -31,12 +35,20 @@ fn random_scene(rng: &mut SplitMix64, n: usize, sh_degree: u32) -> GaussianScene
         scene.positions.push([0; 3].map(|_| grid(uniform(rng, -0.8, 0.8))));
         scene.log_scales.push([0; 3].map(|_| grid(uniform(rng, 0.1, 0.45).ln())));
         let rotation = [0; 4].map(|_| uniform(rng, -1.0, 1.0));
-        let rotation = if rotation.iter().map(|v| v * v).sum::<f64>() < 0.1 { [1.0, 0.2, -0.3, 0.1] } else { rotation };
+        let rotation = if rotation.iter().map(|v| v * v).sum::<f64>() < 0.1 {
+            [1.0, 0.2, -0.3, 0.1]
+        } else {
+            rotation
+        };
         scene.rotations.push(rotation.map(grid));
         scene.opacity_logits.push(grid(uniform(rng, -1.5, 6.0)));
         for coefficient in 0..k {
             for _ in 0..3 {
-                let value = if coefficient == 0 { uniform(rng, -2.5, 1.5) } else { uniform(rng, -0.5, 0.5) };
+                let value = if coefficient == 0 {
+                    uniform(rng, -2.5, 1.5)
+                } else {
+                    uniform(rng, -0.5, 0.5)
+                };
                 scene.sh.push(grid(value));
             }
         }
@@ -50,18 +62,30 @@ fn look_at(eye: DVec3, target: DVec3, roll: f64) -> DMat4 {
     let helper = if forward.y.abs() < 0.9 { DVec3::Y } else { DVec3::X };
     let right0 = forward.cross(helper).normalize();
     let down0 = forward.cross(right0);
-    let (right, down) = (right0 * roll.cos() + down0 * roll.sin(), down0 * roll.cos() - right0 * roll.sin());
+    let (right, down) =
+        (right0 * roll.cos() + down0 * roll.sin(), down0 * roll.cos() - right0 * roll.sin());
     let rotation = [right, down, forward];
-    let row = |r: usize| DVec4::new(rotation[r].x, rotation[r].y, rotation[r].z, -rotation[r].dot(eye));
-    DMat4::from_cols_array_2d(&[row(0).to_array(), row(1).to_array(), row(2).to_array(), [0.0, 0.0, 0.0, 1.0]]).transpose()
+    let row =
+        |r: usize| DVec4::new(rotation[r].x, rotation[r].y, rotation[r].z, -rotation[r].dot(eye));
+    DMat4::from_cols_array_2d(&[
+        row(0).to_array(),
+        row(1).to_array(),
+        row(2).to_array(),
+        [0.0, 0.0, 0.0, 1.0],
+    ])
+    .transpose()
 }
 
 /// A 20×13 camera 3.5 to 4.5 units from the origin, looking near it from a random direction.
 fn random_camera(rng: &mut SplitMix64) -> Camera {
-    let direction = DVec3::new(uniform(rng, -1.0, 1.0), uniform(rng, -1.0, 1.0), uniform(rng, -1.0, 1.0)).normalize();
+    let direction =
+        DVec3::new(uniform(rng, -1.0, 1.0), uniform(rng, -1.0, 1.0), uniform(rng, -1.0, 1.0))
+            .normalize();
     let eye = direction * uniform(rng, 3.5, 4.5);
-    let target = DVec3::new(uniform(rng, -0.1, 0.1), uniform(rng, -0.1, 0.1), uniform(rng, -0.1, 0.1));
-    Camera::new(20, 13, 19.0, 18.0, 10.3, 6.4, look_at(eye, target, uniform(rng, -3.0, 3.0))).unwrap()
+    let target =
+        DVec3::new(uniform(rng, -0.1, 0.1), uniform(rng, -0.1, 0.1), uniform(rng, -0.1, 0.1));
+    Camera::new(20, 13, 19.0, 18.0, 10.3, 6.4, look_at(eye, target, uniform(rng, -3.0, 3.0)))
+        .unwrap()
 }
 
 fn settings(mask_mode: bool, sh_degree: u32) -> RenderSettings {
@@ -93,7 +117,12 @@ impl Loss {
         sum
     }
 
-    fn gradients(&self, scene: &GaussianScene, camera: &Camera, settings: &RenderSettings) -> Gradients {
+    fn gradients(
+        &self,
+        scene: &GaussianScene,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Gradients {
         backward(scene, camera, settings, &self.color, &self.alpha, &self.depth)
     }
 }
@@ -121,7 +150,9 @@ fn parameters(scene: &GaussianScene) -> Vec<(Kind, usize, usize)> {
         out.push((Kind::OpacityLogit, i, 0));
         for k in 0..scene.coefficients() {
             let band = (k as f64).sqrt() as u32;
-            out.extend((0..3).map(|ch| (Kind::ShBand(band), i, (i * scene.coefficients() + k) * 3 + ch)));
+            out.extend(
+                (0..3).map(|ch| (Kind::ShBand(band), i, (i * scene.coefficients() + k) * 3 + ch)),
+            );
         }
     }
     out
@@ -154,15 +185,25 @@ fn gradient(g: &Gradients, (kind, i, a): (Kind, usize, usize)) -> f64 {
 type Structure = (Vec<Vec<(usize, bool)>>, Vec<Option<[bool; 3]>>);
 
 fn structure(scene: &GaussianScene, camera: &Camera, settings: &RenderSettings) -> Structure {
-    let pixels = contributions(scene, camera, settings).into_iter().map(|c| c.into_iter().map(|c| (c.gaussian, c.capped)).collect()).collect();
-    let gaussians = (0..scene.len()).map(|i| project(scene, camera, settings, i).map(|p| p.color.map(|c| c == 0.0))).collect();
+    let pixels = contributions(scene, camera, settings)
+        .into_iter()
+        .map(|c| c.into_iter().map(|c| (c.gaussian, c.capped)).collect())
+        .collect();
+    let gaussians = (0..scene.len())
+        .map(|i| project(scene, camera, settings, i).map(|p| p.color.map(|c| c == 0.0)))
+        .collect();
     (pixels, gaussians)
 }
 
 /// Checks the analytic backward against central differences for every parameter, skipping
 /// those whose ±step changes the [`structure`] (the derivative does not exist there; the
 /// configurations are random, so this is rare). Returns (tested, skipped) per kind.
-fn check_gradients(scene: &GaussianScene, camera: &Camera, settings: &RenderSettings, loss: &Loss) -> std::collections::BTreeMap<Kind, (usize, usize)> {
+fn check_gradients(
+    scene: &GaussianScene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    loss: &Loss,
+) -> std::collections::BTreeMap<Kind, (usize, usize)> {
     // 2⁻¹⁶ is exact on the 2⁻¹² grid of the scene values and about 1e-5 of their magnitude;
     // f64 evaluation keeps the rounding error of the difference far below the tolerance.
     let step = 2f64.powi(-16);
@@ -176,7 +217,11 @@ fn check_gradients(scene: &GaussianScene, camera: &Camera, settings: &RenderSett
         let original = *parameter(&mut scene, p);
         let mut side = |sign: f64| {
             *parameter(&mut scene, p) = (f64::from(original) + sign * step) as f32;
-            assert_eq!(f64::from(*parameter(&mut scene, p)), f64::from(original) + sign * step, "step not exact in f32");
+            assert_eq!(
+                f64::from(*parameter(&mut scene, p)),
+                f64::from(original) + sign * step,
+                "step not exact in f32"
+            );
             let value = loss.value(&render(&scene, camera, settings));
             (value, structure(&scene, camera, settings) == base)
         };
@@ -191,7 +236,12 @@ fn check_gradients(scene: &GaussianScene, camera: &Camera, settings: &RenderSett
         let fd = (plus - minus) / (2.0 * step);
         let a = gradient(&analytic, p);
         let tolerance = 1e-3 * a.abs().max(fd.abs()) + 1e-7 * largest + 1e-10;
-        assert!((a - fd).abs() <= tolerance, "{p:?} (mask {}, degree {}): analytic {a:e}, finite difference {fd:e}", settings.mask_mode, settings.sh_degree);
+        assert!(
+            (a - fd).abs() <= tolerance,
+            "{p:?} (mask {}, degree {}): analytic {a:e}, finite difference {fd:e}",
+            settings.mask_mode,
+            settings.sh_degree
+        );
     }
     counts
 }
@@ -199,7 +249,10 @@ fn check_gradients(scene: &GaussianScene, camera: &Camera, settings: &RenderSett
 /// Most parameters of every kind were compared (not skipped), so the check cannot pass empty.
 fn assert_mostly_tested(counts: &std::collections::BTreeMap<Kind, (usize, usize)>) {
     for (kind, &(tested, skipped)) in counts {
-        assert!(tested >= 3 && skipped * 5 <= tested + skipped, "{kind:?}: {tested} tested, {skipped} skipped");
+        assert!(
+            tested >= 3 && skipped * 5 <= tested + skipped,
+            "{kind:?}: {tested} tested, {skipped} skipped"
+        );
     }
 }
 
@@ -218,7 +271,8 @@ fn backward_matches_finite_differences_for_every_parameter_kind() {
                 // coefficients must get exactly zero, as their differences are.
                 let used = if round == 0 { degree } else { degree.saturating_sub(1) };
                 let settings = settings(mask_mode, used);
-                let covered = render(&scene, &camera, &settings).alpha.iter().filter(|&&a| a > 0.0).count();
+                let covered =
+                    render(&scene, &camera, &settings).alpha.iter().filter(|&&a| a > 0.0).count();
                 assert!(covered > 20, "degenerate scene: only {covered} pixels covered");
                 for (kind, (t, s)) in check_gradients(&scene, &camera, &settings, &loss) {
                     let entry = total.entry(kind).or_insert((0, 0));
@@ -240,7 +294,16 @@ fn backward_matches_finite_differences_for_every_parameter_kind() {
 #[test]
 fn backward_matches_finite_differences_beyond_the_guard_band() {
     let mut rng = SplitMix64::new(99);
-    let camera = Camera::new(20, 13, 19.0, 18.0, 10.3, 6.4, DMat4::from_translation(DVec3::new(0.0, 0.0, 4.0))).unwrap();
+    let camera = Camera::new(
+        20,
+        13,
+        19.0,
+        18.0,
+        10.3,
+        6.4,
+        DMat4::from_translation(DVec3::new(0.0, 0.0, 4.0)),
+    )
+    .unwrap();
     let mut scene = random_scene(&mut rng, 3, 1);
     // v.x / v.z = 1.1 at depth 4: beyond the limit (20 − 10.3) / 19 + 0.3 · 20 / 19 ≈ 0.84.
     scene.positions[0] = [4.4, 0.25, 0.0];
@@ -249,7 +312,10 @@ fn backward_matches_finite_differences_beyond_the_guard_band() {
     let settings = settings(false, 1);
     let v = camera.to_camera(DVec3::new(4.4, 0.25, 0.0));
     assert!(v.x / v.z > (20.0 - 10.3) / 19.0 + 0.3 * 20.0 / 19.0 + 0.1);
-    assert!(contributions(&scene, &camera, &settings).iter().flatten().any(|c| c.gaussian == 0), "the far Gaussian must reach the image");
+    assert!(
+        contributions(&scene, &camera, &settings).iter().flatten().any(|c| c.gaussian == 0),
+        "the far Gaussian must reach the image"
+    );
     let loss = Loss::random(&mut rng, 20 * 13);
     assert_mostly_tested(&check_gradients(&scene, &camera, &settings, &loss));
 }
@@ -263,7 +329,13 @@ fn origin_camera(width: u32, height: u32, cx: f64, cy: f64) -> Camera {
 }
 
 /// One Gaussian of degree 0 with colour `color` (through the DC coefficient).
-fn one_gaussian(position: [f32; 3], log_scales: [f32; 3], rotation: [f32; 4], logit: f32, color: [f32; 3]) -> GaussianScene {
+fn one_gaussian(
+    position: [f32; 3],
+    log_scales: [f32; 3],
+    rotation: [f32; 4],
+    logit: f32,
+    color: [f32; 3],
+) -> GaussianScene {
     const C0: f32 = 0.282_094_8;
     GaussianScene {
         positions: vec![position],
@@ -290,12 +362,24 @@ fn concat(a: &GaussianScene, b: &GaussianScene) -> GaussianScene {
 fn assert_finite(image: &Image, gradients: &Gradients) {
     let values = image.color.iter().flatten().chain(&image.alpha).chain(&image.depth);
     assert!(values.into_iter().all(|v| v.is_finite()), "non-finite output");
-    let g = gradients.positions.iter().flatten().chain(gradients.log_scales.iter().flatten()).chain(gradients.rotations.iter().flatten());
-    assert!(g.chain(&gradients.opacity_logits).chain(&gradients.sh).all(|v| v.is_finite()), "non-finite gradient");
+    let g = gradients
+        .positions
+        .iter()
+        .flatten()
+        .chain(gradients.log_scales.iter().flatten())
+        .chain(gradients.rotations.iter().flatten());
+    assert!(
+        g.chain(&gradients.opacity_logits).chain(&gradients.sh).all(|v| v.is_finite()),
+        "non-finite gradient"
+    );
 }
 
 /// Renders and back-propagates a random loss; both must be finite.
-fn render_and_backward(scene: &GaussianScene, camera: &Camera, settings: &RenderSettings) -> (Image, Gradients) {
+fn render_and_backward(
+    scene: &GaussianScene,
+    camera: &Camera,
+    settings: &RenderSettings,
+) -> (Image, Gradients) {
     let loss = Loss::random(&mut SplitMix64::new(7), (camera.width * camera.height) as usize);
     let image = render(scene, camera, settings);
     let gradients = loss.gradients(scene, camera, settings);
@@ -305,7 +389,8 @@ fn render_and_backward(scene: &GaussianScene, camera: &Camera, settings: &Render
 
 fn is_background(image: &Image, settings: &RenderSettings) -> bool {
     let background = settings.background.map(f64::from);
-    image.color.iter().all(|c| *c == background) && image.alpha.iter().chain(&image.depth).all(|&v| v == 0.0)
+    image.color.iter().all(|c| *c == background)
+        && image.alpha.iter().chain(&image.depth).all(|&v| v == 0.0)
 }
 
 #[test]
@@ -313,7 +398,9 @@ fn behind_at_and_near_the_near_plane() {
     let camera = origin_camera(67, 33, 33.5, 16.5);
     let settings = settings(false, 0);
     let log_scales = [0.0; 3];
-    let at = |z: f32| one_gaussian([0.0, 0.0, z], log_scales, [1.0, 0.0, 0.0, 0.0], 1.0, [0.9, 0.2, 0.1]);
+    let at = |z: f32| {
+        one_gaussian([0.0, 0.0, z], log_scales, [1.0, 0.0, 0.0, 0.0], 1.0, [0.9, 0.2, 0.1])
+    };
     // Behind the camera, at its centre, exactly on the near and far planes: culled.
     for z in [-2.0, 0.0, settings.near, settings.far] {
         assert!(project(&at(z), &camera, &settings, 0).is_none(), "z = {z} not culled");
@@ -323,7 +410,8 @@ fn behind_at_and_near_the_near_plane() {
     }
     // Just past the near plane: a huge footprint, but finite everywhere.
     let just_past = at(settings.near + 2f32.powi(-20));
-    let projected = project(&just_past, &camera, &settings, 0).expect("just past the near plane projects");
+    let projected =
+        project(&just_past, &camera, &settings, 0).expect("just past the near plane projects");
     assert!(projected.conic.iter().all(|v| v.is_finite() && v.abs() < 1.0));
     let (image, _) = render_and_backward(&just_past, &camera, &settings);
     assert!(image.alpha.iter().all(|&a| a > 0.5), "a Gaussian at the near plane covers the image");
@@ -333,9 +421,16 @@ fn behind_at_and_near_the_near_plane() {
 fn far_off_screen_gaussians_touch_no_tile_and_change_nothing() {
     let camera = origin_camera(67, 33, 33.5, 16.5);
     let settings = settings(false, 0);
-    let visible = one_gaussian([0.0, 0.0, 3.0], [0.3f32.ln(); 3], [1.0, 0.0, 0.0, 0.0], 1.0, [0.9, 0.2, 0.1]);
+    let visible =
+        one_gaussian([0.0, 0.0, 3.0], [0.3f32.ln(); 3], [1.0, 0.0, 0.0, 0.0], 1.0, [0.9, 0.2, 0.1]);
     for x in [1e3f32, -1e6, 3e30] {
-        let far = one_gaussian([x, 0.5, 3.0], [0.3f32.ln(); 3], [1.0, 0.0, 0.0, 0.0], 1.0, [0.1, 0.2, 0.9]);
+        let far = one_gaussian(
+            [x, 0.5, 3.0],
+            [0.3f32.ln(); 3],
+            [1.0, 0.0, 0.0, 0.0],
+            1.0,
+            [0.1, 0.2, 0.9],
+        );
         if let Some(p) = project(&far, &camera, &settings, 0) {
             assert!(tiles_touched(&p, camera.width, camera.height).is_empty());
         }
@@ -353,8 +448,18 @@ fn needles_and_sheets() {
     let camera = origin_camera(67, 33, 33.5, 16.5);
     let settings = settings(false, 0);
     let (long, thin) = (0.5f64, 0.5e-6f64);
-    for (scales, rotation) in [([long, thin, thin], [1.0f32, 0.0, 0.0, 0.0]), ([long, long, thin], [1.0, 0.0, 0.0, 0.0]), ([thin, long, thin], [0.9, 0.1, -0.3, 0.2])] {
-        let scene = one_gaussian([0.0, 0.0, 3.0], scales.map(|s| s.ln() as f32), rotation, 2.0, [0.5, 0.6, 0.7]);
+    for (scales, rotation) in [
+        ([long, thin, thin], [1.0f32, 0.0, 0.0, 0.0]),
+        ([long, long, thin], [1.0, 0.0, 0.0, 0.0]),
+        ([thin, long, thin], [0.9, 0.1, -0.3, 0.2]),
+    ] {
+        let scene = one_gaussian(
+            [0.0, 0.0, 3.0],
+            scales.map(|s| s.ln() as f32),
+            rotation,
+            2.0,
+            [0.5, 0.6, 0.7],
+        );
         let p = project(&scene, &camera, &settings, 0).expect("a needle projects");
         render_and_backward(&scene, &camera, &settings);
         if rotation == [1.0, 0.0, 0.0, 0.0] {
@@ -363,7 +468,11 @@ fn needles_and_sheets() {
             let (a, c) = ((30.0 * s[0] / 3.0).powi(2) + 0.3, (30.0 * s[1] / 3.0).powi(2) + 0.3);
             let expected = [1.0 / a, 0.0, 1.0 / c];
             for k in 0..3 {
-                assert!((p.conic[k] - expected[k]).abs() <= 1e-12 * expected[k].abs().max(1.0), "{:?} vs {expected:?}", p.conic);
+                assert!(
+                    (p.conic[k] - expected[k]).abs() <= 1e-12 * expected[k].abs().max(1.0),
+                    "{:?} vs {expected:?}",
+                    p.conic
+                );
             }
         }
     }
@@ -385,9 +494,19 @@ fn sub_pixel_gaussian_matches_the_analytic_footprint() {
     for (x, y, distance2) in [(10, 5, 0.0), (11, 5, 1.0), (10, 4, 1.0), (9, 6, 2.0)] {
         let alpha = o * (-0.5 * distance2 / variance).exp();
         let pixel = y * 20 + x;
-        assert!((image.alpha[pixel] - alpha).abs() < 1e-12, "pixel ({x}, {y}): {} vs {alpha}", image.alpha[pixel]);
-        let expected: [f64; 3] = std::array::from_fn(|ch| c[ch] * alpha + (1.0 - alpha) * f64::from(settings.background[ch]));
-        assert!((0..3).all(|ch| (image.color[pixel][ch] - expected[ch]).abs() < 1e-12), "{:?} vs {expected:?}", image.color[pixel]);
+        assert!(
+            (image.alpha[pixel] - alpha).abs() < 1e-12,
+            "pixel ({x}, {y}): {} vs {alpha}",
+            image.alpha[pixel]
+        );
+        let expected: [f64; 3] = std::array::from_fn(|ch| {
+            c[ch] * alpha + (1.0 - alpha) * f64::from(settings.background[ch])
+        });
+        assert!(
+            (0..3).all(|ch| (image.color[pixel][ch] - expected[ch]).abs() < 1e-12),
+            "{:?} vs {expected:?}",
+            image.color[pixel]
+        );
         assert!((image.depth[pixel] - 2.0).abs() < 1e-12);
     }
     assert_eq!(image.alpha[0], 0.0, "a pixel 10 away is beyond the footprint");
@@ -400,7 +519,13 @@ fn one_gaussian_covering_the_image_matches_the_analytic_image() {
     let camera = origin_camera(67, 33, 33.5, 16.5);
     let settings = settings(false, 0);
     for logit in [1.5f32, 50.0] {
-        let scene = one_gaussian([0.0, 0.0, 3.0], [1.5f32.ln(); 3], [1.0, 0.0, 0.0, 0.0], logit, [0.8, 0.4, 0.2]);
+        let scene = one_gaussian(
+            [0.0, 0.0, 3.0],
+            [1.5f32.ln(); 3],
+            [1.0, 0.0, 0.0, 0.0],
+            logit,
+            [0.8, 0.4, 0.2],
+        );
         let p = project(&scene, &camera, &settings, 0).unwrap();
         assert_eq!(tiles_touched(&p, 67, 33), (0..15).collect::<Vec<u32>>());
         let (image, _) = render_and_backward(&scene, &camera, &settings);
@@ -426,17 +551,26 @@ fn equal_depths_composite_in_index_order() {
     let camera = origin_camera(20, 13, 10.5, 5.5);
     let settings = settings(false, 0);
     let (red, blue) = ([0.9f32, 0.1, 0.1], [0.1f32, 0.1, 0.9]);
-    let layer = |color: [f32; 3], logit: f32| one_gaussian([0.0, 0.0, 2.0], [0.1f32.ln(); 3], [1.0, 0.0, 0.0, 0.0], logit, color);
+    let layer = |color: [f32; 3], logit: f32| {
+        one_gaussian([0.0, 0.0, 2.0], [0.1f32.ln(); 3], [1.0, 0.0, 0.0, 0.0], logit, color)
+    };
     let o = |logit: f64| 1.0 / (1.0 + (-logit).exp());
-    let decoded = |c: [f32; 3]| c.map(|c| f64::from((c - 0.5) / 0.282_094_8) * 0.28209479177387814 + 0.5);
+    let decoded =
+        |c: [f32; 3]| c.map(|c| f64::from((c - 0.5) / 0.282_094_8) * 0.28209479177387814 + 0.5);
     for (front, back) in [((red, 0.5f32), (blue, 1.0f32)), ((blue, 1.0), (red, 0.5))] {
         let scene = concat(&layer(front.0, front.1), &layer(back.0, back.1));
         let pixel = render(&scene, &camera, &settings).color[5 * 20 + 10];
         let (o0, o1) = (o(f64::from(front.1)), o(f64::from(back.1)));
         let (c0, c1) = (decoded(front.0), decoded(back.0));
         for ch in [0, 2] {
-            let expected = c0[ch] * o0 + c1[ch] * o1 * (1.0 - o0) + f64::from(settings.background[ch]) * (1.0 - o0) * (1.0 - o1);
-            assert!((pixel[ch] - expected).abs() < 1e-12, "channel {ch}: {} vs {expected}", pixel[ch]);
+            let expected = c0[ch] * o0
+                + c1[ch] * o1 * (1.0 - o0)
+                + f64::from(settings.background[ch]) * (1.0 - o0) * (1.0 - o1);
+            assert!(
+                (pixel[ch] - expected).abs() < 1e-12,
+                "channel {ch}: {} vs {expected}",
+                pixel[ch]
+            );
         }
     }
 }
@@ -445,16 +579,30 @@ fn equal_depths_composite_in_index_order() {
 fn zero_and_denormal_quaternions_are_culled_tiny_normal_ones_are_not() {
     let camera = origin_camera(20, 13, 10.5, 5.5);
     let settings = settings(false, 0);
-    let with = |rotation: [f32; 4]| one_gaussian([0.1, 0.0, 2.0], [0.3f32.ln(), 0.1f32.ln(), 0.2f32.ln()], rotation, 1.0, [0.5; 3]);
+    let with = |rotation: [f32; 4]| {
+        one_gaussian(
+            [0.1, 0.0, 2.0],
+            [0.3f32.ln(), 0.1f32.ln(), 0.2f32.ln()],
+            rotation,
+            1.0,
+            [0.5; 3],
+        )
+    };
     let denormal = f32::MIN_POSITIVE / 4.0;
     for rotation in [[0.0; 4], [denormal, 0.0, -denormal, 0.0], [-0.0, 0.0, 0.0, 0.0]] {
         assert!(project(&with(rotation), &camera, &settings, 0).is_none(), "{rotation:?}");
-        assert!(is_background(&render_and_backward(&with(rotation), &camera, &settings).0, &settings));
+        assert!(is_background(
+            &render_and_backward(&with(rotation), &camera, &settings).0,
+            &settings
+        ));
     }
     // A quaternion with a smallest-normal component normalises like a unit one.
     let unit = [0.6f32, 0.0, 0.8, 0.0];
     let tiny = unit.map(|v| v * 2.0 * f32::MIN_POSITIVE);
-    let (a, b) = (project(&with(unit), &camera, &settings, 0).unwrap(), project(&with(tiny), &camera, &settings, 0).unwrap());
+    let (a, b) = (
+        project(&with(unit), &camera, &settings, 0).unwrap(),
+        project(&with(tiny), &camera, &settings, 0).unwrap(),
+    );
     for k in 0..3 {
         assert!((a.conic[k] - b.conic[k]).abs() < 1e-12 * a.conic[k].abs().max(1.0));
     }
@@ -465,7 +613,9 @@ fn zero_and_denormal_quaternions_are_culled_tiny_normal_ones_are_not() {
 fn extreme_opacity_logits() {
     let camera = origin_camera(20, 13, 10.5, 5.5);
     let settings = settings(false, 0);
-    let with = |logit: f32| one_gaussian([0.0, 0.0, 2.0], [0.1f32.ln(); 3], [1.0, 0.0, 0.0, 0.0], logit, [0.5; 3]);
+    let with = |logit: f32| {
+        one_gaussian([0.0, 0.0, 2.0], [0.1f32.ln(); 3], [1.0, 0.0, 0.0, 0.0], logit, [0.5; 3])
+    };
     assert!(project(&with(-50.0), &camera, &settings, 0).is_none());
     assert!(is_background(&render(&with(-50.0), &camera, &settings), &settings));
     let (image, gradients) = render_and_backward(&with(50.0), &camera, &settings);
@@ -487,7 +637,14 @@ fn non_finite_gaussians_never_poison_their_neighbours() {
     let bad_row = 2;
     for value in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
         // A copy of Gaussian 1 (which overlaps the others) at row 2, with one bad value.
-        for target in [Kind::Position, Kind::LogScale, Kind::Rotation, Kind::OpacityLogit, Kind::ShBand(0), Kind::ShBand(2)] {
+        for target in [
+            Kind::Position,
+            Kind::LogScale,
+            Kind::Rotation,
+            Kind::OpacityLogit,
+            Kind::ShBand(0),
+            Kind::ShBand(2),
+        ] {
             let mut bad = scene.clone();
             let insert_row = |v: &mut Vec<_>, row| v.insert(bad_row, row);
             insert_row(&mut bad.positions, scene.positions[1]);
@@ -497,14 +654,19 @@ fn non_finite_gaussians_never_poison_their_neighbours() {
             let k3 = scene.coefficients() * 3;
             let copied = scene.sh[k3..2 * k3].to_vec();
             bad.sh.splice(bad_row * k3..bad_row * k3, copied);
-            let sh_index = |band: u32| (bad_row * scene.coefficients() + (band * band) as usize) * 3 + 1;
+            let sh_index =
+                |band: u32| (bad_row * scene.coefficients() + (band * band) as usize) * 3 + 1;
             let at = match target {
                 Kind::ShBand(band) => (target, bad_row, sh_index(band)),
                 _ => (target, bad_row, 0),
             };
             *parameter(&mut bad, at) = value;
-            assert!(project(&bad, &camera, &settings, bad_row).is_none(), "{target:?} = {value} not culled");
-            let (image, gradients) = (render(&bad, &camera, &settings), loss.gradients(&bad, &camera, &settings));
+            assert!(
+                project(&bad, &camera, &settings, bad_row).is_none(),
+                "{target:?} = {value} not culled"
+            );
+            let (image, gradients) =
+                (render(&bad, &camera, &settings), loss.gradients(&bad, &camera, &settings));
             assert_eq!(image, reference_image, "{target:?} = {value}");
             let mut without = gradients.clone();
             without.positions.remove(bad_row);
@@ -555,11 +717,22 @@ fn binned_render_equals_brute_force_on_a_partial_tile_image() {
     let scene = random_scene(&mut rng, 60, 1);
     let mut scene = scene;
     scene.positions.iter_mut().for_each(|p| *p = p.map(|v| v * 2.5));
-    let camera = Camera::new(67, 33, 40.0, 40.0, 31.0, 17.0, look_at(DVec3::new(0.5, -1.0, -5.0), DVec3::ZERO, 0.4)).unwrap();
+    let camera = Camera::new(
+        67,
+        33,
+        40.0,
+        40.0,
+        31.0,
+        17.0,
+        look_at(DVec3::new(0.5, -1.0, -5.0), DVec3::ZERO, 0.4),
+    )
+    .unwrap();
     for mask_mode in [false, true] {
         let settings = settings(mask_mode, 1);
         let (image, _) = render_and_backward(&scene, &camera, &settings);
-        let projected: Vec<(usize, Projected)> = (0..scene.len()).filter_map(|i| project(&scene, &camera, &settings, i).map(|p| (i, p))).collect();
+        let projected: Vec<(usize, Projected)> = (0..scene.len())
+            .filter_map(|i| project(&scene, &camera, &settings, i).map(|p| (i, p)))
+            .collect();
         let mut order = projected.clone();
         order.sort_by(|a, b| (a.1.depth as f32).total_cmp(&(b.1.depth as f32)).then(a.0.cmp(&b.0)));
         let mut stopped = 0;
@@ -584,13 +757,20 @@ fn binned_render_equals_brute_force_on_a_partial_tile_image() {
                 }
                 let pixel = y * 67 + x;
                 assert!((image.alpha[pixel] - (1.0 - t)).abs() < 1e-12, "({x}, {y})");
-                let expected: [f64; 3] = std::array::from_fn(|ch| color[ch] + t * f64::from(settings.background[ch]));
-                assert!((0..3).all(|ch| (image.color[pixel][ch] - expected[ch]).abs() < 1e-12), "({x}, {y})");
+                let expected: [f64; 3] =
+                    std::array::from_fn(|ch| color[ch] + t * f64::from(settings.background[ch]));
+                assert!(
+                    (0..3).all(|ch| (image.color[pixel][ch] - expected[ch]).abs() < 1e-12),
+                    "({x}, {y})"
+                );
                 let expected_depth = if 1.0 - t < 1e-6 { 0.0 } else { depth / (1.0 - t) };
                 assert!((image.depth[pixel] - expected_depth).abs() < 1e-9, "({x}, {y})");
             }
         }
-        assert!(image.alpha[32 * 67 + 66] > 0.0 || image.alpha[0] > 0.0, "the scene reaches the partial tiles");
+        assert!(
+            image.alpha[32 * 67 + 66] > 0.0 || image.alpha[0] > 0.0,
+            "the scene reaches the partial tiles"
+        );
         if mask_mode {
             assert!(stopped > 0, "opaque mask renders must hit the transmittance stop somewhere");
         }
@@ -617,8 +797,16 @@ fn ply_round_trip_is_bit_exact_for_every_degree() {
         let back = GaussianScene::read_ply(&path).unwrap();
         std::fs::remove_file(&path).unwrap();
         let bits = |s: &GaussianScene| {
-            let rows = s.positions.iter().flatten().chain(s.log_scales.iter().flatten()).chain(s.rotations.iter().flatten());
-            (rows.chain(&s.opacity_logits).chain(&s.sh).map(|v| v.to_bits()).collect::<Vec<_>>(), s.sh_degree)
+            let rows = s
+                .positions
+                .iter()
+                .flatten()
+                .chain(s.log_scales.iter().flatten())
+                .chain(s.rotations.iter().flatten());
+            (
+                rows.chain(&s.opacity_logits).chain(&s.sh).map(|v| v.to_bits()).collect::<Vec<_>>(),
+                s.sh_degree,
+            )
         };
         assert_eq!(bits(&back), bits(&scene));
         let settings = settings(false, degree);
@@ -636,9 +824,13 @@ fn ply_layout_is_the_3dgs_one() {
     std::fs::remove_file(&path).unwrap();
     let vertex = ply.element("vertex").unwrap();
     let names: Vec<&str> = vertex.properties.iter().map(|p| p.name.as_str()).collect();
-    let mut expected: Vec<String> = ["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"].map(String::from).to_vec();
+    let mut expected: Vec<String> =
+        ["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"].map(String::from).to_vec();
     expected.extend((0..24).map(|k| format!("f_rest_{k}")));
-    expected.extend(["opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"].map(String::from));
+    expected.extend(
+        ["opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"]
+            .map(String::from),
+    );
     assert_eq!(names, expected);
     assert_eq!(vertex.column_f32("ny").unwrap(), vec![0.0; 3]);
     // Coefficient 5 of the green channel of Gaussian 2 is f_rest_{1·8 + 4}.
@@ -654,7 +846,13 @@ fn ascii_3dgs_ply_reads() {
         property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\nproperty float opacity\n\
         property float scale_0\nproperty float scale_1\nproperty float scale_2\n\
         property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n";
-    std::fs::write(&path, format!("{header}1 2 3 0.1 0.2 0.3 -1 -2 -3 -4 1 0 0 0\n4 5 6 0.4 0.5 0.6 2 -1 -1 -1 0 1 0 0\n")).unwrap();
+    std::fs::write(
+        &path,
+        format!(
+            "{header}1 2 3 0.1 0.2 0.3 -1 -2 -3 -4 1 0 0 0\n4 5 6 0.4 0.5 0.6 2 -1 -1 -1 0 1 0 0\n"
+        ),
+    )
+    .unwrap();
     let scene = GaussianScene::read_ply(&path).unwrap();
     std::fs::remove_file(&path).unwrap();
     assert_eq!(scene.sh_degree, 0);
@@ -672,7 +870,10 @@ fn bad_ply_files_name_the_file_and_the_problem() {
     let path = temporary("bad.ply");
     let expect_error = |expected: &str| {
         let message = GaussianScene::read_ply(&path).unwrap_err().to_string();
-        assert!(message.starts_with(&path.display().to_string()) && message.contains(expected), "{message}");
+        assert!(
+            message.starts_with(&path.display().to_string()) && message.contains(expected),
+            "{message}"
+        );
     };
     // Truncated body.
     scene.write_ply(&path).unwrap();
@@ -682,13 +883,19 @@ fn bad_ply_files_name_the_file_and_the_problem() {
     // A missing property, a count of f_rest of no degree, no vertex element.
     let column = || ColumnOut::F32(vec![0.5; 2]);
     let mut element = ElementOut::new("vertex");
-    for name in ["x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2"] {
+    for name in [
+        "x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2",
+        "rot_0", "rot_1", "rot_2",
+    ] {
         element = element.with(name, column());
     }
     write_ply(&path, &[], &[element]).unwrap();
     expect_error("rot_3");
     let mut element = ElementOut::new("vertex").with("rot_3", column());
-    for name in ["x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2"] {
+    for name in [
+        "x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2",
+        "rot_0", "rot_1", "rot_2",
+    ] {
         element = element.with(name, column());
     }
     for k in 0..5 {
@@ -706,6 +913,9 @@ fn bad_ply_files_name_the_file_and_the_problem() {
     let mut invalid = scene.clone();
     invalid.sh.pop();
     let message = invalid.write_ply(&path).unwrap_err().to_string();
-    assert!(message.contains(&path.display().to_string()) && message.contains("SH values"), "{message}");
+    assert!(
+        message.contains(&path.display().to_string()) && message.contains("SH values"),
+        "{message}"
+    );
     assert!(!path.exists());
 }

@@ -22,7 +22,17 @@ fn temp(name: &str) -> PathBuf {
 }
 
 fn small(seed: u64) -> SynthOptions {
-    SynthOptions { subject: SubjectSource::Procedural { subdivisions: 3 }, views: 3, frames: 3, resolution: 48, seed, samples: 2, track_vertices: 20, track_surface: 30, ..Default::default() }
+    SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 3 },
+        views: 3,
+        frames: 3,
+        resolution: 48,
+        seed,
+        samples: 2,
+        track_vertices: 20,
+        track_surface: 30,
+        ..Default::default()
+    }
 }
 
 fn mesh(dir: &Path, t: usize) -> TriMesh {
@@ -116,7 +126,12 @@ fn meshes_masks_and_trajectories_agree() {
 fn largest_step_over_size(dir: &Path, frames: usize) -> f64 {
     let meshes: Vec<TriMesh> = (0..frames).map(|t| mesh(dir, t)).collect();
     let (lo, hi) = tagsplat::mesh::bounding_box(&meshes[0].positions).unwrap();
-    let step = meshes.windows(2).flat_map(|w| w[0].positions.iter().zip(&w[1].positions).map(|(a, b)| (0..3).map(|k| ((b[k] - a[k]) as f64).powi(2)).sum::<f64>().sqrt()));
+    let step = meshes.windows(2).flat_map(|w| {
+        w[0].positions
+            .iter()
+            .zip(&w[1].positions)
+            .map(|(a, b)| (0..3).map(|k| ((b[k] - a[k]) as f64).powi(2)).sum::<f64>().sqrt())
+    });
     step.fold(0.0, f64::max) / (hi - lo).max_element()
 }
 
@@ -130,14 +145,24 @@ fn motion_presets_move_as_fast_as_the_benchmarks() {
         let report = generate(&SynthOptions { frames: 8, motion, ..small(4) }, &dir).unwrap();
         let measured = largest_step_over_size(&dir, 8);
         // The report's statistics describe the meshes written (f32 rounding apart).
-        assert!((report.motion_per_frame.max - measured).abs() < 1e-4, "{motion:?}: report {} vs meshes {measured}", report.motion_per_frame.max);
-        assert!(report.motion_per_frame.mean <= report.motion_per_frame.p90 && report.motion_per_frame.p90 <= measured);
+        assert!(
+            (report.motion_per_frame.max - measured).abs() < 1e-4,
+            "{motion:?}: report {} vs meshes {measured}",
+            report.motion_per_frame.max
+        );
+        assert!(
+            report.motion_per_frame.mean <= report.motion_per_frame.p90
+                && report.motion_per_frame.p90 <= measured
+        );
         largest.push(measured);
         std::fs::remove_dir_all(dir).unwrap();
     }
     let [gentle, walk, run] = largest[..] else { unreachable!() };
     assert!(gentle < 0.05, "gentle {gentle}");
-    assert!((0.08..0.2).contains(&walk) && (0.08..0.25).contains(&run) && run > walk, "walk {walk}, run {run}");
+    assert!(
+        (0.08..0.2).contains(&walk) && (0.08..0.25).contains(&run) && run > walk,
+        "walk {walk}, run {run}"
+    );
 }
 
 #[test]
@@ -166,8 +191,14 @@ fn deterministic_for_a_seed() {
         out
     };
     assert_eq!(files(&a), files(&b));
-    assert_ne!(std::fs::read(a.join("cameras/cam000.json")).unwrap(), std::fs::read(c.join("cameras/cam000.json")).unwrap());
-    assert_ne!(std::fs::read(a.join("bindings.csv")).unwrap(), std::fs::read(c.join("bindings.csv")).unwrap());
+    assert_ne!(
+        std::fs::read(a.join("cameras/cam000.json")).unwrap(),
+        std::fs::read(c.join("cameras/cam000.json")).unwrap()
+    );
+    assert_ne!(
+        std::fs::read(a.join("bindings.csv")).unwrap(),
+        std::fs::read(c.join("bindings.csv")).unwrap()
+    );
     for d in [a, b, c] {
         std::fs::remove_dir_all(d).unwrap();
     }
@@ -205,21 +236,36 @@ fn bad_options_write_nothing() {
 
 /// A two-joint skinned tetrahedron with a LINEAR rotation channel, buffers in a .bin file.
 fn write_gltf(dir: &Path, skin: bool, animation: bool) -> PathBuf {
-    let positions: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 2.0, 1.0]];
+    let positions: [[f32; 3]; 4] =
+        [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 2.0, 1.0]];
     let joints: [[u16; 4]; 4] = [[0, 0, 0, 0], [0, 0, 0, 0], [1, 0, 0, 0], [1, 0, 0, 0]];
-    let weights: [[f32; 4]; 4] = [[1.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.5, 0.5, 0.0, 0.0]];
+    let weights: [[f32; 4]; 4] =
+        [[1.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.5, 0.5, 0.0, 0.0]];
     let indices: [u16; 12] = [0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2];
-    let ibm: [[f32; 16]; 2] = [DMat4::IDENTITY.as_mat4().to_cols_array(), DMat4::from_translation(DVec3::new(0.0, -1.0, 0.0)).as_mat4().to_cols_array()];
+    let ibm: [[f32; 16]; 2] = [
+        DMat4::IDENTITY.as_mat4().to_cols_array(),
+        DMat4::from_translation(DVec3::new(0.0, -1.0, 0.0)).as_mat4().to_cols_array(),
+    ];
     let times: [f32; 2] = [0.0, 1.0];
     let q = DQuat::from_rotation_z(std::f64::consts::FRAC_PI_2).as_quat().to_array();
     let rotations: [[f32; 4]; 2] = [[0.0, 0.0, 0.0, 1.0], q];
     let mut bin = Vec::new();
     let mut views = Vec::new();
-    for chunk in [bytemuck::cast_slice::<_, u8>(&positions), bytemuck::cast_slice(&joints), bytemuck::cast_slice(&weights), bytemuck::cast_slice(&indices), bytemuck::cast_slice(&ibm), bytemuck::cast_slice(&times), bytemuck::cast_slice(&rotations)] {
+    for chunk in [
+        bytemuck::cast_slice::<_, u8>(&positions),
+        bytemuck::cast_slice(&joints),
+        bytemuck::cast_slice(&weights),
+        bytemuck::cast_slice(&indices),
+        bytemuck::cast_slice(&ibm),
+        bytemuck::cast_slice(&times),
+        bytemuck::cast_slice(&rotations),
+    ] {
         while bin.len() % 4 != 0 {
             bin.push(0);
         }
-        views.push(serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": chunk.len()}));
+        views.push(
+            serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": chunk.len()}),
+        );
         bin.extend_from_slice(chunk);
     }
     std::fs::write(dir.join("t.bin"), &bin).unwrap();
@@ -259,8 +305,14 @@ fn gltf_skinning_matches_the_hand_computed_pose() {
     assert_eq!(closed_manifold_problem(4, &subject.faces), None);
     // Frame 15 = 0.5 s: joint 2 has turned 45° about z around its origin (0, 1, 0).
     let posed = subject.positions(15);
-    let turn = |p: DVec3| DQuat::from_rotation_z(std::f64::consts::FRAC_PI_4) * (p - DVec3::Y) + DVec3::Y;
-    let expect = [DVec3::ZERO, DVec3::X, turn(DVec3::new(0.0, 2.0, 0.0)), 0.5 * DVec3::new(0.0, 2.0, 1.0) + 0.5 * turn(DVec3::new(0.0, 2.0, 1.0))];
+    let turn =
+        |p: DVec3| DQuat::from_rotation_z(std::f64::consts::FRAC_PI_4) * (p - DVec3::Y) + DVec3::Y;
+    let expect = [
+        DVec3::ZERO,
+        DVec3::X,
+        turn(DVec3::new(0.0, 2.0, 0.0)),
+        0.5 * DVec3::new(0.0, 2.0, 1.0) + 0.5 * turn(DVec3::new(0.0, 2.0, 1.0)),
+    ];
     for (p, e) in posed.iter().zip(expect) {
         assert!(DVec3::from(p.map(f64::from)).distance(e) < 1e-6, "{p:?} vs {e}");
     }
@@ -271,7 +323,8 @@ fn gltf_skinning_matches_the_hand_computed_pose() {
     assert!(no_skin.contains("no skin") && no_skin.contains(".gltf"), "{no_skin}");
     let no_animation = load_gltf(&write_gltf(&dir, true, false), None).unwrap_err().to_string();
     assert!(no_animation.contains("no animation"), "{no_animation}");
-    let wrong_name = load_gltf(&write_gltf(&dir, true, true), Some("walk")).unwrap_err().to_string();
+    let wrong_name =
+        load_gltf(&write_gltf(&dir, true, true), Some("walk")).unwrap_err().to_string();
     assert!(wrong_name.contains("walk"), "{wrong_name}");
     std::fs::write(dir.join("bad.glb"), b"glTF\x02\0\0\0garbage").unwrap();
     assert!(load_gltf(&dir.join("bad.glb"), None).unwrap_err().to_string().contains("bad.glb"));

@@ -44,7 +44,9 @@ fn config() -> TrainConfig {
 }
 
 fn per_frame(scores: &Scores) -> Vec<String> {
-    scores.eval.tracking.as_ref().map_or(Vec::new(), |t| t.rmse_per_frame.iter().map(|(f, e)| format!("{f}: {e:.4}")).collect())
+    scores.eval.tracking.as_ref().map_or(Vec::new(), |t| {
+        t.rmse_per_frame.iter().map(|(f, e)| format!("{f}: {e:.4}")).collect()
+    })
 }
 
 #[test]
@@ -54,7 +56,18 @@ fn the_temporal_stage_tracks_a_run_that_the_previous_stage_loses() {
     let data = dir.join("data");
     fast_sequence(&data);
     let (new, old) = (dir.join("new"), dir.join("previous"));
-    run_train(g.ctx(), &TrainJob { data: data.clone(), out: new.clone(), mesh: None, config: config(), frames: Some(0..1) }, &mut |_| {}).unwrap();
+    run_train(
+        g.ctx(),
+        &TrainJob {
+            data: data.clone(),
+            out: new.clone(),
+            mesh: None,
+            config: config(),
+            frames: Some(0..1),
+        },
+        &mut |_| {},
+    )
+    .unwrap();
     copy_frame0(&new, &old).unwrap();
 
     let (_, new_scores) = train_and_score(g.ctx(), &data, &new, config(), &mut |_| {}).unwrap();
@@ -72,6 +85,9 @@ fn the_temporal_stage_tracks_a_run_that_the_previous_stage_loses() {
     eprintln!("{message}");
     // Measured on lavapipe (AMD EPYC host): 2.56 % against 5.03 %.
     const BOUND: f64 = 0.035;
-    assert!(new_scores.tracking_rmse_per_height < BOUND && old_scores.tracking_rmse_per_height > BOUND, "{message}");
+    assert!(
+        new_scores.tracking_rmse_per_height < BOUND && old_scores.tracking_rmse_per_height > BOUND,
+        "{message}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

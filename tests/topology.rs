@@ -4,12 +4,14 @@
 
 mod common;
 
+use std::path::Path;
 use tagsplat::mesh::TriMesh;
 use tagsplat::rng::SplitMix64;
 use tagsplat::synth::icosphere::icosphere;
 use tagsplat::topology::shapes::{grid, torus};
-use tagsplat::topology::{import, remap_rows, CollapseRefusal, FlipRefusal, ManifoldMesh, TopologyError, NEW_ROW, NONE};
-use std::path::Path;
+use tagsplat::topology::{
+    import, remap_rows, CollapseRefusal, FlipRefusal, ManifoldMesh, TopologyError, NEW_ROW, NONE,
+};
 
 fn sphere() -> ManifoldMesh {
     let (positions, faces) = icosphere(2);
@@ -19,7 +21,11 @@ fn sphere() -> ManifoldMesh {
 fn shapes() -> Vec<(&'static str, ManifoldMesh, i64)> {
     let (tp, tf) = torus(16, 9);
     let (gp, gf) = grid(8, 7);
-    vec![("sphere", sphere(), 2), ("torus", ManifoldMesh::new(tp, tf).unwrap(), 0), ("disk", ManifoldMesh::new(gp, gf).unwrap(), 1)]
+    vec![
+        ("sphere", sphere(), 2),
+        ("torus", ManifoldMesh::new(tp, tf).unwrap(), 0),
+        ("disk", ManifoldMesh::new(gp, gf).unwrap(), 1),
+    ]
 }
 
 /// (vertices, edges, faces)
@@ -45,7 +51,13 @@ fn centroid(m: &ManifoldMesh, f: u32) -> [f32; 3] {
 }
 
 fn interior_edge(m: &ManifoldMesh) -> u32 {
-    m.edges().find(|&h| !m.is_boundary_edge(h) && !m.is_boundary_vertex(m.origin(h)) && !m.is_boundary_vertex(m.dest(h))).unwrap()
+    m.edges()
+        .find(|&h| {
+            !m.is_boundary_edge(h)
+                && !m.is_boundary_vertex(m.origin(h))
+                && !m.is_boundary_vertex(m.dest(h))
+        })
+        .unwrap()
 }
 
 #[test]
@@ -57,7 +69,18 @@ fn reference_shapes_are_manifold_with_their_euler_characteristic() {
         // Every vertex's 1-ring is the set of its edge partners.
         for v in m.vertices() {
             let mut ring = m.ring(v);
-            let mut partners: Vec<u32> = m.edges().filter_map(|h| if m.origin(h) == v { Some(m.dest(h)) } else if m.dest(h) == v { Some(m.origin(h)) } else { None }).collect();
+            let mut partners: Vec<u32> = m
+                .edges()
+                .filter_map(|h| {
+                    if m.origin(h) == v {
+                        Some(m.dest(h))
+                    } else if m.dest(h) == v {
+                        Some(m.origin(h))
+                    } else {
+                        None
+                    }
+                })
+                .collect();
             ring.sort_unstable();
             partners.sort_unstable();
             assert_eq!(ring, partners, "{name}: ring of {v}");
@@ -90,14 +113,23 @@ fn edge_split_adds_one_vertex_three_edges_two_faces_or_two_one_on_the_boundary()
         let (a, b) = (m.origin(h), m.dest(h));
         let v = m.split_edge(h, midpoint(&m, h)).unwrap();
         assert_eq!(counts(&m), [before[0] + 1, before[1] + 3, before[2] + 2], "{name}");
-        assert!(m.find_edge(a, b).is_none() && m.find_edge(a, v).is_some() && m.find_edge(v, b).is_some(), "{name}");
+        assert!(
+            m.find_edge(a, b).is_none()
+                && m.find_edge(a, v).is_some()
+                && m.find_edge(v, b).is_some(),
+            "{name}"
+        );
         assert_eq!(m.valence(v), 4, "{name}");
         assert_sound(&m, euler, name);
         let boundary = m.edges().find(|&h| m.is_boundary_edge(h));
         if let Some(h) = boundary {
             let before = counts(&m);
             let v = m.split_edge(h, midpoint(&m, h)).unwrap();
-            assert_eq!(counts(&m), [before[0] + 1, before[1] + 2, before[2] + 1], "{name} boundary");
+            assert_eq!(
+                counts(&m),
+                [before[0] + 1, before[1] + 2, before[2] + 1],
+                "{name} boundary"
+            );
             assert!(m.is_boundary_vertex(v) && m.valence(v) == 3, "{name} boundary");
             assert_sound(&m, euler, name);
         }
@@ -110,7 +142,8 @@ fn edge_flip_keeps_counts_and_swaps_the_diagonal() {
         let before = counts(&m);
         let h = m.edges().find(|&h| m.can_flip(h).is_ok()).unwrap();
         let (a, b) = (m.origin(h), m.dest(h));
-        let (c, d) = (m.origin(tagsplat::topology::prev(h)), m.origin(tagsplat::topology::prev(m.twin(h))));
+        let (c, d) =
+            (m.origin(tagsplat::topology::prev(h)), m.origin(tagsplat::topology::prev(m.twin(h))));
         m.flip_edge(h).unwrap();
         assert_eq!(counts(&m), before, "{name}");
         assert!(m.find_edge(a, b).is_none() && m.find_edge(c, d).is_some(), "{name}");
@@ -128,7 +161,8 @@ fn edge_collapse_removes_one_vertex_three_edges_two_faces_or_two_one_on_the_boun
         let before = counts(&m);
         let h = interior_edge(&m);
         let (a, b) = (m.origin(h), m.dest(h));
-        let mut expected_ring: Vec<u32> = m.ring(a).into_iter().chain(m.ring(b)).filter(|&v| v != a && v != b).collect();
+        let mut expected_ring: Vec<u32> =
+            m.ring(a).into_iter().chain(m.ring(b)).filter(|&v| v != a && v != b).collect();
         expected_ring.sort_unstable();
         expected_ring.dedup();
         assert_eq!(m.collapse_edge(h, midpoint(&m, h)), Ok(b), "{name}");
@@ -138,11 +172,17 @@ fn edge_collapse_removes_one_vertex_three_edges_two_faces_or_two_one_on_the_boun
         ring.sort_unstable();
         assert_eq!(ring, expected_ring, "{name}: the kept vertex inherits both rings");
         assert_sound(&m, euler, name);
-        let boundary = m.edges().find(|&h| m.is_boundary_edge(h) && m.can_collapse(h, midpoint(&m, h)).is_ok());
+        let boundary = m
+            .edges()
+            .find(|&h| m.is_boundary_edge(h) && m.can_collapse(h, midpoint(&m, h)).is_ok());
         if let Some(h) = boundary {
             let before = counts(&m);
             m.collapse_edge(h, midpoint(&m, h)).unwrap();
-            assert_eq!(counts(&m), [before[0] - 1, before[1] - 2, before[2] - 1], "{name} boundary");
+            assert_eq!(
+                counts(&m),
+                [before[0] - 1, before[1] - 2, before[2] - 1],
+                "{name} boundary"
+            );
             assert_sound(&m, euler, name);
         }
     }
@@ -179,14 +219,20 @@ fn boundary_collapses_that_would_pinch_or_dangle_are_refused() {
     let (positions, faces) = grid(3, 1);
     let m = ManifoldMesh::new(positions, faces).unwrap();
     let diagonal = m.edges().find(|&h| !m.is_boundary_edge(h)).unwrap();
-    assert_eq!(m.can_collapse(diagonal, midpoint(&m, diagonal)), Err(CollapseRefusal::BoundaryPinch));
+    assert_eq!(
+        m.can_collapse(diagonal, midpoint(&m, diagonal)),
+        Err(CollapseRefusal::BoundaryPinch)
+    );
     // An ear's opposite edge joins two boundary vertices too.
     let (positions, faces) = grid(3, 3);
     let m = ManifoldMesh::new(positions, faces).unwrap();
     let corner = 3 * 4;
     assert_eq!(m.outgoing(corner).count(), 1);
     let opposite = tagsplat::topology::next(m.outgoing(corner).next().unwrap());
-    assert_eq!(m.can_collapse(opposite, midpoint(&m, opposite)), Err(CollapseRefusal::BoundaryPinch));
+    assert_eq!(
+        m.can_collapse(opposite, midpoint(&m, opposite)),
+        Err(CollapseRefusal::BoundaryPinch)
+    );
     // A lone triangle beside a grid: collapsing any of its edges would strand its third vertex.
     let (mut positions, mut faces) = grid(2, 2);
     let base = positions.len() as u32;
@@ -205,7 +251,10 @@ fn collapse_that_would_flip_a_face_is_refused() {
     // Moving the kept vertex far past the opposite side folds the fan over.
     let (a, b) = (m.positions[m.origin(h) as usize], m.positions[m.dest(h) as usize]);
     let far = [0, 1, 2].map(|k| b[k] + 10.0 * (b[k] - a[k]));
-    assert!(matches!(m.can_collapse(h, far), Err(CollapseRefusal::FlipsNormal { .. } | CollapseRefusal::Degenerate { .. })));
+    assert!(matches!(
+        m.can_collapse(h, far),
+        Err(CollapseRefusal::FlipsNormal { .. } | CollapseRefusal::Degenerate { .. })
+    ));
     assert_eq!(m.can_collapse(h, midpoint(&m, h)), Ok(()));
 }
 
@@ -242,7 +291,10 @@ fn random_operation_sequences_keep_every_invariant() {
                 _ => match m.collapse_edge(h, midpoint(&m, h)) {
                     Ok(_) => {
                         let d = if boundary { [1, 2, 1] } else { [1, 3, 2] };
-                        assert_eq!(counts(&m), [before[0] - d[0], before[1] - d[1], before[2] - d[2]]);
+                        assert_eq!(
+                            counts(&m),
+                            [before[0] - d[0], before[1] - d[1], before[2] - d[2]]
+                        );
                         true
                     }
                     Err(_) => false,
@@ -260,11 +312,17 @@ fn random_operation_sequences_keep_every_invariant() {
                 let remapped = remap_rows(&synced, &old_of_new, |_| NONE);
                 for (row, (&got, &want)) in remapped.iter().zip(&live).enumerate() {
                     let new = old_of_new[row] == NEW_ROW;
-                    assert!(if new { got == NONE && want >= synced.len() as u32 } else { got == want }, "{name}: row {row}");
+                    assert!(
+                        if new { got == NONE && want >= synced.len() as u32 } else { got == want },
+                        "{name}: row {row}"
+                    );
                 }
                 assert_sound(&m, euler, &format!("{name} compaction at step {step}"));
                 let (positions, faces, identity) = m.clone().into_arrays();
-                assert_eq!((positions, faces, identity), (m.positions.clone(), m.live_faces(), (0..m.vertex_count() as u32).collect()));
+                assert_eq!(
+                    (positions, faces, identity),
+                    (m.positions.clone(), m.live_faces(), (0..m.vertex_count() as u32).collect())
+                );
                 ids = live;
                 synced = ids.clone();
             }
@@ -275,7 +333,8 @@ fn random_operation_sequences_keep_every_invariant() {
 
 #[test]
 fn construction_errors_name_the_first_problem() {
-    let quad = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.5, 0.5, 1.0]];
+    let quad =
+        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.5, 0.5, 1.0]];
     // Edge 0–1 with three faces.
     let fin = vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]];
     match ManifoldMesh::new(quad.clone(), fin) {
@@ -283,17 +342,35 @@ fn construction_errors_name_the_first_problem() {
         other => panic!("expected edge 0–1, got {other:?}"),
     }
     // Two fans meeting at vertex 0 only (a bow tie).
-    let bow = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [-1.0, -1.0, 0.0]];
+    let bow = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [-1.0, -1.0, 0.0],
+    ];
     match ManifoldMesh::new(bow, vec![[0, 1, 2], [0, 3, 4]]) {
         Err(TopologyError::PinchedVertex { vertex: 0 }) => {}
         other => panic!("expected vertex 0, got {other:?}"),
     }
-    assert!(matches!(ManifoldMesh::new(quad.clone(), vec![[0, 1, 2]]), Err(TopologyError::UnusedVertex { vertex: 3 })));
+    assert!(matches!(
+        ManifoldMesh::new(quad.clone(), vec![[0, 1, 2]]),
+        Err(TopologyError::UnusedVertex { vertex: 3 })
+    ));
     let mut nan = quad.clone();
     nan[2][1] = f32::NAN;
-    assert!(matches!(ManifoldMesh::new(nan, vec![[0, 1, 2]]), Err(TopologyError::NonFinite { vertex: 2 })));
-    assert!(matches!(ManifoldMesh::new(quad.clone(), vec![[0, 1, 1]]), Err(TopologyError::DegenerateFace { face: 0, .. })));
-    assert!(matches!(ManifoldMesh::new(quad, vec![[0, 1, 9]]), Err(TopologyError::IndexOutOfRange { face: 0, .. })));
+    assert!(matches!(
+        ManifoldMesh::new(nan, vec![[0, 1, 2]]),
+        Err(TopologyError::NonFinite { vertex: 2 })
+    ));
+    assert!(matches!(
+        ManifoldMesh::new(quad.clone(), vec![[0, 1, 1]]),
+        Err(TopologyError::DegenerateFace { face: 0, .. })
+    ));
+    assert!(matches!(
+        ManifoldMesh::new(quad, vec![[0, 1, 9]]),
+        Err(TopologyError::IndexOutOfRange { face: 0, .. })
+    ));
 }
 
 #[test]
@@ -305,7 +382,11 @@ fn import_welds_seams_orients_and_names_the_file() {
     for (f, face) in faces.iter().enumerate() {
         let base = soup.positions.len() as u32;
         soup.positions.extend(face.iter().map(|&v| positions[v as usize].map(|c| c as f32)));
-        soup.faces.push(if f % 2 == 0 { [base, base + 1, base + 2] } else { [base, base + 2, base + 1] });
+        soup.faces.push(if f % 2 == 0 {
+            [base, base + 1, base + 2]
+        } else {
+            [base, base + 2, base + 1]
+        });
     }
     soup.positions.push([5.0, 5.0, 5.0]);
     let path = Path::new("soup.ply");
@@ -317,7 +398,8 @@ fn import_welds_seams_orients_and_names_the_file() {
     assert_sound(&imported.mesh, 2, "imported soup");
     // Outward: every face normal points away from the centre.
     for f in imported.mesh.faces() {
-        let [a, b, c] = imported.mesh.face(f).map(|v| glam::Vec3::from(imported.mesh.positions[v as usize]));
+        let [a, b, c] =
+            imported.mesh.face(f).map(|v| glam::Vec3::from(imported.mesh.positions[v as usize]));
         assert!((b - a).cross(c - a).dot(a + b + c) > 0.0);
     }
     // Each mesh row comes from a file row at the same position.
@@ -338,14 +420,18 @@ fn import_welds_seams_orients_and_names_the_file() {
 
 mod gaussians {
     use super::*;
-    use tagsplat::topology::{dc_colors, densify, face_scores, gaussian_normal, gaussians_from_mesh, improve_angles, prune, DensifyConfig, InitConfig, PruneConfig};
     use tagsplat::splat::GaussianScene;
+    use tagsplat::topology::{
+        dc_colors, densify, face_scores, gaussian_normal, gaussians_from_mesh, improve_angles,
+        prune, DensifyConfig, InitConfig, PruneConfig,
+    };
 
     fn min_angle_of(m: &ManifoldMesh) -> f64 {
         m.faces()
             .map(|f| {
                 let [a, b, c] = m.face(f).map(|v| m.point(v));
-                let angle = |p: glam::DVec3, q: glam::DVec3, r: glam::DVec3| (q - p).angle_between(r - p);
+                let angle =
+                    |p: glam::DVec3, q: glam::DVec3, r: glam::DVec3| (q - p).angle_between(r - p);
                 angle(a, b, c).min(angle(b, c, a)).min(angle(c, a, b))
             })
             .fold(f64::INFINITY, f64::min)
@@ -353,8 +439,10 @@ mod gaussians {
 
     /// A scene whose opacity logits hold the row ids, so rows can be followed.
     fn tagged_scene(m: &ManifoldMesh) -> GaussianScene {
-        let colors: Vec<[f32; 3]> = (0..m.vertex_rows()).map(|i| [(i % 7) as f32 / 7.0, 0.5, 0.25]).collect();
-        let mut scene = gaussians_from_mesh(m, &colors, &InitConfig { sh_degree: 1, ..Default::default() });
+        let colors: Vec<[f32; 3]> =
+            (0..m.vertex_rows()).map(|i| [(i % 7) as f32 / 7.0, 0.5, 0.25]).collect();
+        let mut scene =
+            gaussians_from_mesh(m, &colors, &InitConfig { sh_degree: 1, ..Default::default() });
         scene.opacity_logits = (0..scene.len()).map(|i| i as f32).collect();
         scene
     }
@@ -362,7 +450,8 @@ mod gaussians {
     #[test]
     fn gaussians_lie_in_the_sphere_with_neighbour_scales_and_vertex_colours() {
         let m = sphere();
-        let colors: Vec<[f32; 3]> = (0..m.vertex_rows()).map(|i| [i as f32 / 200.0, 0.2, 0.9]).collect();
+        let colors: Vec<[f32; 3]> =
+            (0..m.vertex_rows()).map(|i| [i as f32 / 200.0, 0.2, 0.9]).collect();
         let config = InitConfig::default();
         let scene = gaussians_from_mesh(&m, &colors, &config);
         scene.check().unwrap();
@@ -372,7 +461,8 @@ mod gaussians {
             let radial = m.point(v).normalize();
             assert!(gaussian_normal(scene.rotations[i]).dot(radial) > 0.995, "vertex {v}");
             let ring = m.ring(v);
-            let mean = ring.iter().map(|&r| (m.point(r) - m.point(v)).length()).sum::<f64>() / ring.len() as f64;
+            let mean = ring.iter().map(|&r| (m.point(r) - m.point(v)).length()).sum::<f64>()
+                / ring.len() as f64;
             let s = scene.log_scales[i];
             assert!((s[0] as f64 - (0.5 * mean).ln()).abs() < 1e-5 && s[0] == s[1]);
             assert!((s[2] as f64 - (0.05 * mean).ln()).abs() < 1e-5);
@@ -410,7 +500,10 @@ mod gaussians {
                     // A new Gaussian averages three parents: its id is the mean of theirs.
                     let parents = chosen[new_rows];
                     let expected = parents.iter().map(|&p| p as f32).sum::<f32>() / 3.0;
-                    assert!((scene.opacity_logits[row] - expected).abs() < 1e-3, "{name} row {row}");
+                    assert!(
+                        (scene.opacity_logits[row] - expected).abs() < 1e-3,
+                        "{name} row {row}"
+                    );
                     let q = scene.rotations[row];
                     assert!((q.iter().map(|c| c * c).sum::<f32>() - 1.0).abs() < 1e-5);
                     new_rows += 1;
@@ -459,7 +552,13 @@ mod gaussians {
         let before: Vec<[f32; 3]> = corners.iter().map(|&c| scene.log_scales[c as usize]).collect();
         let mut scores = vec![0.0; m.face_rows()];
         scores[f as usize] = 1.0;
-        let report = densify(&mut m, &mut scene, &scores, &DensifyConfig { threshold: 0.5, large_scale: 1e-4, ..Default::default() }).unwrap();
+        let report = densify(
+            &mut m,
+            &mut scene,
+            &scores,
+            &DensifyConfig { threshold: 0.5, large_scale: 1e-4, ..Default::default() },
+        )
+        .unwrap();
         assert_eq!((report.split_faces, report.halved), (1, 4));
         for (k, &c) in corners.iter().enumerate() {
             let row = report.old_of_new.iter().position(|&o| o == c).unwrap();
@@ -490,7 +589,11 @@ mod gaussians {
             assert_eq!(scene.len(), n - report.pruned);
             for (row, &old) in report.old_of_new.iter().enumerate() {
                 assert_ne!(old, NEW_ROW);
-                assert_eq!(scene.sh[row * stride], old as f32, "{name}: row {row} keeps its own parameters");
+                assert_eq!(
+                    scene.sh[row * stride],
+                    old as f32,
+                    "{name}: row {row} keeps its own parameters"
+                );
                 assert_eq!(scene.positions[row], m.positions[row]);
             }
             let survivors_picked = report.old_of_new.iter().filter(|&&o| o % 9 == 4).count();
@@ -501,12 +604,30 @@ mod gaussians {
     #[test]
     fn prune_counts_gaussians_without_a_legal_edge() {
         // An octahedron: after one merge 5 vertices remain, so the second is refused.
-        let positions = vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
-        let faces = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        let positions = vec![
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+        ];
+        let faces = vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
         let mut m = ManifoldMesh::new(positions, faces).unwrap();
         let mut scene = tagged_scene(&m);
         scene.opacity_logits = vec![-10.0, -10.0, 3.0, 3.0, 3.0, 3.0];
-        let report = prune(&mut m, &mut scene, &PruneConfig { max_scale: 10.0, ..Default::default() }).unwrap();
+        let report =
+            prune(&mut m, &mut scene, &PruneConfig { max_scale: 10.0, ..Default::default() })
+                .unwrap();
         assert_eq!((report.candidates, report.pruned, report.kept_no_legal_edge), (2, 1, 1));
         assert_eq!(m.vertex_count(), 5);
         assert_sound(&m, 2, "octahedron");
@@ -517,9 +638,12 @@ mod gaussians {
 /// (Adam moments, gradient statistics) follows the scene through the returned remaps.
 #[test]
 fn optimizer_moments_and_statistics_follow_the_gaussians() {
-    use tagsplat::topology::{densify, gaussians_from_mesh, prune, DensifyConfig, InitConfig, PruneConfig};
+    use tagsplat::topology::{
+        densify, gaussians_from_mesh, prune, DensifyConfig, InitConfig, PruneConfig,
+    };
     let mut m = sphere();
-    let mut scene = gaussians_from_mesh(&m, &[], &InitConfig { sh_degree: 0, ..Default::default() });
+    let mut scene =
+        gaussians_from_mesh(&m, &[], &InitConfig { sh_degree: 0, ..Default::default() });
     let n = scene.len();
     // Ids in the DC term; moments = 10 × id (3 floats per row); statistics = id.
     for i in 0..n {
@@ -528,14 +652,23 @@ fn optimizer_moments_and_statistics_follow_the_gaussians() {
     let mut moments: Vec<f32> = (0..n).flat_map(|i| [10.0 * i as f32; 3]).collect();
     let mut stats: Vec<f32> = (0..n).map(|i| i as f32).collect();
     let scores: Vec<f32> = (0..m.face_rows()).map(|f| (f % 4 == 0) as u32 as f32).collect();
-    let d = densify(&mut m, &mut scene, &scores, &DensifyConfig { threshold: 0.5, large_scale: 10.0, ..Default::default() }).unwrap();
+    let d = densify(
+        &mut m,
+        &mut scene,
+        &scores,
+        &DensifyConfig { threshold: 0.5, large_scale: 10.0, ..Default::default() },
+    )
+    .unwrap();
     moments = tagsplat::topology::remap_strided(&moments, 3, &d.old_of_new, |_, row| row.fill(0.0));
     stats = remap_rows(&stats, &d.old_of_new, |_| 0.0);
     for (i, l) in scene.opacity_logits.iter_mut().enumerate() {
         *l = if i % 7 == 3 { -10.0 } else { 3.0 };
     }
-    let p = prune(&mut m, &mut scene, &PruneConfig { max_scale: 10.0, ..Default::default() }).unwrap();
-    moments = tagsplat::topology::remap_strided(&moments, 3, &p.old_of_new, |_, _| unreachable!("pruning adds no rows"));
+    let p =
+        prune(&mut m, &mut scene, &PruneConfig { max_scale: 10.0, ..Default::default() }).unwrap();
+    moments = tagsplat::topology::remap_strided(&moments, 3, &p.old_of_new, |_, _| {
+        unreachable!("pruning adds no rows")
+    });
     stats = remap_rows(&stats, &p.old_of_new, |_| unreachable!("pruning adds no rows"));
     assert!(d.split_faces > 50 && p.pruned > 20, "{} splits, {} merges", d.split_faces, p.pruned);
     assert_eq!((moments.len(), stats.len()), (3 * scene.len(), scene.len()));
@@ -544,7 +677,11 @@ fn optimizer_moments_and_statistics_follow_the_gaussians() {
         let kept_since_start = tagsplat::topology::compose(&d.old_of_new, &p.old_of_new)[row];
         if kept_since_start == NEW_ROW {
             fresh += 1;
-            assert_eq!((moments[3 * row], stats[row]), (0.0, 0.0), "row {row}: new Gaussians start with zero moments");
+            assert_eq!(
+                (moments[3 * row], stats[row]),
+                (0.0, 0.0),
+                "row {row}: new Gaussians start with zero moments"
+            );
         } else {
             let id = scene.sh[3 * row];
             assert_eq!(id, kept_since_start as f32, "row {row}");
@@ -556,18 +693,24 @@ fn optimizer_moments_and_statistics_follow_the_gaussians() {
 
 #[test]
 fn densify_and_prune_refuse_mismatched_inputs() {
-    use tagsplat::topology::{densify, gaussians_from_mesh, prune, DensifyConfig, InitConfig, PruneConfig};
+    use tagsplat::topology::{
+        densify, gaussians_from_mesh, prune, DensifyConfig, InitConfig, PruneConfig,
+    };
     let mut m = sphere();
-    let mut scene = gaussians_from_mesh(&m, &[], &InitConfig { sh_degree: 0, ..Default::default() });
+    let mut scene =
+        gaussians_from_mesh(&m, &[], &InitConfig { sh_degree: 0, ..Default::default() });
     let short = vec![1.0; m.face_rows() - 1];
-    let err = densify(&mut m, &mut scene, &short, &DensifyConfig::default()).unwrap_err().to_string();
+    let err =
+        densify(&mut m, &mut scene, &short, &DensifyConfig::default()).unwrap_err().to_string();
     assert!(err.contains("face scores"), "{err}");
     scene.positions.pop();
     let err = prune(&mut m, &mut scene, &PruneConfig::default()).unwrap_err().to_string();
     assert!(err.contains("Gaussians for"), "{err}");
-    let mut scene = gaussians_from_mesh(&m, &[], &InitConfig { sh_degree: 0, ..Default::default() });
+    let mut scene =
+        gaussians_from_mesh(&m, &[], &InitConfig { sh_degree: 0, ..Default::default() });
     let h = m.edges().next().unwrap();
-    let mid = [0, 1, 2].map(|k| 0.5 * (m.positions[m.origin(h) as usize][k] + m.positions[m.dest(h) as usize][k]));
+    let mid = [0, 1, 2]
+        .map(|k| 0.5 * (m.positions[m.origin(h) as usize][k] + m.positions[m.dest(h) as usize][k]));
     m.collapse_edge(h, mid).unwrap();
     let err = prune(&mut m, &mut scene, &PruneConfig::default()).unwrap_err().to_string();
     assert!(err.contains("compact"), "{err}");
@@ -581,7 +724,8 @@ fn collapsing_a_thin_tube_across_is_refused_and_leaves_the_mesh_untouched() {
     let (p, f) = torus(8, minor);
     let mut m = ManifoldMesh::new(p, f).unwrap();
     let before = counts(&m);
-    let across: Vec<u32> = m.edges().filter(|&h| m.origin(h) / minor == m.dest(h) / minor).collect();
+    let across: Vec<u32> =
+        m.edges().filter(|&h| m.origin(h) / minor == m.dest(h) / minor).collect();
     assert_eq!(across.len(), 8 * 3);
     for h in across {
         assert_eq!(m.collapse_edge(h, midpoint(&m, h)), Err(CollapseRefusal::LinkCondition));

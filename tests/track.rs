@@ -41,20 +41,32 @@ fn assert_relative_eq(a: f64, b: f64, tolerance: f64, what: &str) {
 fn closest_point_equals_brute_force_on_random_meshes() {
     let mut rng = SplitMix64::new(11);
     let ellipsoid = sequence(4, 1, affine);
-    let meshes = [soup(&mut rng, 1), soup(&mut rng, 7), soup(&mut rng, 3000), (ellipsoid.frames[0].clone(), ellipsoid.faces.clone())];
+    let meshes = [
+        soup(&mut rng, 1),
+        soup(&mut rng, 7),
+        soup(&mut rng, 3000),
+        (ellipsoid.frames[0].clone(), ellipsoid.faces.clone()),
+    ];
     for (positions, faces) in meshes {
         let bvh = SurfaceBvh::build(&positions, &faces).unwrap();
         let corners = brute::corners_f64(&triangles(&positions, &faces).unwrap());
         for i in 0..1500 {
             // Mostly near the geometry, some far outside it.
             let p = random_in_cube(&mut rng) * if i % 10 == 0 { 10.0 } else { 1.2 };
-            let (fast, slow) = (bvh.closest_point(p).unwrap(), brute::closest_point(&corners, p).unwrap());
+            let (fast, slow) =
+                (bvh.closest_point(p).unwrap(), brute::closest_point(&corners, p).unwrap());
             assert_relative_eq(fast.distance, slow.distance, 1e-6, "distance");
             // The answer is self-consistent: its barycentrics give its point on its face.
             let [a, b, c] = corners[fast.face as usize];
             let q = a * fast.barycentric[0] + b * fast.barycentric[1] + c * fast.barycentric[2];
-            assert!(q.distance(fast.position) <= 1e-12 && (p.distance(q) - fast.distance).abs() <= 1e-12);
-            assert!(fast.barycentric.iter().all(|&b| b >= -1e-12) && (fast.barycentric.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+            assert!(
+                q.distance(fast.position) <= 1e-12
+                    && (p.distance(q) - fast.distance).abs() <= 1e-12
+            );
+            assert!(
+                fast.barycentric.iter().all(|&b| b >= -1e-12)
+                    && (fast.barycentric.iter().sum::<f64>() - 1.0).abs() < 1e-12
+            );
         }
     }
 }
@@ -63,7 +75,11 @@ fn closest_point_equals_brute_force_on_random_meshes() {
 fn ray_casts_equal_brute_force_on_random_meshes() {
     let mut rng = SplitMix64::new(12);
     let ellipsoid = sequence(4, 1, affine);
-    for (positions, faces) in [soup(&mut rng, 5), soup(&mut rng, 3000), (ellipsoid.frames[0].clone(), ellipsoid.faces.clone())] {
+    for (positions, faces) in [
+        soup(&mut rng, 5),
+        soup(&mut rng, 3000),
+        (ellipsoid.frames[0].clone(), ellipsoid.faces.clone()),
+    ] {
         let bvh = SurfaceBvh::build(&positions, &faces).unwrap();
         let corners = brute::corners_f64(&triangles(&positions, &faces).unwrap());
         let mut hits = 0;
@@ -72,7 +88,11 @@ fn ray_casts_equal_brute_force_on_random_meshes() {
             // every 7th ray is axis-parallel, where the slab test divides by zero.
             let [a, b, c] = corners[(rng.next_u32() as usize) % corners.len()];
             let (u, v) = (rng.next_f64(), rng.next_f64());
-            let target = if u + v <= 1.0 { a + (b - a) * u + (c - a) * v } else { a + (b - a) * (1.0 - u) + (c - a) * (1.0 - v) };
+            let target = if u + v <= 1.0 {
+                a + (b - a) * u + (c - a) * v
+            } else {
+                a + (b - a) * (1.0 - u) + (c - a) * (1.0 - v)
+            };
             let (origin, dir) = match i % 7 {
                 0 => (target - DVec3::X * 3.0, DVec3::X),
                 1 => (target + DVec3::Y * 3.0, -DVec3::Y),
@@ -89,9 +109,14 @@ fn ray_casts_equal_brute_force_on_random_meshes() {
                     // The hit point from barycentrics and from t agree up to the triangle's
                     // conditioning: slivers (rounded collinear corners) amplify rounding.
                     let [a, b, c] = corners[fast.face as usize];
-                    let sine = (b - a).cross(c - a).length() / ((b - a).length() * (c - a).length());
+                    let sine =
+                        (b - a).cross(c - a).length() / ((b - a).length() * (c - a).length());
                     let gap = fast.position.distance(origin + dir * fast.distance);
-                    assert!(gap <= 1e-11 * (1.0 + fast.distance) / sine, "gap {gap}, t {}, sine {sine}", fast.distance);
+                    assert!(
+                        gap <= 1e-11 * (1.0 + fast.distance) / sine,
+                        "gap {gap}, t {}, sine {sine}",
+                        fast.distance
+                    );
                 }
                 (None, None) => {}
                 (fast, slow) => panic!("ray {origin} {dir}: BVH {fast:?}, brute force {slow:?}"),
@@ -105,19 +130,35 @@ fn ray_casts_equal_brute_force_on_random_meshes() {
 fn unusable_meshes_are_errors_not_panics() {
     let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
     assert!(matches!(SurfaceBvh::build(&p, &[]), Err(TrackError::EmptyMesh)));
-    assert!(matches!(SurfaceBvh::build(&p, &[[0, 1, 3]]), Err(TrackError::IndexOutOfRange { face: 0, index: 3, vertices: 3 })));
+    assert!(matches!(
+        SurfaceBvh::build(&p, &[[0, 1, 3]]),
+        Err(TrackError::IndexOutOfRange { face: 0, index: 3, vertices: 3 })
+    ));
     let nan = [[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]];
-    assert!(matches!(SurfaceBvh::build(&nan, &[[0, 1, 2]]), Err(TrackError::NonFinitePosition { vertex: 1 })));
+    assert!(matches!(
+        SurfaceBvh::build(&nan, &[[0, 1, 2]]),
+        Err(TrackError::NonFinitePosition { vertex: 1 })
+    ));
     // A mesh made only of degenerate triangles still answers exactly.
     let flat = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
-    let hit = SurfaceBvh::build(&flat, &[[0, 1, 2]]).unwrap().closest_point(DVec3::new(1.5, 1.0, 0.0)).unwrap();
-    assert!((hit.distance - 1.0).abs() < 1e-15 && hit.position.distance(DVec3::new(1.5, 0.0, 0.0)) < 1e-15);
+    let hit = SurfaceBvh::build(&flat, &[[0, 1, 2]])
+        .unwrap()
+        .closest_point(DVec3::new(1.5, 1.0, 0.0))
+        .unwrap();
+    assert!(
+        (hit.distance - 1.0).abs() < 1e-15
+            && hit.position.distance(DVec3::new(1.5, 0.0, 0.0)) < 1e-15
+    );
 }
 
 #[test]
 fn tracking_the_vertices_reproduces_their_trajectories_exactly() {
     let seq = sequence(3, 12, bend);
-    let points: Vec<(String, [f64; 3])> = seq.frames[0].iter().enumerate().map(|(i, p)| (format!("v{i}"), p.map(f64::from))).collect();
+    let points: Vec<(String, [f64; 3])> = seq.frames[0]
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (format!("v{i}"), p.map(f64::from)))
+        .collect();
     let report = track(&seq.faces, &seq.frames, &Queries::Points(points), 0.0).unwrap();
     assert!(report.unbound.is_empty());
     assert_eq!(report.points.len(), seq.frames[0].len());
@@ -144,7 +185,10 @@ fn random_surface_points_follow_the_analytic_motion() {
         let [a, b, c] = face.map(|k| DVec3::from(seq.frames[0][k as usize].map(f64::from)));
         let normal = (b - a).cross(c - a).normalize();
         let offset = if i % 2 == 0 { 0.0 } else { 1e-4 };
-        points.push((format!("p{i}"), (a * (1.0 - u - v) + b * u + c * v + normal * offset).to_array()));
+        points.push((
+            format!("p{i}"),
+            (a * (1.0 - u - v) + b * u + c * v + normal * offset).to_array(),
+        ));
     }
     let report = track(&seq.faces, &seq.frames, &Queries::Points(points.clone()), 0.001).unwrap();
     assert!(report.unbound.is_empty());
@@ -154,7 +198,11 @@ fn random_surface_points_follow_the_analytic_motion() {
         let surface0 = DVec3::from(point.trajectory[0]);
         for (t, position) in point.trajectory.iter().enumerate() {
             let expected = affine(t as f64, surface0);
-            assert!(expected.distance(DVec3::from(*position)) < 1e-5, "{} frame {t}: {position:?} vs {expected}", point.id);
+            assert!(
+                expected.distance(DVec3::from(*position)) < 1e-5,
+                "{} frame {t}: {position:?} vs {expected}",
+                point.id
+            );
         }
         assert!(surface0.distance(DVec3::from(*query)) <= 1.0001e-4);
     }
@@ -163,10 +211,17 @@ fn random_surface_points_follow_the_analytic_motion() {
 #[test]
 fn points_off_the_surface_are_reported_not_snapped() {
     let seq = sequence(3, 3, affine);
-    let points = vec![("near".to_string(), [1.001, 0.0, 0.0]), ("far".to_string(), [3.0, 0.0, 0.0]), ("inf".to_string(), [f64::INFINITY, 0.0, 0.0])];
+    let points = vec![
+        ("near".to_string(), [1.001, 0.0, 0.0]),
+        ("far".to_string(), [3.0, 0.0, 0.0]),
+        ("inf".to_string(), [f64::INFINITY, 0.0, 0.0]),
+    ];
     let report = track(&seq.faces, &seq.frames, &Queries::Points(points), 0.01).unwrap();
     assert_eq!(report.points.iter().map(|p| p.id.as_str()).collect::<Vec<_>>(), vec!["near"]);
-    assert_eq!(report.unbound.iter().map(|p| p.id.as_str()).collect::<Vec<_>>(), vec!["far", "inf"]);
+    assert_eq!(
+        report.unbound.iter().map(|p| p.id.as_str()).collect::<Vec<_>>(),
+        vec!["far", "inf"]
+    );
     // The ellipsoid's x radius is 1 (up to f32 rounding and the facets): 2 units away.
     let far = report.unbound[0].distance.unwrap();
     assert!((far - 2.0).abs() < 1e-3, "{far}");
@@ -180,24 +235,47 @@ fn look_at_origin(eye: DVec3, size: u32) -> Camera {
     let down = forward.cross(right);
     let rotation = glam::DMat3::from_cols(right, down, forward).transpose();
     let world_to_camera = DMat4::from_mat3_translation(rotation, -(rotation * eye));
-    Camera::new(size, size, size as f64, size as f64, size as f64 / 2.0, size as f64 / 2.0, world_to_camera).unwrap()
+    Camera::new(
+        size,
+        size,
+        size as f64,
+        size as f64,
+        size as f64 / 2.0,
+        size as f64 / 2.0,
+        world_to_camera,
+    )
+    .unwrap()
 }
 
 #[test]
 fn pixels_bind_where_their_rays_first_hit_the_surface() {
     let seq = sequence(4, 5, affine);
     let camera = look_at_origin(DVec3::new(3.0, -2.0, 1.0), 64);
-    let pixels: Vec<(String, [f64; 2])> = (0..64).flat_map(|j| (0..64).map(move |i| (format!("{i}_{j}"), [i as f64 + 0.5, j as f64 + 0.5]))).collect();
-    let report = track(&seq.faces, &seq.frames, &Queries::Pixels { camera, pixels: pixels.clone() }, 0.0).unwrap();
-    assert!(report.points.len() > 300 && report.unbound.len() > 300, "{} hits, {} misses", report.points.len(), report.unbound.len());
+    let pixels: Vec<(String, [f64; 2])> = (0..64)
+        .flat_map(|j| (0..64).map(move |i| (format!("{i}_{j}"), [i as f64 + 0.5, j as f64 + 0.5])))
+        .collect();
+    let report =
+        track(&seq.faces, &seq.frames, &Queries::Pixels { camera, pixels: pixels.clone() }, 0.0)
+            .unwrap();
+    assert!(
+        report.points.len() > 300 && report.unbound.len() > 300,
+        "{} hits, {} misses",
+        report.points.len(),
+        report.unbound.len()
+    );
     let corners = brute::corners_f64(&triangles(&seq.frames[0], &seq.faces).unwrap());
-    let by_id: std::collections::HashMap<&str, [f64; 2]> = pixels.iter().map(|(id, uv)| (id.as_str(), *uv)).collect();
+    let by_id: std::collections::HashMap<&str, [f64; 2]> =
+        pixels.iter().map(|(id, uv)| (id.as_str(), *uv)).collect();
     for point in &report.points {
         let [u, v] = by_id[point.id.as_str()];
         let hit = DVec3::from(point.trajectory[0]);
         // The hit projects back onto its pixel centre and is the nearest hit along the ray.
         let projected = camera.project(hit).unwrap();
-        assert!((projected.x - u).abs() < 1e-6 && (projected.y - v).abs() < 1e-6, "{} -> {projected}", point.id);
+        assert!(
+            (projected.x - u).abs() < 1e-6 && (projected.y - v).abs() < 1e-6,
+            "{} -> {projected}",
+            point.id
+        );
         let (origin, dir) = camera.pixel_ray(u, v);
         let nearest = brute::ray_cast(&corners, origin, dir).unwrap();
         assert!(nearest.position.distance(hit) < 1e-9);
@@ -214,19 +292,28 @@ fn cli_tracks_points_of_a_folder_sequence_into_csv_json_and_png() {
     let dir = temp_dir("cli-track");
     let seq = sequence(3, 6, bend);
     seq.write_folder(&dir.join("frames"), tagsplat::io::sequence::FrameFormat::Ply).unwrap();
-    let csv: String = "id,x,y,z\n".to_string() + &[0usize, 17, 40].iter().map(|&v| {
-        let p = seq.frames[0][v];
-        // The f64 spelling of the f32 coordinates, so the points are the vertices exactly.
-        format!("vertex{v},{},{},{}\n", p[0] as f64, p[1] as f64, p[2] as f64)
-    }).collect::<String>();
+    let csv: String = "id,x,y,z\n".to_string()
+        + &[0usize, 17, 40]
+            .iter()
+            .map(|&v| {
+                let p = seq.frames[0][v];
+                // The f64 spelling of the f32 coordinates, so the points are the vertices exactly.
+                format!("vertex{v},{},{},{}\n", p[0] as f64, p[1] as f64, p[2] as f64)
+            })
+            .collect::<String>();
     std::fs::write(dir.join("points.csv"), csv).unwrap();
     let run = |extra: &[&str]| {
         std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
-            .args(["track", "--sequence"]).arg(dir.join("frames"))
-            .arg("--points").arg(dir.join("points.csv"))
-            .arg("--out").arg(dir.join("tracks.csv"))
-            .arg("--json").arg(dir.join("tracks.json"))
-            .arg("--plot").arg(dir.join("tracks.png"))
+            .args(["track", "--sequence"])
+            .arg(dir.join("frames"))
+            .arg("--points")
+            .arg(dir.join("points.csv"))
+            .arg("--out")
+            .arg(dir.join("tracks.csv"))
+            .arg("--json")
+            .arg(dir.join("tracks.json"))
+            .arg("--plot")
+            .arg(dir.join("tracks.png"))
             .args(extra)
             .output()
             .unwrap()
@@ -236,7 +323,8 @@ fn cli_tracks_points_of_a_folder_sequence_into_csv_json_and_png() {
     let tracks = std::fs::read_to_string(dir.join("tracks.csv")).unwrap();
     let mut lines = tracks.lines();
     assert_eq!(lines.next(), Some("id,frame,x,y,z"));
-    let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
+    let rows: Vec<Vec<String>> =
+        lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
     assert_eq!(rows.len(), 3 * 6);
     for row in &rows {
         let v: usize = row[0].trim_start_matches("vertex").parse().unwrap();
@@ -244,7 +332,8 @@ fn cli_tracks_points_of_a_folder_sequence_into_csv_json_and_png() {
         let xyz: Vec<f64> = row[2..].iter().map(|s| s.parse().unwrap()).collect();
         assert_eq!(xyz, seq.frames[t][v].map(f64::from).to_vec(), "vertex {v} frame {t}");
     }
-    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("tracks.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("tracks.json")).unwrap()).unwrap();
     assert_eq!(json["points"].as_array().unwrap().len(), 3);
     assert_eq!(json["points"][0]["distance"], 0.0);
     assert!(json["points"][0]["face"].as_u64().unwrap() < seq.faces.len() as u64);
@@ -256,7 +345,8 @@ fn cli_tracks_points_of_a_folder_sequence_into_csv_json_and_png() {
     let stderr = String::from_utf8_lossy(&failed.stderr);
     assert!(!failed.status.success() && stderr.contains("point moon not bound"), "{stderr}");
     assert!(run(&["--skip-unbound"]).status.success());
-    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("tracks.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("tracks.json")).unwrap()).unwrap();
     assert_eq!(json["unbound"][0]["id"], "moon");
     std::fs::remove_dir_all(&dir).unwrap();
 }

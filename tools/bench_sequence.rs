@@ -35,17 +35,24 @@ pub struct BenchSequenceArgs {
 pub fn run(context: impl FnOnce() -> Result<Arc<GpuContext>>, a: BenchSequenceArgs) -> Result<()> {
     let config = a.config.as_deref().map(TrainConfig::load).transpose()?.unwrap_or_default();
     let name = a.data.file_name().map_or("data".into(), |n| n.to_string_lossy().into_owned());
-    let out = a.out.unwrap_or_else(|| std::env::temp_dir().join(format!("tagsplat-bench-{name}-{}", std::process::id())));
+    let out = a.out.unwrap_or_else(|| {
+        std::env::temp_dir().join(format!("tagsplat-bench-{name}-{}", std::process::id()))
+    });
     let job = TrainJob { data: a.data, out, mesh: None, config, frames: a.frames };
     let eval = SequenceEvalOptions { chamfer_samples: a.chamfer_samples, ..Default::default() };
     // One line per frame on stderr, so stdout stays one JSON object with --json.
     let mut current = None;
     let mut progress = |p: TrainProgress| {
         if current.replace(p.frame) != Some(p.frame) {
-            eprintln!("training frame {} of {} ({} iterations)", p.frame, p.frames_end, p.iterations);
+            eprintln!(
+                "training frame {} of {} ({} iterations)",
+                p.frame, p.frames_end, p.iterations
+            );
         }
     };
-    let report = bench_sequence(&context()?, &job, &eval, &mut progress).with_context(|| format!("bench sequence --data {} --out {}", job.data.display(), job.out.display()))?;
+    let report = bench_sequence(&context()?, &job, &eval, &mut progress).with_context(|| {
+        format!("bench sequence --data {} --out {}", job.data.display(), job.out.display())
+    })?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
@@ -59,7 +66,12 @@ fn print_report(r: &SequenceBenchReport) {
     println!("device          {}", r.device);
     println!("host CPU        {}", r.cpu.as_deref().unwrap_or("unknown"));
     println!("data, output    {}, {}", r.data.display(), r.out.display());
-    println!("training        {:.1} s in all; frame 0 {}, later frames {} each (mean)", r.train_total_s, seconds(r.frame0_s), seconds(r.later_frame_mean_s));
+    println!(
+        "training        {:.1} s in all; frame 0 {}, later frames {} each (mean)",
+        r.train_total_s,
+        seconds(r.frame0_s),
+        seconds(r.later_frame_mean_s)
+    );
     println!("ground truth    {}", r.ground_truth.display());
     crate::eval::print_scores(&r.out, &r.scores, &r.rows);
     r.files.iter().for_each(|f| println!("wrote {}", f.display()));

@@ -20,9 +20,11 @@ pub enum DatasetCommand {
 
 pub fn run(command: DatasetCommand) -> Result<()> {
     let DatasetCommand::Info { data, check, json } = command;
-    let d = Dataset::load(&data).with_context(|| format!("cannot load the dataset in {}", data.display()))?;
+    let d = Dataset::load(&data)
+        .with_context(|| format!("cannot load the dataset in {}", data.display()))?;
     let missing: Vec<String> = d.missing_files().iter().map(|p| p.display().to_string()).collect();
-    let problems: Vec<String> = if check { d.check().iter().map(ToString::to_string).collect() } else { Vec::new() };
+    let problems: Vec<String> =
+        if check { d.check().iter().map(ToString::to_string).collect() } else { Vec::new() };
     let cameras: Vec<_> = d
         .cameras
         .iter()
@@ -42,11 +44,26 @@ pub fn run(command: DatasetCommand) -> Result<()> {
         return Ok(());
     }
     println!("dataset   {} ({:?})", d.root.display(), d.format);
-    println!("frames    {} (time {:.4} .. {:.4}), {} images", d.frames.len(), d.frames[0].time, d.frames[d.frames.len() - 1].time, views);
+    println!(
+        "frames    {} (time {:.4} .. {:.4}), {} images",
+        d.frames.len(),
+        d.frames[0].time,
+        d.frames[d.frames.len() - 1].time,
+        views
+    );
     println!("cameras   {} ({} train, {} test)", d.cameras.len(), d.train.len(), d.test.len());
     for c in &cameras {
-        println!("  {:<10} {}×{}  fx {:.2} fy {:.2}  cx {:.2} cy {:.2}  {}", c["name"].as_str().unwrap_or(""), c["width"], c["height"],
-            c["fx"].as_f64().unwrap_or(0.0), c["fy"].as_f64().unwrap_or(0.0), c["cx"].as_f64().unwrap_or(0.0), c["cy"].as_f64().unwrap_or(0.0), c["split"].as_str().unwrap_or(""));
+        println!(
+            "  {:<10} {}×{}  fx {:.2} fy {:.2}  cx {:.2} cy {:.2}  {}",
+            c["name"].as_str().unwrap_or(""),
+            c["width"],
+            c["height"],
+            c["fx"].as_f64().unwrap_or(0.0),
+            c["fy"].as_f64().unwrap_or(0.0),
+            c["cx"].as_f64().unwrap_or(0.0),
+            c["cy"].as_f64().unwrap_or(0.0),
+            c["split"].as_str().unwrap_or("")
+        );
     }
     println!("missing   {} file(s)", missing.len());
     for m in missing.iter().take(20) {

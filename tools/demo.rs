@@ -19,25 +19,50 @@ pub struct DemoArgs {
 }
 
 pub fn demo(ctx: &Arc<GpuContext>, args: &DemoArgs) -> Result<()> {
-    let options = DemoOptions { frames: args.frames as usize, resolution: args.resolution, ..Default::default() };
+    let options = DemoOptions {
+        frames: args.frames as usize,
+        resolution: args.resolution,
+        ..Default::default()
+    };
     let bar = ProgressBar::new(0);
-    bar.set_style(ProgressStyle::with_template("frame {msg} {bar:30} {pos}/{len} it  {elapsed}").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    bar.set_style(
+        ProgressStyle::with_template("frame {msg} {bar:30} {pos}/{len} it  {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
     let mut progress = |p: tagsplat::train::pipeline::TrainProgress| {
         bar.set_message(format!("{}/{}", p.frame, p.frames_end));
         bar.set_length(p.iterations as u64);
         bar.set_position(p.iteration as u64);
     };
-    let r = run_demo(ctx, &args.out, &options, &mut progress).with_context(|| format!("demo in {}", args.out.display()))?;
+    let r = run_demo(ctx, &args.out, &options, &mut progress)
+        .with_context(|| format!("demo in {}", args.out.display()))?;
     bar.finish_and_clear();
     super::train::print_report(&r.train);
     println!();
-    println!("against the ground truth ({} frames, {} views at {}², {} tracked points):", options.frames, options.views, options.resolution, r.scores.tracked_points);
+    println!(
+        "against the ground truth ({} frames, {} views at {}², {} tracked points):",
+        options.frames, options.views, options.resolution, r.scores.tracked_points
+    );
     let s = &r.scores;
-    println!("  held-out PSNR       Gaussians {:.2} dB, mesh {:.2} dB (mean over frames)", s.psnr_gs, s.psnr_mesh);
-    println!("  Chamfer / diagonal  {:.5}  (mean nearest-neighbour distance, 20 000 samples per mesh)", s.chamfer_per_diagonal);
+    println!(
+        "  held-out PSNR       Gaussians {:.2} dB, mesh {:.2} dB (mean over frames)",
+        s.psnr_gs, s.psnr_mesh
+    );
+    println!(
+        "  Chamfer / diagonal  {:.5}  (mean nearest-neighbour distance, 20 000 samples per mesh)",
+        s.chamfer_per_diagonal
+    );
     println!("  EMD / diagonal      {:.5}  (exact, 500 samples per mesh)", s.emd_per_diagonal);
-    println!("  tracking RMSE       {:.5} of the subject's height (MSE {:.3e} scene units²)", s.tracking_rmse_per_height, s.tracking_mse);
-    println!("wrote {}, {}, {}", r.data.display(), r.out.display(), args.out.join("demo.json").display());
+    println!(
+        "  tracking RMSE       {:.5} of the subject's height (MSE {:.3e} scene units²)",
+        s.tracking_rmse_per_height, s.tracking_mse
+    );
+    println!(
+        "wrote {}, {}, {}",
+        r.data.display(),
+        r.out.display(),
+        args.out.join("demo.json").display()
+    );
     Ok(())
 }
 
@@ -70,7 +95,10 @@ pub fn ablate(ctx: &Arc<GpuContext>, args: &AblateArgs) -> Result<()> {
         None => tagsplat::train::pipeline::TrainConfig::default(),
     };
     let bar = ProgressBar::new(0);
-    bar.set_style(ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} it").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    bar.set_style(
+        ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} it")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
     let mut progress = |name: &str, p: tagsplat::train::pipeline::TrainProgress| {
         bar.set_message(format!("{name}: frame {}/{}", p.frame, p.frames_end));
         bar.set_length(p.iterations as u64);
@@ -82,11 +110,19 @@ pub fn ablate(ctx: &Arc<GpuContext>, args: &AblateArgs) -> Result<()> {
                 Some(range) => range.clone(),
                 None => 0..tagsplat::io::dataset::Dataset::load(&args.data)?.frames.len(),
             };
-            let job = tagsplat::ablate::TemporalAblationJob { data: args.data.clone(), out: args.out.clone(), base, frame0: frame0.clone(), frames };
-            tagsplat::ablate::run_temporal_ablations(ctx, &job, &mut progress).with_context(|| format!("temporal ablations of {}", args.data.display()))?;
+            let job = tagsplat::ablate::TemporalAblationJob {
+                data: args.data.clone(),
+                out: args.out.clone(),
+                base,
+                frame0: frame0.clone(),
+                frames,
+            };
+            tagsplat::ablate::run_temporal_ablations(ctx, &job, &mut progress)
+                .with_context(|| format!("temporal ablations of {}", args.data.display()))?;
         }
         _ => {
-            tagsplat::demo::run_ablations(ctx, &args.data, &args.out, &base, &mut progress).with_context(|| format!("ablations of {}", args.data.display()))?;
+            tagsplat::demo::run_ablations(ctx, &args.data, &args.out, &base, &mut progress)
+                .with_context(|| format!("ablations of {}", args.data.display()))?;
         }
     }
     bar.finish_and_clear();

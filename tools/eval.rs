@@ -6,7 +6,10 @@ use anyhow::{Context, Result};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use tagsplat::eval::sequence::{FrameScores, FrameValue};
-use tagsplat::eval::{evaluate_folders, evaluate_sequence, find_ground_truth, write_sequence_eval, FolderOptions, GroundTruth, SequenceEvalOptions, SequenceSummary};
+use tagsplat::eval::{
+    evaluate_folders, evaluate_sequence, find_ground_truth, write_sequence_eval, FolderOptions,
+    GroundTruth, SequenceEvalOptions, SequenceSummary,
+};
 
 #[derive(clap::Args)]
 pub struct EvalArgs {
@@ -40,9 +43,14 @@ pub fn run(a: EvalArgs) -> Result<()> {
     let context = || format!("eval --pred {} --gt {}", a.pred.display(), a.gt.display());
     if let Some(root) = find_ground_truth(&a.gt) {
         let gt = GroundTruth::read(&root).with_context(context)?;
-        let options = SequenceEvalOptions { chamfer_samples: a.chamfer_samples.unwrap_or(5000), seed: a.seed, frames: a.frames.clone() };
+        let options = SequenceEvalOptions {
+            chamfer_samples: a.chamfer_samples.unwrap_or(5000),
+            seed: a.seed,
+            frames: a.frames.clone(),
+        };
         let eval = evaluate_sequence(&a.pred, &gt, &options).with_context(context)?;
-        let files = write_sequence_eval(a.out.as_deref().unwrap_or(&a.pred), &eval).with_context(context)?;
+        let files = write_sequence_eval(a.out.as_deref().unwrap_or(&a.pred), &eval)
+            .with_context(context)?;
         if a.json {
             println!("{}", serde_json::to_string_pretty(&eval)?);
         } else {
@@ -57,14 +65,23 @@ pub fn run(a: EvalArgs) -> Result<()> {
 
 /// The file-by-file comparison of two folders in the same layout.
 fn folders(a: &EvalArgs) -> Result<()> {
-    let options = FolderOptions { chamfer_samples: a.chamfer_samples.unwrap_or(30_000), emd_samples: a.emd_samples, seed: a.seed };
+    let options = FolderOptions {
+        chamfer_samples: a.chamfer_samples.unwrap_or(30_000),
+        emd_samples: a.emd_samples,
+        seed: a.seed,
+    };
     let r = evaluate_folders(&a.pred, &a.gt, &options)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&r)?);
         return Ok(());
     }
     if let (Some(sq), Some(m), Some(e)) = (r.chamfer_squared_mean, r.chamfer_mean, r.emd_mean) {
-        println!("meshes    {} frames; {} Chamfer samples, {} EMD samples per mesh", r.meshes.len(), r.chamfer_samples, r.emd_samples);
+        println!(
+            "meshes    {} frames; {} Chamfer samples, {} EMD samples per mesh",
+            r.meshes.len(),
+            r.chamfer_samples,
+            r.emd_samples
+        );
         println!("  Chamfer (mean of squared NN distances)  {sq:.6e} scene units²");
         println!("  Chamfer (mean of NN distances)          {m:.6e} scene units ({:.4e} of the GT bounding-box diagonal)", r.meshes.iter().map(|f| f.chamfer.mean_fraction).sum::<f64>() / r.meshes.len() as f64);
         println!("  EMD (mean matched distance, exact)      {e:.6e} scene units");
@@ -85,7 +102,10 @@ fn cell(v: Option<f64>, digits: usize, percent: bool) -> String {
 
 /// The per-frame table and the summary of a benchmark evaluation of the folder `pred`.
 pub fn print_scores(pred: &Path, s: &SequenceSummary, frames: &[FrameScores]) {
-    println!("size {:.4} scene units; {} points, {} Chamfer samples per mesh", s.size, s.points, s.chamfer_samples);
+    println!(
+        "size {:.4} scene units; {} points, {} Chamfer samples per mesh",
+        s.size, s.points, s.chamfer_samples
+    );
     println!("frame  track RMSE %  track max %  Chamfer %  PSNR gs dB  PSNR mesh dB  iters  seconds  stop reason");
     for f in frames {
         let t = &f.train;
@@ -104,14 +124,37 @@ pub fn print_scores(pred: &Path, s: &SequenceSummary, frames: &[FrameScores]) {
     }
     println!("(% = per cent of size)");
     if !s.missing_frames.is_empty() {
-        println!("missing frames   {:?} (not in {})", s.missing_frames, pred.join("meshes").display());
+        println!(
+            "missing frames   {:?} (not in {})",
+            s.missing_frames,
+            pred.join("meshes").display()
+        );
     }
-    let frame_value = |v: Option<FrameValue>| v.map_or("-".into(), |v| format!("{:.3}% at frame {}", v.value * 100.0, v.frame));
-    println!("tracking RMSE    {}% over all points and frames; worst frame {}; max {}%", cell(s.tracking_rmse_over_size, 3, true), frame_value(s.tracking_worst_frame), cell(s.tracking_max_over_size, 3, true));
+    let frame_value = |v: Option<FrameValue>| {
+        v.map_or("-".into(), |v| format!("{:.3}% at frame {}", v.value * 100.0, v.frame))
+    };
+    println!(
+        "tracking RMSE    {}% over all points and frames; worst frame {}; max {}%",
+        cell(s.tracking_rmse_over_size, 3, true),
+        frame_value(s.tracking_worst_frame),
+        cell(s.tracking_max_over_size, 3, true)
+    );
     println!("binding          {:.3}% mean, {:.3}% max distance of the points to the predicted frame-0 surface", s.binding_mean_over_size * 100.0, s.binding_max_over_size * 100.0);
-    println!("Chamfer          {}% mean over frames; worst frame {}", cell(s.chamfer_mean_over_size, 3, true), frame_value(s.chamfer_worst_frame));
-    println!("PSNR gs          {} dB first frame, {} dB last", cell(s.psnr_gs_first_db, 2, false), cell(s.psnr_gs_last_db, 2, false));
-    println!("PSNR mesh        {} dB first frame, {} dB last", cell(s.psnr_mesh_first_db, 2, false), cell(s.psnr_mesh_last_db, 2, false));
+    println!(
+        "Chamfer          {}% mean over frames; worst frame {}",
+        cell(s.chamfer_mean_over_size, 3, true),
+        frame_value(s.chamfer_worst_frame)
+    );
+    println!(
+        "PSNR gs          {} dB first frame, {} dB last",
+        cell(s.psnr_gs_first_db, 2, false),
+        cell(s.psnr_gs_last_db, 2, false)
+    );
+    println!(
+        "PSNR mesh        {} dB first frame, {} dB last",
+        cell(s.psnr_mesh_first_db, 2, false),
+        cell(s.psnr_mesh_last_db, 2, false)
+    );
     if s.train_report.is_none() {
         println!("no report.json in {}: PSNR, iterations and seconds are absent", pred.display());
     }

@@ -45,10 +45,15 @@ pub fn fit(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: FitArgs) -> 
     if let Some(iters) = args.iters {
         config.iterations = iters;
     }
-    let (Some(data), Some(out)) = (args.data, args.out) else { bail!("--data and --out are required") };
+    let (Some(data), Some(out)) = (args.data, args.out) else {
+        bail!("--data and --out are required")
+    };
     let ctx = context()?;
     let bar = ProgressBar::new(config.iterations as u64);
-    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} it  {per_sec}  {msg}  ETA {eta}").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} it  {per_sec}  {msg}  ETA {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
     let mut progress = |p: Progress| {
         bar.set_position(p.iteration as u64);
         if let Some(loss) = p.loss {
@@ -56,12 +61,19 @@ pub fn fit(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: FitArgs) -> 
         }
     };
     let job = FitJob { data: data.clone(), frame: args.frame, init: args.init, config };
-    let outcome = run_fit_job(&ctx, &job, &mut progress).with_context(|| format!("fit of {} frame {}", data.display(), args.frame))?;
+    let outcome = run_fit_job(&ctx, &job, &mut progress)
+        .with_context(|| format!("fit of {} frame {}", data.display(), args.frame))?;
     bar.finish_and_clear();
     let written = write_fit_outputs(&out, &outcome)?;
     let r = &outcome.report;
-    println!("{} iterations in {:.1} s ({:.1} it/s, {} Gaussians) on {}", r.iterations, r.train_wall_s, r.iterations_per_s, r.gaussians, r.device);
-    println!("{} PSNR {:.2} dB (from {:.2} dB), SSIM {:.4}", r.eval_views, r.psnr, r.initial_psnr, r.ssim);
+    println!(
+        "{} iterations in {:.1} s ({:.1} it/s, {} Gaussians) on {}",
+        r.iterations, r.train_wall_s, r.iterations_per_s, r.gaussians, r.device
+    );
+    println!(
+        "{} PSNR {:.2} dB (from {:.2} dB), SSIM {:.4}",
+        r.eval_views, r.psnr, r.initial_psnr, r.ssim
+    );
     for path in written {
         println!("wrote {}", path.display());
     }

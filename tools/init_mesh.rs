@@ -43,7 +43,8 @@ pub struct InitMeshArgs {
 }
 
 pub fn run(a: InitMeshArgs) -> Result<()> {
-    let data = Dataset::load(&a.data).with_context(|| format!("cannot load the dataset {}", a.data.display()))?;
+    let data = Dataset::load(&a.data)
+        .with_context(|| format!("cannot load the dataset {}", a.data.display()))?;
     let options = InitOptions {
         tolerance: a.tolerance,
         voxel_pixels: a.voxel_pixels,
@@ -54,15 +55,24 @@ pub fn run(a: InitMeshArgs) -> Result<()> {
         colors: !a.no_colors,
         ..InitOptions::default()
     };
-    let built = init_mesh(&data, a.frame, &options).with_context(|| format!("init-mesh --data {} --frame {}", a.data.display(), a.frame))?;
+    let built = init_mesh(&data, a.frame, &options)
+        .with_context(|| format!("init-mesh --data {} --frame {}", a.data.display(), a.frame))?;
     built.mesh.write_ply(&a.out).with_context(|| format!("cannot write {}", a.out.display()))?;
     let r = &built.report;
     if a.json {
         println!("{}", serde_json::to_string_pretty(r)?);
         return Ok(());
     }
-    println!("wrote {}: {} vertices, {} faces (closed manifold, one component)", a.out.display(), r.vertices, r.faces);
-    println!("views {}, pixel {:.4e} scene units, voxel {:.4e} scene units, grid {}×{}×{}", r.views, r.pixel, r.voxel, r.grid[0], r.grid[1], r.grid[2]);
+    println!(
+        "wrote {}: {} vertices, {} faces (closed manifold, one component)",
+        a.out.display(),
+        r.vertices,
+        r.faces
+    );
+    println!(
+        "views {}, pixel {:.4e} scene units, voxel {:.4e} scene units, grid {}×{}×{}",
+        r.views, r.pixel, r.voxel, r.grid[0], r.grid[1], r.grid[2]
+    );
     println!("remeshed {} → {} vertices at edge length {:.4e} scene units ({} splits, {} collapses, {} flips)", r.extracted_vertices, r.vertices, r.edge_length, r.remesh.splits, r.remesh.collapses, r.remesh.flips);
     println!("mask hole pixels filled {}, cavity samples filled {}, components dropped {}, unseen vertices {}", r.mask_hole_pixels, r.cavity_samples, r.components_dropped, r.unseen_vertices);
     let t = &r.seconds;

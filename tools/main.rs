@@ -19,13 +19,17 @@ mod synth;
 mod topology;
 mod train;
 use tagsplat::bench::{
-    bench_mesh, bench_sort, bench_splat, bench_train, MeshBenchConfig, MeshBenchReport, SortBenchReport, SplatBenchConfig,
-    SplatBenchReport, TrainBenchConfig, TrainBenchReport,
+    bench_mesh, bench_sort, bench_splat, bench_train, MeshBenchConfig, MeshBenchReport,
+    SortBenchReport, SplatBenchConfig, SplatBenchReport, TrainBenchConfig, TrainBenchReport,
 };
 use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
 
 #[derive(Parser)]
-#[command(name = "tagsplat", version, about = "Topology-consistent mesh sequences from multi-view video, on Vulkan compute")]
+#[command(
+    name = "tagsplat",
+    version,
+    about = "Topology-consistent mesh sequences from multi-view video, on Vulkan compute"
+)]
 struct Cli {
     /// Vulkan device to use: an index or part of its name (see `tagsplat devices`).
     /// Overrides the TAGSPLAT_DEVICE environment variable.
@@ -168,7 +172,8 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> Result<()> {
-    let options = ContextOptions { device: cli.device.clone(), validation: cli.validation.then_some(true) };
+    let options =
+        ContextOptions { device: cli.device.clone(), validation: cli.validation.then_some(true) };
     match cli.command {
         Command::Devices => devices(options.device.as_deref()),
         Command::Track(args) => track::track(args),
@@ -181,7 +186,12 @@ fn run(cli: Cli) -> Result<()> {
         Command::RenderMesh(args) => render_mesh::render_mesh(&context(&options)?, &args),
         Command::Bench(Bench::Mesh { triangles, resolution, views, rounds, json }) => {
             let ctx = context(&options)?;
-            let config = MeshBenchConfig { triangles: triangles as usize, resolution, views: views as usize, rounds: rounds as usize };
+            let config = MeshBenchConfig {
+                triangles: triangles as usize,
+                resolution,
+                views: views as usize,
+                rounds: rounds as usize,
+            };
             let report = bench_mesh(&ctx, &config).context("bench mesh")?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
@@ -199,7 +209,8 @@ fn run(cli: Cli) -> Result<()> {
         Command::Eval(args) => eval::run(args),
         Command::Bench(Bench::Sort { n, bits, repetitions, lsd_only, json }) => {
             let ctx = context(&options)?;
-            let report = bench_sort(&ctx, n, bits, repetitions as usize, lsd_only).with_context(|| format!("bench sort --n {n} --bits {bits}"))?;
+            let report = bench_sort(&ctx, n, bits, repetitions as usize, lsd_only)
+                .with_context(|| format!("bench sort --n {n} --bits {bits}"))?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
@@ -210,10 +221,25 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench(Bench::Train { gaussians, views, resolution, sh_degree, iterations, json }) => {
+        Command::Bench(Bench::Train {
+            gaussians,
+            views,
+            resolution,
+            sh_degree,
+            iterations,
+            json,
+        }) => {
             let ctx = context(&options)?;
-            let scene = SplatBenchConfig { gaussians, views: views as usize, resolution, sh_degree, rounds: 2 };
-            let report = bench_train(&ctx, &TrainBenchConfig { scene, iterations: iterations as usize }).context("bench train")?;
+            let scene = SplatBenchConfig {
+                gaussians,
+                views: views as usize,
+                resolution,
+                sh_degree,
+                rounds: 2,
+            };
+            let report =
+                bench_train(&ctx, &TrainBenchConfig { scene, iterations: iterations as usize })
+                    .context("bench train")?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
@@ -223,7 +249,13 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Bench(Bench::Splat { gaussians, views, resolution, sh_degree, rounds, json }) => {
             let ctx = context(&options)?;
-            let config = SplatBenchConfig { gaussians, views: views as usize, resolution, sh_degree, rounds: rounds as usize };
+            let config = SplatBenchConfig {
+                gaussians,
+                views: views as usize,
+                resolution,
+                sh_degree,
+                rounds: rounds as usize,
+            };
             let report = bench_splat(&ctx, &config).context("bench splat")?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
@@ -268,27 +300,67 @@ fn devices(wanted: Option<&str>) -> Result<()> {
 
 fn print_sort_report(r: &SortBenchReport) {
     println!("device            {}", r.device);
-    println!("pairs             {} ({}-bit keys, {} significant bits, {} passes, u32 values)", r.n, r.key_bytes * 8, r.bits, r.passes);
-    println!("variant, path     {}, {}", r.variant, if r.bucket_path { "bucket path (top-digit pass, then each bucket in cache)" } else { "LSD passes" });
-    println!("GPU sort          {:.3} ms  = {:.1} M pairs/s  (fastest of {}; median {:.3} ms)", r.sort_ms, r.keys_per_s * 1e-6, r.repetitions, r.sort_median_ms);
+    println!(
+        "pairs             {} ({}-bit keys, {} significant bits, {} passes, u32 values)",
+        r.n,
+        r.key_bytes * 8,
+        r.bits,
+        r.passes
+    );
+    println!(
+        "variant, path     {}, {}",
+        r.variant,
+        if r.bucket_path {
+            "bucket path (top-digit pass, then each bucket in cache)"
+        } else {
+            "LSD passes"
+        }
+    );
+    println!(
+        "GPU sort          {:.3} ms  = {:.1} M pairs/s  (fastest of {}; median {:.3} ms)",
+        r.sort_ms,
+        r.keys_per_s * 1e-6,
+        r.repetitions,
+        r.sort_median_ms
+    );
     for stage in &r.stage_ms {
         println!("  {:<16}{:.3} ms (median)", stage.name, stage.ms);
     }
-    println!("copy bandwidth    {:.2} GB/s compute kernel, {:.2} GB/s vkCmdCopyBuffer ({} MiB)",
-        r.copy_gb_per_s, r.copy.transfer_bytes_per_s * 1e-9, r.copy.bytes >> 20);
-    println!("bandwidth bound   {:.3} ms  ({} passes x {} B/pair at compute-copy bandwidth)", r.bound_ms, r.passes, r.key_bytes + 4);
+    println!(
+        "copy bandwidth    {:.2} GB/s compute kernel, {:.2} GB/s vkCmdCopyBuffer ({} MiB)",
+        r.copy_gb_per_s,
+        r.copy.transfer_bytes_per_s * 1e-9,
+        r.copy.bytes >> 20
+    );
+    println!(
+        "bandwidth bound   {:.3} ms  ({} passes x {} B/pair at compute-copy bandwidth)",
+        r.bound_ms,
+        r.passes,
+        r.key_bytes + 4
+    );
     println!("bandwidth fraction {:.3}", r.bandwidth_fraction);
-    println!("CPU sort_unstable {:.3} ms  = {:.1} M pairs/s (one thread)", r.cpu_sort_ms, r.cpu_sort_keys_per_s * 1e-6);
+    println!(
+        "CPU sort_unstable {:.3} ms  = {:.1} M pairs/s (one thread)",
+        r.cpu_sort_ms,
+        r.cpu_sort_keys_per_s * 1e-6
+    );
     println!("result verified   {}", if r.verified { "sorted" } else { "NOT SORTED" });
 }
 
 fn print_splat_report(r: &SplatBenchReport) {
     let c = &r.config;
     println!("device              {}", r.device);
-    println!("scene               {} Gaussians, SH degree {}, {} views of {}x{}", c.gaussians, c.sh_degree, c.views, c.resolution, c.resolution);
+    println!(
+        "scene               {} Gaussians, SH degree {}, {} views of {}x{}",
+        c.gaussians, c.sh_degree, c.views, c.resolution, c.resolution
+    );
     println!("forward             {:.2} ms per view (median wall time)", r.fwd_s * 1e3);
     println!("backward            {:.2} ms per view", r.bwd_s * 1e3);
-    println!("forward + backward  {:.2} ms per view = {:.2} views/s", r.fwd_bwd_s * 1e3, r.fwd_bwd_per_s);
+    println!(
+        "forward + backward  {:.2} ms per view = {:.2} views/s",
+        r.fwd_bwd_s * 1e3,
+        r.fwd_bwd_per_s
+    );
     println!("intersections       {:.0} per view", r.intersections_per_view);
     println!("GPU passes (median ms per view):");
     for (name, ms) in &r.passes_ms {
@@ -299,7 +371,10 @@ fn print_splat_report(r: &SplatBenchReport) {
 fn print_mesh_report(r: &MeshBenchReport) {
     let c = &r.config;
     println!("device              {}", r.device);
-    println!("mesh                {} triangles, {} views of {}x{}", r.triangles, c.views, c.resolution, c.resolution);
+    println!(
+        "mesh                {} triangles, {} views of {}x{}",
+        r.triangles, c.views, c.resolution, c.resolution
+    );
     println!("forward             {:.2} ms per view (median wall time) = {:.1} M triangles/s, {:.1} M pixels/s", r.forward_ms, r.tris_per_s * 1e-6, r.pixels_per_s * 1e-6);
     println!("backward            {:.2} ms per view", r.backward_ms);
     println!("large sub-triangles {:.0} per view", r.large_per_view);
@@ -308,15 +383,29 @@ fn print_mesh_report(r: &MeshBenchReport) {
         println!("  {name:<28}{ms:.2}");
     }
     println!("copy bandwidth      {:.2} GB/s compute kernel", r.copy.compute_bytes_per_s * 1e-9);
-    println!("pixel passes        {:.2} ms bound at copy bandwidth; measured {:.1}x the bound", r.pixel_passes_bound_ms, r.pixel_passes_over_bound);
+    println!(
+        "pixel passes        {:.2} ms bound at copy bandwidth; measured {:.1}x the bound",
+        r.pixel_passes_bound_ms, r.pixel_passes_over_bound
+    );
 }
 
 fn print_train_report(r: &TrainBenchReport) {
     let c = &r.config.scene;
     println!("device              {}", r.device);
-    println!("scene               {} Gaussians, SH degree {}, {} views of {}x{}, no densification", c.gaussians, c.sh_degree, c.views, c.resolution, c.resolution);
-    println!("iteration           {:.1} ms (median of {}) = {:.2} it/s", r.s_per_iter * 1e3, r.config.iterations, r.iters_per_s);
-    println!("splatting alone     {:.1} ms forward + backward per view (same run)", r.splat_fwd_bwd_s * 1e3);
+    println!(
+        "scene               {} Gaussians, SH degree {}, {} views of {}x{}, no densification",
+        c.gaussians, c.sh_degree, c.views, c.resolution, c.resolution
+    );
+    println!(
+        "iteration           {:.1} ms (median of {}) = {:.2} it/s",
+        r.s_per_iter * 1e3,
+        r.config.iterations,
+        r.iters_per_s
+    );
+    println!(
+        "splatting alone     {:.1} ms forward + backward per view (same run)",
+        r.splat_fwd_bwd_s * 1e3
+    );
     println!("loss + Adam + rest  {:.0}% of an iteration", r.overhead_fraction * 100.0);
     println!("GPU passes (median ms per iteration):");
     for (name, ms) in &r.passes_ms {

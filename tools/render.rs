@@ -47,8 +47,15 @@ pub fn render(ctx: &Arc<GpuContext>, args: &RenderArgs) -> Result<()> {
     let scene = GaussianScene::read_ply(&args.splats)?;
     let camera = Camera::load_json(&args.camera)?;
     let background = [args.background[0], args.background[1], args.background[2]];
-    let settings = RenderSettings { background, near: args.near, far: args.far, sh_degree: args.sh_degree, mask_mode: args.mask };
-    let buffers = GaussianBuffers::from_scene(ctx, &scene).with_context(|| format!("{}: cannot upload", args.splats.display()))?;
+    let settings = RenderSettings {
+        background,
+        near: args.near,
+        far: args.far,
+        sh_degree: args.sh_degree,
+        mask_mode: args.mask,
+    };
+    let buffers = GaussianBuffers::from_scene(ctx, &scene)
+        .with_context(|| format!("{}: cannot upload", args.splats.display()))?;
     let mut splatter = Splatter::new(ctx)?;
     splatter.forward(&buffers, &camera, &settings)?;
     let rgba = splatter.read_rgba()?;
@@ -56,7 +63,10 @@ pub fn render(ctx: &Arc<GpuContext>, args: &RenderArgs) -> Result<()> {
     let rgb = rgba.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
     write_png(&args.out, &Image { width, height, channels: 3, data: rgb })?;
     if let Some(path) = &args.alpha {
-        write_png(path, &Image { width, height, channels: 1, data: rgba.iter().map(|p| p[3]).collect() })?;
+        write_png(
+            path,
+            &Image { width, height, channels: 1, data: rgba.iter().map(|p| p[3]).collect() },
+        )?;
     }
     if let Some(path) = &args.depth {
         write_depth_exr(path, width, height, splatter.read_depth()?)?;
@@ -68,7 +78,14 @@ pub fn render(ctx: &Arc<GpuContext>, args: &RenderArgs) -> Result<()> {
 fn write_depth_exr(path: &Path, width: u32, height: u32, depth: Vec<f32>) -> Result<()> {
     use exr::prelude::*;
     let channel = AnyChannel::new("Z", FlatSamples::F32(depth));
-    let layer = Layer::new((width as usize, height as usize), LayerAttributes::named("depth"), Encoding::FAST_LOSSLESS, AnyChannels::sort(SmallVec::from_vec(vec![channel])));
-    write_atomically(path, |w| Image::from_layer(layer).write().to_buffered(w).map_err(std::io::Error::other))
-        .with_context(|| format!("{}: cannot write EXR", path.display()))
+    let layer = Layer::new(
+        (width as usize, height as usize),
+        LayerAttributes::named("depth"),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(SmallVec::from_vec(vec![channel])),
+    );
+    write_atomically(path, |w| {
+        Image::from_layer(layer).write().to_buffered(w).map_err(std::io::Error::other)
+    })
+    .with_context(|| format!("{}: cannot write EXR", path.display()))
 }

@@ -38,7 +38,9 @@ fn load_mesh(path: &Path) -> Result<RasterMesh> {
     let mesh = match extension.as_deref() {
         Some("ply") => TriMesh::read_ply(path)?,
         Some("obj") => TriMesh::read_obj(path)?,
-        _ => bail!("{}: not a mesh file this command reads (expected .ply or .obj)", path.display()),
+        _ => {
+            bail!("{}: not a mesh file this command reads (expected .ply or .obj)", path.display())
+        }
     };
     if mesh.faces.is_empty() {
         bail!("{}: has no triangles (faces) to render", path.display());
@@ -47,7 +49,8 @@ fn load_mesh(path: &Path) -> Result<RasterMesh> {
         Some(colors) => colors.iter().map(|c| c.map(|v| v as f32 / 255.0)).collect(),
         None => vec![[0.8; 3]; mesh.positions.len()],
     };
-    RasterMesh::new(mesh.positions, mesh.faces, colors).with_context(|| format!("{}: unusable mesh", path.display()))
+    RasterMesh::new(mesh.positions, mesh.faces, colors)
+        .with_context(|| format!("{}: unusable mesh", path.display()))
 }
 
 pub fn render_mesh(ctx: &Arc<GpuContext>, args: &RenderMeshArgs) -> Result<()> {
@@ -58,13 +61,25 @@ pub fn render_mesh(ctx: &Arc<GpuContext>, args: &RenderMeshArgs) -> Result<()> {
         settings.near = near;
     }
     if mesh.faces.len() >= 1 << 24 && args.ids.is_some() {
-        bail!("{}: {} triangles do not fit the 24-bit id image", args.mesh.display(), mesh.faces.len());
+        bail!(
+            "{}: {} triangles do not fit the 24-bit id image",
+            args.mesh.display(),
+            mesh.faces.len()
+        );
     }
     let rasterizer = MeshRasterizer::new(ctx, &mesh, camera.width, camera.height)?;
     rasterizer.render(&camera, &settings)?;
     let frame = rasterizer.read_frame()?;
     let (width, height) = (camera.width, camera.height);
-    write_png(&args.out, &Image { width, height, channels: 3, data: frame.color.iter().flatten().copied().collect() })?;
+    write_png(
+        &args.out,
+        &Image {
+            width,
+            height,
+            channels: 3,
+            data: frame.color.iter().flatten().copied().collect(),
+        },
+    )?;
     if let Some(path) = &args.mask {
         write_png(path, &Image { width, height, channels: 1, data: frame.mask.clone() })?;
     }
@@ -72,7 +87,11 @@ pub fn render_mesh(ctx: &Arc<GpuContext>, args: &RenderMeshArgs) -> Result<()> {
         write_png(path, &id_image(&frame))?;
     }
     let covered = frame.ids.iter().filter(|&&t| t != NO_TRIANGLE).count();
-    println!("rendered {} triangles to {} ({width}x{height}, {covered} pixels covered)", mesh.faces.len(), args.out.display());
+    println!(
+        "rendered {} triangles to {} ({width}x{height}, {covered} pixels covered)",
+        mesh.faces.len(),
+        args.out.display()
+    );
     Ok(())
 }
 
@@ -95,7 +114,8 @@ mod tests {
 
     /// Writes `text` to a fresh file named `name` and returns load_mesh's error for it.
     fn load_error(name: &str, text: &str) -> String {
-        let dir = std::env::temp_dir().join(format!("tagsplat-render-mesh-{}-{name}", std::process::id()));
+        let dir = std::env::temp_dir()
+            .join(format!("tagsplat-render-mesh-{}-{name}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join(name);
         std::fs::write(&path, text).unwrap();
@@ -109,13 +129,21 @@ mod tests {
     fn files_that_are_not_triangle_meshes_are_refused_by_name() {
         assert!(load_error("lines.obj", "v 0 0 0\nv 1 0 0\nl 1 2\n").contains("no triangles"));
         assert!(load_error("mesh.stl", "solid x\nendsolid x\n").contains("expected .ply or .obj"));
-        assert!(load_error("nan.obj", "v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").contains("non-finite"));
-        assert!(load_error("index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").contains("past the 3 vertices"));
+        assert!(
+            load_error("nan.obj", "v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").contains("non-finite")
+        );
+        assert!(load_error("index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n")
+            .contains("past the 3 vertices"));
     }
 
     #[test]
     fn ids_are_encoded_exactly_in_24_bits() {
-        let frame = RasterFrame { width: 3, height: 1, ids: vec![NO_TRIANGLE, 0, 0x12_3456], ..Default::default() };
+        let frame = RasterFrame {
+            width: 3,
+            height: 1,
+            ids: vec![NO_TRIANGLE, 0, 0x12_3456],
+            ..Default::default()
+        };
         let image = id_image(&frame);
         let bytes: Vec<u32> = image.data.iter().map(|v| (v * 255.0).round() as u32).collect();
         let decode = |p: usize| bytes[3 * p] + 256 * bytes[3 * p + 1] + 65536 * bytes[3 * p + 2];

@@ -48,12 +48,28 @@ pub fn run(a: SynthArgs) -> Result<()> {
         "procedural" => SubjectSource::Procedural { subdivisions: a.subdivisions },
         path => SubjectSource::Gltf { path: path.into(), animation: a.animation.clone() },
     };
-    let options = SynthOptions { subject, views: a.views, frames: a.frames, resolution: a.resolution, seed: a.seed, samples: a.samples, track_vertices: a.track_vertices, track_surface: a.track_surface, motion: a.motion };
+    let options = SynthOptions {
+        subject,
+        views: a.views,
+        frames: a.frames,
+        resolution: a.resolution,
+        seed: a.seed,
+        samples: a.samples,
+        track_vertices: a.track_vertices,
+        track_surface: a.track_surface,
+        motion: a.motion,
+    };
     let start = std::time::Instant::now();
-    let report = generate(&options, &a.out).with_context(|| format!("synth --out {}", a.out.display()))?;
+    let report =
+        generate(&options, &a.out).with_context(|| format!("synth --out {}", a.out.display()))?;
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&serde_json::json!({ "report": report, "seconds": seconds }))?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(
+                &serde_json::json!({ "report": report, "seconds": seconds })
+            )?
+        );
         return Ok(());
     }
     println!("wrote {}: {} views × {} frames at {}² px, {} vertices / {} faces, {} tracked points, subject radius {:.4} scene units, {:.2} s",

@@ -29,7 +29,13 @@ pub fn bench(ctx: &Arc<GpuContext>, args: &BenchTopologyArgs) -> Result<()> {
     if !(0.0..=1.0).contains(&args.fraction) {
         anyhow::bail!("--fraction {} is outside [0, 1]", args.fraction);
     }
-    let config = TopologyBenchConfig { major: args.major, minor: args.minor, fraction: args.fraction, repetitions: args.repetitions as usize, ..Default::default() };
+    let config = TopologyBenchConfig {
+        major: args.major,
+        minor: args.minor,
+        fraction: args.fraction,
+        repetitions: args.repetitions as usize,
+        ..Default::default()
+    };
     let report = bench_topology(ctx, &config).context("bench topology")?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -41,12 +47,34 @@ pub fn bench(ctx: &Arc<GpuContext>, args: &BenchTopologyArgs) -> Result<()> {
 
 fn print_report(r: &TopologyBenchReport) {
     println!("device              {}", r.device);
-    println!("mesh                torus, {} vertices, {} faces; SH degree {}", r.vertices, r.faces, r.config.sh_degree);
-    println!("densify step        {:.1} ms  ({} faces split, {} flips; median of {})", r.densify_ms, r.densify_splits, r.densify_flips, r.config.repetitions);
-    println!("prune step          {:.1} ms  ({} merged, {} kept without a legal edge)", r.prune_ms, r.pruned, r.prune_kept_no_legal_edge);
-    println!("scene clone         {:.1} ms  (floor of any remap of the Gaussian arrays)", r.scene_clone_ms);
+    println!(
+        "mesh                torus, {} vertices, {} faces; SH degree {}",
+        r.vertices, r.faces, r.config.sh_degree
+    );
+    println!(
+        "densify step        {:.1} ms  ({} faces split, {} flips; median of {})",
+        r.densify_ms, r.densify_splits, r.densify_flips, r.config.repetitions
+    );
+    println!(
+        "prune step          {:.1} ms  ({} merged, {} kept without a legal edge)",
+        r.prune_ms, r.pruned, r.prune_kept_no_legal_edge
+    );
+    println!(
+        "scene clone         {:.1} ms  (floor of any remap of the Gaussian arrays)",
+        r.scene_clone_ms
+    );
     println!("1-ring upload build {:.1} ms", r.neighbourhoods_ms);
-    println!("regularizers        {:.2} ms GPU = {:.1} M vertices/s (forward + backward, all six terms)", r.regularize_ms, r.regularize_vertices_per_s * 1e-6);
-    println!("copy bound          {:.2} ms  ({} MB at {:.2} GB/s compute copy) -> fraction {:.3}", r.regularize_bound_ms, r.regularize_min_bytes / 1_000_000, r.copy.compute_bytes_per_s * 1e-9, r.bandwidth_fraction);
+    println!(
+        "regularizers        {:.2} ms GPU = {:.1} M vertices/s (forward + backward, all six terms)",
+        r.regularize_ms,
+        r.regularize_vertices_per_s * 1e-6
+    );
+    println!(
+        "copy bound          {:.2} ms  ({} MB at {:.2} GB/s compute copy) -> fraction {:.3}",
+        r.regularize_bound_ms,
+        r.regularize_min_bytes / 1_000_000,
+        r.copy.compute_bytes_per_s * 1e-9,
+        r.bandwidth_fraction
+    );
     println!("f64 CPU reference   {:.1} ms (one thread)", r.reference_ms);
 }

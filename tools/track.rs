@@ -53,30 +53,55 @@ pub fn track(args: TrackArgs) -> Result<()> {
     let sequence = MeshSequence::read(&args.sequence).context("cannot read the sequence")?;
     let queries = match (&args.points, &args.pixels, &args.camera) {
         (Some(points), _, _) => Queries::Points(read_points(points)?),
-        (None, Some(pixels), Some(camera)) => Queries::Pixels { camera: Camera::load_json(camera)?, pixels: read_pixels(pixels)? },
+        (None, Some(pixels), Some(camera)) => {
+            Queries::Pixels { camera: Camera::load_json(camera)?, pixels: read_pixels(pixels)? }
+        }
         _ => bail!("give --points, or --pixels with --camera"),
     };
     let report = track_sequence(&sequence.faces, &sequence.frames, &queries, args.max_distance)
         .with_context(|| format!("cannot track on {}", args.sequence.display()))?;
     for u in &report.unbound {
-        eprintln!("{}: point {} not bound: {}", if args.skip_unbound { "warning" } else { "error" }, u.id, u.reason);
+        eprintln!(
+            "{}: point {} not bound: {}",
+            if args.skip_unbound { "warning" } else { "error" },
+            u.id,
+            u.reason
+        );
     }
     if !report.unbound.is_empty() && !args.skip_unbound {
         let hint = match queries {
-            Queries::Points(_) => format!(" (farther than --max-distance {} x the frame-0 extent = {})", args.max_distance, report.max_distance),
+            Queries::Points(_) => format!(
+                " (farther than --max-distance {} x the frame-0 extent = {})",
+                args.max_distance, report.max_distance
+            ),
             Queries::Pixels { .. } => String::new(),
         };
-        bail!("{} of {} points not bound{hint}; fix them, or pass --skip-unbound to track the rest", report.unbound.len(), report.unbound.len() + report.points.len());
+        bail!(
+            "{} of {} points not bound{hint}; fix them, or pass --skip-unbound to track the rest",
+            report.unbound.len(),
+            report.unbound.len() + report.points.len()
+        );
     }
     write_tracks_csv(&args.out, &report.points)?;
     if let Some(json) = &args.json {
         write_report_json(json, &report)?;
     }
     if let Some(plot) = &args.plot {
-        let paths: Vec<Vec<glam::DVec3>> = report.points.iter().map(|p| p.trajectory.iter().map(|&x| glam::DVec3::from(x)).collect()).collect();
+        let paths: Vec<Vec<glam::DVec3>> = report
+            .points
+            .iter()
+            .map(|p| p.trajectory.iter().map(|&x| glam::DVec3::from(x)).collect())
+            .collect();
         write_plot(plot, &paths)?;
     }
-    println!("tracked {} points through {} frames ({} vertices, {} faces) -> {}", report.points.len(), report.frames, report.vertices, report.faces, args.out.display());
+    println!(
+        "tracked {} points through {} frames ({} vertices, {} faces) -> {}",
+        report.points.len(),
+        report.frames,
+        report.vertices,
+        report.faces,
+        args.out.display()
+    );
     Ok(())
 }
 
@@ -110,7 +135,13 @@ pub fn convert(args: ConvertArgs) -> Result<()> {
         FrameFormatArg::Obj => FrameFormat::Obj,
     };
     sequence.write(&args.to, format, args.fps).context("cannot write the sequence")?;
-    println!("{} frames, {} vertices, {} faces -> {}", sequence.frames.len(), sequence.frames[0].len(), sequence.faces.len(), args.to.display());
+    println!(
+        "{} frames, {} vertices, {} faces -> {}",
+        sequence.frames.len(),
+        sequence.frames[0].len(),
+        sequence.faces.len(),
+        args.to.display()
+    );
     Ok(())
 }
 
@@ -147,7 +178,22 @@ fn print_bench(r: &TrackBenchReport) {
     let speedup = |a: f64, b: f64| a / b;
     println!("mesh              {} triangles, {} vertices (unit sphere)", r.triangles, r.vertices);
     println!("BVH build         {:.2} ms (fastest of the builds, one thread)", r.build_ms);
-    println!("closest point     {:.0} queries/s BVH, {:.0} queries/s brute force ({:.0}x)", r.queries_per_s, r.brute_force_queries_per_s, speedup(r.queries_per_s, r.brute_force_queries_per_s));
-    println!("ray cast          {:.0} rays/s BVH, {:.0} rays/s brute force ({:.0}x)", r.rays_per_s, r.brute_force_rays_per_s, speedup(r.rays_per_s, r.brute_force_rays_per_s));
-    println!("checked           {} of {} queries of each kind against brute force: {}", r.brute_force_queries, r.queries, if r.verified { "equal" } else { "DIFFERENT" });
+    println!(
+        "closest point     {:.0} queries/s BVH, {:.0} queries/s brute force ({:.0}x)",
+        r.queries_per_s,
+        r.brute_force_queries_per_s,
+        speedup(r.queries_per_s, r.brute_force_queries_per_s)
+    );
+    println!(
+        "ray cast          {:.0} rays/s BVH, {:.0} rays/s brute force ({:.0}x)",
+        r.rays_per_s,
+        r.brute_force_rays_per_s,
+        speedup(r.rays_per_s, r.brute_force_rays_per_s)
+    );
+    println!(
+        "checked           {} of {} queries of each kind against brute force: {}",
+        r.brute_force_queries,
+        r.queries,
+        if r.verified { "equal" } else { "DIFFERENT" }
+    );
 }

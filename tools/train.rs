@@ -49,7 +49,9 @@ pub fn train(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: TrainArgs)
         print!("{}", config.to_toml());
         return Ok(());
     }
-    let (Some(data), Some(out)) = (args.data, args.out) else { bail!("--data and --out are required") };
+    let (Some(data), Some(out)) = (args.data, args.out) else {
+        bail!("--data and --out are required")
+    };
     let job = TrainJob { data, out, mesh: args.mesh, config, frames: args.frames };
     let report = run_with_progress(&context()?, &job)?;
     print_report(&report);
@@ -59,9 +61,14 @@ pub fn train(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: TrainArgs)
 /// Runs the job with a bar per frame and one overall.
 pub fn run_with_progress(ctx: &Arc<GpuContext>, job: &TrainJob) -> Result<TrainReport> {
     let bars = MultiProgress::new();
-    let style = |template| ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar());
-    let overall = bars.add(ProgressBar::new(0).with_style(style("frames {bar:30} {pos}/{len}  {elapsed}")));
-    let frame_bar = bars.add(ProgressBar::new(0).with_style(style("frame {msg:>4} {bar:30} {pos}/{len} it  {per_sec}")));
+    let style = |template| {
+        ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar())
+    };
+    let overall =
+        bars.add(ProgressBar::new(0).with_style(style("frames {bar:30} {pos}/{len}  {elapsed}")));
+    let frame_bar = bars.add(
+        ProgressBar::new(0).with_style(style("frame {msg:>4} {bar:30} {pos}/{len} it  {per_sec}")),
+    );
     let mut progress = |p: TrainProgress| {
         overall.set_length(p.frames_end as u64);
         overall.set_position(p.frame as u64);
@@ -69,25 +76,51 @@ pub fn run_with_progress(ctx: &Arc<GpuContext>, job: &TrainJob) -> Result<TrainR
         frame_bar.set_length(p.iterations as u64);
         frame_bar.set_position(p.iteration as u64);
     };
-    let report = run_train(ctx, job, &mut progress).with_context(|| format!("train {} → {}", job.data.display(), job.out.display()))?;
+    let report = run_train(ctx, job, &mut progress)
+        .with_context(|| format!("train {} → {}", job.data.display(), job.out.display()))?;
     frame_bar.finish_and_clear();
     overall.finish_and_clear();
     Ok(report)
 }
 
 pub fn print_report(r: &TrainReport) {
-    println!("{} frames in {:.1} s on {} ({} vertices, {} faces; {} evaluation views)", r.frames.len(), r.total_wall_s, r.device, r.vertices, r.faces, r.eval_views);
+    println!(
+        "{} frames in {:.1} s on {} ({} vertices, {} faces; {} evaluation views)",
+        r.frames.len(),
+        r.total_wall_s,
+        r.device,
+        r.vertices,
+        r.faces,
+        r.eval_views
+    );
     if !r.resumed_frames.is_empty() {
         println!("resumed: frames {:?} were complete", r.resumed_frames);
     }
     println!("frame  graph iters  iters  stopped         seconds  Gaussians  PSNR gs  PSNR mesh");
     for f in &r.frames {
-        let graph = f.graph.as_ref().map_or("-".into(), |g| g.levels.iter().map(|l| l.iterations.to_string()).collect::<Vec<_>>().join("+"));
-        let stop = serde_json::to_value(f.stop_reason).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default();
-        println!("{:>5}  {graph:>11}  {:>5}  {stop:<14}  {:>7.1}  {:>9}  {:>7.2}  {:>9.2}", f.frame, f.iterations, f.wall_s, f.gaussians, f.psnr_gs, f.psnr_mesh);
+        let graph = f.graph.as_ref().map_or("-".into(), |g| {
+            g.levels.iter().map(|l| l.iterations.to_string()).collect::<Vec<_>>().join("+")
+        });
+        let stop = serde_json::to_value(f.stop_reason)
+            .ok()
+            .and_then(|v| v.as_str().map(String::from))
+            .unwrap_or_default();
+        println!(
+            "{:>5}  {graph:>11}  {:>5}  {stop:<14}  {:>7.1}  {:>9}  {:>7.2}  {:>9.2}",
+            f.frame, f.iterations, f.wall_s, f.gaussians, f.psnr_gs, f.psnr_mesh
+        );
     }
     for f in r.frames.iter().filter(|f| !f.lost_views.is_empty()) {
-        println!("frame {}: no subject in view(s) {} (left out of the frame{})", f.frame, f.lost_views.join(", "), if f.graph.is_none() && f.iterations == 0 { "; no view left, the pose is extrapolated" } else { "" });
+        println!(
+            "frame {}: no subject in view(s) {} (left out of the frame{})",
+            f.frame,
+            f.lost_views.join(", "),
+            if f.graph.is_none() && f.iterations == 0 {
+                "; no view left, the pose is extrapolated"
+            } else {
+                ""
+            }
+        );
     }
     for path in &r.outputs {
         println!("wrote {}", path.display());

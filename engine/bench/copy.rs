@@ -2,7 +2,9 @@
 //! what a memory-bound compute pass can reach) and by vkCmdCopyBuffer (the transfer path).
 //! Bandwidth counts bytes copied, each read once and written once.
 
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PassTimes, PipelineDesc, Recorder};
+use crate::gpu::{
+    ComputePipeline, GpuBuffer, GpuContext, GpuResult, PassTimes, PipelineDesc, Recorder,
+};
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -63,7 +65,12 @@ impl CopyProbe {
         let groups = (len as u64).div_ceil(WORKGROUP_SIZE as u64 * 8).clamp(1, 4096);
         let params = CopyParams { len: len as u32, total_threads: groups as u32 * WORKGROUP_SIZE };
         recorder.begin_pass(COMPUTE_PASS);
-        recorder.dispatch_1d(&self.pipeline, &[self.src.binding(), self.dst.binding()], &params, groups)?;
+        recorder.dispatch_1d(
+            &self.pipeline,
+            &[self.src.binding(), self.dst.binding()],
+            &params,
+            groups,
+        )?;
         recorder.end_pass();
         recorder.begin_pass(TRANSFER_PASS);
         recorder.copy_buffer(&self.src, &self.dst, len);
@@ -75,9 +82,14 @@ impl CopyProbe {
     pub fn bandwidth(&self, times: &PassTimes) -> CopyBandwidth {
         let bytes = self.src.size_bytes();
         let rate = |name: &str| {
-            let ms: Vec<f64> = times.passes.iter().filter(|p| p.name == name).skip(1).map(|p| p.ms).collect();
+            let ms: Vec<f64> =
+                times.passes.iter().filter(|p| p.name == name).skip(1).map(|p| p.ms).collect();
             bytes as f64 / (super::fastest(ms) * 1e-3)
         };
-        CopyBandwidth { bytes, compute_bytes_per_s: rate(COMPUTE_PASS), transfer_bytes_per_s: rate(TRANSFER_PASS) }
+        CopyBandwidth {
+            bytes,
+            compute_bytes_per_s: rate(COMPUTE_PASS),
+            transfer_bytes_per_s: rate(TRANSFER_PASS),
+        }
     }
 }

@@ -64,7 +64,8 @@ pub fn bumpy_sphere(triangles: usize) -> Result<RasterMesh, RasterError> {
     let cols = 2 * rows;
     let point = |theta: f64, phi: f64| {
         let radius = 1.0 + 0.05 * (7.0 * phi).sin() * (5.0 * theta).sin();
-        [radius * theta.sin() * phi.cos(), radius * theta.cos(), radius * theta.sin() * phi.sin()].map(|x| x as f32)
+        [radius * theta.sin() * phi.cos(), radius * theta.cos(), radius * theta.sin() * phi.sin()]
+            .map(|x| x as f32)
     };
     let mut positions = vec![point(0.0, 0.0)];
     for r in 1..rows {
@@ -88,15 +89,23 @@ pub fn bumpy_sphere(triangles: usize) -> Result<RasterMesh, RasterError> {
     RasterMesh::new(positions, faces, colors)
 }
 
-pub fn bench_mesh(ctx: &Arc<GpuContext>, config: &MeshBenchConfig) -> Result<MeshBenchReport, RasterError> {
+pub fn bench_mesh(
+    ctx: &Arc<GpuContext>,
+    config: &MeshBenchConfig,
+) -> Result<MeshBenchReport, RasterError> {
     let mesh = bumpy_sphere(config.triangles)?;
-    let (res, pixels) = (config.resolution, config.resolution as usize * config.resolution as usize);
+    let (res, pixels) =
+        (config.resolution, config.resolution as usize * config.resolution as usize);
     let rasterizer = MeshRasterizer::new(ctx, &mesh, res, res)?;
     let settings = RasterSettings::scaled_to(&mesh.positions);
-    let grad_color = GpuBuffer::from_slice(ctx, "bench dL/dcolour", &vec![1.0 / pixels as f32; 3 * pixels])?;
-    let grad_mask = GpuBuffer::from_slice(ctx, "bench dL/dmask", &vec![1.0 / pixels as f32; pixels])?;
-    let grad_positions = GpuBuffer::<f32>::new(ctx, "bench dL/dposition", 3 * mesh.positions.len())?;
-    let grad_colors = GpuBuffer::<f32>::new(ctx, "bench dL/dvertex colour", 3 * mesh.positions.len())?;
+    let grad_color =
+        GpuBuffer::from_slice(ctx, "bench dL/dcolour", &vec![1.0 / pixels as f32; 3 * pixels])?;
+    let grad_mask =
+        GpuBuffer::from_slice(ctx, "bench dL/dmask", &vec![1.0 / pixels as f32; pixels])?;
+    let grad_positions =
+        GpuBuffer::<f32>::new(ctx, "bench dL/dposition", 3 * mesh.positions.len())?;
+    let grad_colors =
+        GpuBuffer::<f32>::new(ctx, "bench dL/dvertex colour", 3 * mesh.positions.len())?;
     let (mut fwd, mut bwd, mut passes, mut large) = (Vec::new(), Vec::new(), Vec::new(), 0u64);
     for round in 0..config.rounds.max(2) {
         for camera in ring_cameras(config.views, res) {
@@ -107,7 +116,12 @@ pub fn bench_mesh(ctx: &Arc<GpuContext>, config: &MeshBenchConfig) -> Result<Mes
             let mut rec = Recorder::new(ctx)?;
             rec.fill_buffer(&grad_positions, 0);
             rec.fill_buffer(&grad_colors, 0);
-            rasterizer.record_backward(&mut rec, &params, (&grad_color, &grad_mask), (&grad_positions, &grad_colors))?;
+            rasterizer.record_backward(
+                &mut rec,
+                &params,
+                (&grad_color, &grad_mask),
+                (&grad_positions, &grad_colors),
+            )?;
             let backward_times = rec.submit_and_wait()?;
             if round > 0 {
                 fwd.push((middle - start).as_secs_f64());
@@ -161,10 +175,13 @@ fn pass_ms(submissions: &[PassTimes]) -> BTreeMap<String, f64> {
 
 fn median_per_pass(views: &[BTreeMap<String, f64>]) -> BTreeMap<String, f64> {
     let names: Vec<String> = views.first().map(|p| p.keys().cloned().collect()).unwrap_or_default();
-    names.into_iter().map(|name| {
-        let samples = views.iter().map(|p| p.get(&name).copied().unwrap_or(0.0)).collect();
-        (name, super::median(samples))
-    }).collect()
+    names
+        .into_iter()
+        .map(|name| {
+            let samples = views.iter().map(|p| p.get(&name).copied().unwrap_or(0.0)).collect();
+            (name, super::median(samples))
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -175,13 +192,21 @@ mod tests {
     #[test]
     fn bumpy_sphere_is_closed_outward_and_near_the_asked_size() {
         let mesh = bumpy_sphere(10_000).unwrap();
-        assert!((mesh.faces.len() as f64 / 10_000.0 - 1.0).abs() < 0.05, "{} triangles", mesh.faces.len());
+        assert!(
+            (mesh.faces.len() as f64 / 10_000.0 - 1.0).abs() < 0.05,
+            "{} triangles",
+            mesh.faces.len()
+        );
         assert_eq!(closed_manifold_problem(mesh.positions.len(), &mesh.faces), None);
         // Counter-clockwise from outside: the signed volume is positive (about 4π/3).
-        let volume: f64 = mesh.faces.iter().map(|f| {
-            let [a, b, c] = f.map(|k| glam::Vec3::from(mesh.positions[k as usize]).as_dvec3());
-            a.dot(b.cross(c)) / 6.0
-        }).sum();
+        let volume: f64 = mesh
+            .faces
+            .iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|k| glam::Vec3::from(mesh.positions[k as usize]).as_dvec3());
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum();
         assert!((volume / (4.0 * PI / 3.0) - 1.0).abs() < 0.05, "volume {volume}");
     }
 }

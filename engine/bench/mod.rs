@@ -10,15 +10,17 @@ mod mesh;
 mod sequence;
 mod sort;
 mod splat;
-mod train;
 mod topology;
+mod train;
 
 pub use copy::{CopyBandwidth, CopyProbe};
 pub use mesh::{bench_mesh, bumpy_sphere, MeshBenchConfig, MeshBenchReport};
 pub use sequence::{bench_sequence, host_cpu_model, SequenceBenchError, SequenceBenchReport};
 pub use sort::{bench_sort, SortBenchReport};
+pub use splat::{
+    bench_splat, random_scene, ring_cameras, BenchWork, SplatBenchConfig, SplatBenchReport,
+};
 pub use topology::{bench_topology, TopologyBenchConfig, TopologyBenchError, TopologyBenchReport};
-pub use splat::{bench_splat, BenchWork, random_scene, ring_cameras, SplatBenchConfig, SplatBenchReport};
 pub use train::{bench_train, TrainBenchConfig, TrainBenchReport};
 
 /// Median of a sample; 0 for an empty one (nothing was timed).
@@ -28,7 +30,11 @@ fn median(mut samples: Vec<f64>) -> f64 {
     }
     samples.sort_by(f64::total_cmp);
     let mid = samples.len() / 2;
-    if samples.len() % 2 == 1 { samples[mid] } else { 0.5 * (samples[mid - 1] + samples[mid]) }
+    if samples.len() % 2 == 1 {
+        samples[mid]
+    } else {
+        0.5 * (samples[mid - 1] + samples[mid])
+    }
 }
 
 /// Smallest of a sample; 0 for an empty one.

@@ -5,7 +5,10 @@
 //! output folder.
 
 use crate::eval::sequence::FrameScores;
-use crate::eval::{evaluate_sequence, find_ground_truth, write_sequence_eval, GroundTruth, SequenceEvalError, SequenceEvalOptions, SequenceSummary};
+use crate::eval::{
+    evaluate_sequence, find_ground_truth, write_sequence_eval, GroundTruth, SequenceEvalError,
+    SequenceEvalOptions, SequenceSummary,
+};
 use crate::gpu::GpuContext;
 use crate::train::pipeline::{run_train, TrainJob, TrainProgress};
 use crate::train::TrainError;
@@ -47,15 +50,22 @@ pub struct SequenceBenchReport {
 
 /// Trains `job` (its frames are the ones scored) and scores the output. The ground truth is
 /// read before training, so a dataset without one fails at once.
-pub fn bench_sequence(ctx: &Arc<GpuContext>, job: &TrainJob, eval: &SequenceEvalOptions, progress: &mut dyn FnMut(TrainProgress)) -> Result<SequenceBenchReport, SequenceBenchError> {
-    let root = find_ground_truth(&job.data).ok_or_else(|| SequenceBenchError::NoGroundTruth(job.data.clone()))?;
+pub fn bench_sequence(
+    ctx: &Arc<GpuContext>,
+    job: &TrainJob,
+    eval: &SequenceEvalOptions,
+    progress: &mut dyn FnMut(TrainProgress),
+) -> Result<SequenceBenchReport, SequenceBenchError> {
+    let root = find_ground_truth(&job.data)
+        .ok_or_else(|| SequenceBenchError::NoGroundTruth(job.data.clone()))?;
     let gt = GroundTruth::read(&root)?;
     let train = run_train(ctx, job, progress)?;
     let options = SequenceEvalOptions { frames: job.frames.clone(), ..eval.clone() };
     let scored = evaluate_sequence(&job.out, &gt, &options)?;
     let files = write_sequence_eval(&job.out, &scored)?;
     let seconds = |f: &FrameScores| f.train.wall_s;
-    let later: Vec<f64> = scored.frames.iter().filter(|f| f.frame > 0).filter_map(seconds).collect();
+    let later: Vec<f64> =
+        scored.frames.iter().filter(|f| f.frame > 0).filter_map(seconds).collect();
     Ok(SequenceBenchReport {
         device: ctx.info().name.clone(),
         cpu: host_cpu_model(),
@@ -64,7 +74,8 @@ pub fn bench_sequence(ctx: &Arc<GpuContext>, job: &TrainJob, eval: &SequenceEval
         out: job.out.clone(),
         train_total_s: train.total_wall_s,
         frame0_s: scored.frames.iter().find(|f| f.frame == 0).and_then(seconds),
-        later_frame_mean_s: (!later.is_empty()).then(|| later.iter().sum::<f64>() / later.len() as f64),
+        later_frame_mean_s: (!later.is_empty())
+            .then(|| later.iter().sum::<f64>() / later.len() as f64),
         iterations: scored.frames.iter().map(|f| f.train.iterations).collect(),
         scores: scored.summary,
         rows: scored.frames,

@@ -50,9 +50,18 @@ pub struct SortBenchReport {
 /// times. Speeds use the fastest repetition, of the sort as of the copy bound: both are what
 /// the device can do when the (shared, noisy) machine lets it.
 /// `lsd_only` holds the CPU variant to its LSD passes (see [`crate::sort::RadixTuning::with_max_bucket_len`]).
-pub fn bench_sort(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize, lsd_only: bool) -> GpuResult<SortBenchReport> {
+pub fn bench_sort(
+    ctx: &Arc<GpuContext>,
+    n: usize,
+    bits: u32,
+    repetitions: usize,
+    lsd_only: bool,
+) -> GpuResult<SortBenchReport> {
     if ctx.limits().timestamp_period_ns.is_none() {
-        return Err(GpuError::MissingFeatures { device: ctx.info().name.clone(), missing: vec!["timestamp queries on the compute queue"] });
+        return Err(GpuError::MissingFeatures {
+            device: ctx.info().name.clone(),
+            missing: vec!["timestamp queries on the compute queue"],
+        });
     }
     if bits <= 32 {
         run::<u32>(ctx, n, bits, repetitions, lsd_only, |x| x as u32)
@@ -61,14 +70,30 @@ pub fn bench_sort(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize
     }
 }
 
-fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usize, lsd_only: bool, make: fn(u64) -> K) -> GpuResult<SortBenchReport> {
+fn run<K: RadixKey>(
+    ctx: &Arc<GpuContext>,
+    n: usize,
+    bits: u32,
+    repetitions: usize,
+    lsd_only: bool,
+    make: fn(u64) -> K,
+) -> GpuResult<SortBenchReport> {
     if repetitions > MAX_REPETITIONS {
-        return Err(GpuError::LimitExceeded { what: "bench sort repetitions".into(), count: repetitions as u64, limit: MAX_REPETITIONS as u64, limit_name: "one submission's passes" });
+        return Err(GpuError::LimitExceeded {
+            what: "bench sort repetitions".into(),
+            count: repetitions as u64,
+            limit: MAX_REPETITIONS as u64,
+            limit_name: "one submission's passes",
+        });
     }
     let repetitions = repetitions.max(1);
     // Create the GPU side first: an impossible `n` fails here, before host memory is spent.
     let tuning = RadixSort::<K>::tuning_for(ctx, n);
-    let sorter = RadixSort::<K>::with_tuning(ctx, n, if lsd_only { tuning.with_max_bucket_len(0) } else { tuning })?;
+    let sorter = RadixSort::<K>::with_tuning(
+        ctx,
+        n,
+        if lsd_only { tuning.with_max_bucket_len(0) } else { tuning },
+    )?;
     let mut input = GpuBuffer::<K>::new(ctx, "bench keys (input)", n)?;
     let mut input_values = GpuBuffer::<u32>::new(ctx, "bench values (input)", n)?;
     let keys = GpuBuffer::<K>::new(ctx, "bench keys", n)?;
@@ -98,7 +123,8 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
     let bucket_path = sorter.took_bucket_path()?;
     let verified = is_stable_sort(&host_keys, &keys.read()?, &values.read()?);
 
-    let sort_times: Vec<f64> = times.passes.iter().filter(|p| p.name == SORT_PASS).skip(1).map(|p| p.ms).collect();
+    let sort_times: Vec<f64> =
+        times.passes.iter().filter(|p| p.name == SORT_PASS).skip(1).map(|p| p.ms).collect();
     let sort_ms = super::fastest(sort_times.clone());
     let sort_median_ms = super::median(sort_times);
     let stage_ms = stage_medians(&times);
@@ -138,7 +164,8 @@ fn run<K: RadixKey>(ctx: &Arc<GpuContext>, n: usize, bits: u32, repetitions: usi
 /// Whether (`sorted_keys`, `sorted_values`) is the stable sort of `keys` paired with their
 /// indices: keys in order, each with its own index, equal keys in input order.
 fn is_stable_sort<K: RadixKey>(keys: &[K], sorted_keys: &[K], sorted_values: &[u32]) -> bool {
-    let own_index = sorted_keys.iter().zip(sorted_values).all(|(k, &v)| keys.get(v as usize) == Some(k));
+    let own_index =
+        sorted_keys.iter().zip(sorted_values).all(|(k, &v)| keys.get(v as usize) == Some(k));
     let pair = |i: usize| (sorted_keys[i], sorted_values[i]);
     let in_order = (1..sorted_keys.len()).all(|i| pair(i - 1) < pair(i));
     own_index && in_order
@@ -166,7 +193,11 @@ fn stage_medians(times: &PassTimes) -> Vec<PassTime> {
     first
         .iter()
         .map(|stage| {
-            let ms = repetitions[1..].iter().filter_map(|r| r.iter().find(|s| s.name == stage.name)).map(|s| s.ms).collect();
+            let ms = repetitions[1..]
+                .iter()
+                .filter_map(|r| r.iter().find(|s| s.name == stage.name))
+                .map(|s| s.ms)
+                .collect();
             PassTime { name: stage.name.clone(), ms: super::median(ms), depth: stage.depth }
         })
         .collect()

@@ -5,7 +5,9 @@
 use crate::camera::Camera;
 use crate::gpu::{GpuBuffer, GpuContext, PassTimes, Recorder};
 use crate::rng::SplitMix64;
-use crate::splat::{sh_coefficients, GaussianBuffers, GaussianScene, RenderSettings, SplatError, Splatter};
+use crate::splat::{
+    sh_coefficients, GaussianBuffers, GaussianScene, RenderSettings, SplatError, Splatter,
+};
 use glam::DVec3;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -60,8 +62,17 @@ pub fn random_scene(n: usize, sh_degree: u32, seed: u64) -> GaussianScene {
         }
         scene.positions.push(p.as_vec3().to_array());
         let scale = |u: f64| (spacing * (0.3 + 0.7 * u)).ln() as f32;
-        scene.log_scales.push([scale(uniform(0.0, 1.0)), scale(uniform(0.0, 1.0)), scale(uniform(0.0, 1.0))]);
-        scene.rotations.push([uniform(-1.0, 1.0) as f32, uniform(-1.0, 1.0) as f32, uniform(-1.0, 1.0) as f32, uniform(-1.0, 1.0) as f32]);
+        scene.log_scales.push([
+            scale(uniform(0.0, 1.0)),
+            scale(uniform(0.0, 1.0)),
+            scale(uniform(0.0, 1.0)),
+        ]);
+        scene.rotations.push([
+            uniform(-1.0, 1.0) as f32,
+            uniform(-1.0, 1.0) as f32,
+            uniform(-1.0, 1.0) as f32,
+            uniform(-1.0, 1.0) as f32,
+        ]);
         scene.opacity_logits.push(uniform(-1.0, 3.0) as f32);
         for k in 0..coefficients * 3 {
             let spread = if k < 3 { 1.0 } else { 0.2 };
@@ -80,7 +91,8 @@ pub fn ring_cameras(views: usize, resolution: u32) -> Vec<Camera> {
         .map(|v| {
             let angle = std::f64::consts::TAU * v as f64 / views as f64;
             let eye = DVec3::new(3.5 * angle.cos(), 0.3, 3.5 * angle.sin());
-            Camera::look_at(resolution, resolution, f, f, c, c, eye, DVec3::ZERO, DVec3::Y).expect("ring cameras are valid")
+            Camera::look_at(resolution, resolution, f, f, c, c, eye, DVec3::ZERO, DVec3::Y)
+                .expect("ring cameras are valid")
         })
         .collect()
 }
@@ -96,13 +108,25 @@ pub struct BenchWork {
 }
 
 impl BenchWork {
-    pub fn new(ctx: &Arc<GpuContext>, scene: &GaussianScene, resolution: u32) -> Result<Self, SplatError> {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        scene: &GaussianScene,
+        resolution: u32,
+    ) -> Result<Self, SplatError> {
         let buffers = GaussianBuffers::from_scene(ctx, scene)?;
         let grads = GaussianBuffers::shaped_like(ctx, &buffers)?;
         let pixels = (resolution * resolution) as usize;
         let work = Self {
-            densify_stats: GpuBuffer::from_slice(ctx, "bench densify stats", &vec![[0.0f32; 2]; scene.len()])?,
-            grad_rgba: GpuBuffer::from_slice(ctx, "bench colour gradients", &vec![[1.0 / pixels as f32; 4]; pixels])?,
+            densify_stats: GpuBuffer::from_slice(
+                ctx,
+                "bench densify stats",
+                &vec![[0.0f32; 2]; scene.len()],
+            )?,
+            grad_rgba: GpuBuffer::from_slice(
+                ctx,
+                "bench colour gradients",
+                &vec![[1.0 / pixels as f32; 4]; pixels],
+            )?,
             grad_depth: GpuBuffer::from_slice(ctx, "bench depth gradients", &vec![0.0f32; pixels])?,
             scene: buffers,
             grads,
@@ -115,16 +139,30 @@ impl BenchWork {
 
     /// One view's backward after a forward of `splatter`.
     pub fn backward(&self, splatter: &mut Splatter) -> Result<PassTimes, SplatError> {
-        splatter.backward(&self.scene, &self.grad_rgba, &self.grad_depth, &self.grads, &self.densify_stats)
+        splatter.backward(
+            &self.scene,
+            &self.grad_rgba,
+            &self.grad_depth,
+            &self.grads,
+            &self.densify_stats,
+        )
     }
 }
 
-pub fn bench_splat(ctx: &Arc<GpuContext>, config: &SplatBenchConfig) -> Result<SplatBenchReport, SplatError> {
+pub fn bench_splat(
+    ctx: &Arc<GpuContext>,
+    config: &SplatBenchConfig,
+) -> Result<SplatBenchReport, SplatError> {
     let cameras = ring_cameras(config.views, config.resolution);
-    let work = BenchWork::new(ctx, &random_scene(config.gaussians, config.sh_degree, 0x5EED), config.resolution)?;
+    let work = BenchWork::new(
+        ctx,
+        &random_scene(config.gaussians, config.sh_degree, 0x5EED),
+        config.resolution,
+    )?;
     let mut splatter = Splatter::new(ctx)?;
     let settings = RenderSettings { sh_degree: config.sh_degree, ..Default::default() };
-    let (mut fwd, mut bwd, mut passes, mut intersections) = (Vec::new(), Vec::new(), Vec::new(), 0usize);
+    let (mut fwd, mut bwd, mut passes, mut intersections) =
+        (Vec::new(), Vec::new(), Vec::new(), 0usize);
     for round in 0..config.rounds.max(2) {
         for camera in &cameras {
             let start = Instant::now();
@@ -143,7 +181,10 @@ pub fn bench_splat(ctx: &Arc<GpuContext>, config: &SplatBenchConfig) -> Result<S
     let fwd_s = super::median(fwd.clone());
     let bwd_s = super::median(bwd.clone());
     let fwd_bwd_s = super::median(fwd.iter().zip(&bwd).map(|(f, b)| f + b).collect());
-    let names: Vec<String> = passes.first().map(|p: &BTreeMap<String, f64>| p.keys().cloned().collect()).unwrap_or_default();
+    let names: Vec<String> = passes
+        .first()
+        .map(|p: &BTreeMap<String, f64>| p.keys().cloned().collect())
+        .unwrap_or_default();
     let passes_ms = names.into_iter().map(|name| {
         let samples = passes.iter().map(|p| p.get(&name).copied().unwrap_or(0.0)).collect();
         (name, super::median(samples))

@@ -9,7 +9,10 @@ use crate::regularize::{reference, Neighbourhoods, Regularizers, Temporal, Weigh
 use crate::rng::SplitMix64;
 use crate::splat::{GaussianBuffers, GaussianScene};
 use crate::topology::shapes::torus;
-use crate::topology::{densify, gaussians_from_mesh, prune, DensifyConfig, DensifyReport, InitConfig, ManifoldMesh, PruneConfig, PruneReport};
+use crate::topology::{
+    densify, gaussians_from_mesh, prune, DensifyConfig, DensifyReport, InitConfig, ManifoldMesh,
+    PruneConfig, PruneReport,
+};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -76,22 +79,40 @@ pub struct TopologyBenchReport {
 }
 
 /// Runs the benchmark (see the module doc).
-pub fn bench_topology(ctx: &Arc<GpuContext>, config: &TopologyBenchConfig) -> Result<TopologyBenchReport, TopologyBenchError> {
+pub fn bench_topology(
+    ctx: &Arc<GpuContext>,
+    config: &TopologyBenchConfig,
+) -> Result<TopologyBenchReport, TopologyBenchError> {
     if ctx.limits().timestamp_period_ns.is_none() {
-        return Err(GpuError::MissingFeatures { device: ctx.info().name.clone(), missing: vec!["timestamp queries on the compute queue"] }.into());
+        return Err(GpuError::MissingFeatures {
+            device: ctx.info().name.clone(),
+            missing: vec!["timestamp queries on the compute queue"],
+        }
+        .into());
     }
     let (positions, faces) = torus(config.major.max(3), config.minor.max(3));
     let mesh = ManifoldMesh::new(positions, faces)?;
-    let scene = gaussians_from_mesh(&mesh, &[], &InitConfig { sh_degree: config.sh_degree, ..Default::default() });
+    let scene = gaussians_from_mesh(
+        &mesh,
+        &[],
+        &InitConfig { sh_degree: config.sh_degree, ..Default::default() },
+    );
     let reps = config.repetitions.max(1);
     let mut rng = SplitMix64::new(7);
     let (mut densify_ms, mut prune_ms, mut clone_ms) = (Vec::new(), Vec::new(), Vec::new());
     let (mut densified, mut pruned) = (DensifyReport::default(), PruneReport::default());
     for _ in 0..reps {
-        let scores: Vec<f32> = (0..mesh.face_rows()).map(|_| if rng.next_f64() < config.fraction { 1.0 } else { 0.0 }).collect();
+        let scores: Vec<f32> = (0..mesh.face_rows())
+            .map(|_| if rng.next_f64() < config.fraction { 1.0 } else { 0.0 })
+            .collect();
         let (mut m, mut s) = (mesh.clone(), scene.clone());
         let t = Instant::now();
-        densified = densify(&mut m, &mut s, &scores, &DensifyConfig { threshold: 0.5, ..Default::default() })?;
+        densified = densify(
+            &mut m,
+            &mut s,
+            &scores,
+            &DensifyConfig { threshold: 0.5, ..Default::default() },
+        )?;
         densify_ms.push(ms(t));
         let (mut m, mut s) = (mesh.clone(), scene.clone());
         for (i, l) in s.opacity_logits.iter_mut().enumerate() {
@@ -100,7 +121,8 @@ pub fn bench_topology(ctx: &Arc<GpuContext>, config: &TopologyBenchConfig) -> Re
             }
         }
         let t = Instant::now();
-        pruned = prune(&mut m, &mut s, &PruneConfig { max_scale: f32::INFINITY, ..Default::default() })?;
+        pruned =
+            prune(&mut m, &mut s, &PruneConfig { max_scale: f32::INFINITY, ..Default::default() })?;
         prune_ms.push(ms(t));
         let t = Instant::now();
         std::hint::black_box(scene.clone());
@@ -145,7 +167,12 @@ struct GpuFigures {
     reference_ms: f64,
 }
 
-fn bench_regularizers(ctx: &Arc<GpuContext>, nb: &Neighbourhoods, scene: &GaussianScene, reps: usize) -> Result<GpuFigures, TopologyBenchError> {
+fn bench_regularizers(
+    ctx: &Arc<GpuContext>,
+    nb: &Neighbourhoods,
+    scene: &GaussianScene,
+    reps: usize,
+) -> Result<GpuFigures, TopologyBenchError> {
     let mut reg = Regularizers::new(ctx)?;
     reg.upload(nb)?;
     let params = GaussianBuffers::from_scene(ctx, scene)?;
@@ -168,7 +195,8 @@ fn bench_regularizers(ctx: &Arc<GpuContext>, nb: &Neighbourhoods, scene: &Gaussi
         rec.end_pass();
     }
     let times = rec.submit_and_wait()?;
-    let timed: Vec<f64> = times.passes.iter().filter(|p| p.name == REGULARIZE_PASS).skip(1).map(|p| p.ms).collect();
+    let timed: Vec<f64> =
+        times.passes.iter().filter(|p| p.name == REGULARIZE_PASS).skip(1).map(|p| p.ms).collect();
     let copy = probe.bandwidth(&times);
     let gpu_ms = super::fastest(timed);
     let bound_ms = min_bytes as f64 / copy.compute_bytes_per_s * 1e3;

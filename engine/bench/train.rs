@@ -6,7 +6,7 @@ use super::splat::{bench_splat, random_scene, ring_cameras, SplatBenchConfig};
 use crate::gpu::GpuContext;
 use crate::optim::{AdamParams, LearningRates};
 use crate::splat::{GaussianBuffers, RenderSettings, Splatter};
-use crate::train::{Trainer, TrainError, ViewTarget};
+use crate::train::{TrainError, Trainer, ViewTarget};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
@@ -40,9 +40,19 @@ pub struct TrainBenchReport {
 }
 
 /// Learning rates of the fit's defaults (their values do not change the work).
-const RATES: LearningRates = LearningRates { positions: 1.6e-4, log_scales: 5e-3, rotations: 1e-3, opacity_logits: 0.05, sh_dc: 2.5e-3, sh_rest: 1.25e-4 };
+const RATES: LearningRates = LearningRates {
+    positions: 1.6e-4,
+    log_scales: 5e-3,
+    rotations: 1e-3,
+    opacity_logits: 0.05,
+    sh_dc: 2.5e-3,
+    sh_rest: 1.25e-4,
+};
 
-pub fn bench_train(ctx: &Arc<GpuContext>, config: &TrainBenchConfig) -> Result<TrainBenchReport, TrainError> {
+pub fn bench_train(
+    ctx: &Arc<GpuContext>,
+    config: &TrainBenchConfig,
+) -> Result<TrainBenchReport, TrainError> {
     let c = &config.scene;
     let scene = random_scene(c.gaussians, c.sh_degree, 0x5EED);
     let settings = RenderSettings { sh_degree: c.sh_degree, ..Default::default() };
@@ -60,14 +70,28 @@ pub fn bench_train(ctx: &Arc<GpuContext>, config: &TrainBenchConfig) -> Result<T
     for it in 0..c.views + config.iterations {
         let adam = AdamParams::new(&RATES, it as u32 + 1, trainer.gaussians(), trainer.sh_degree());
         let start = Instant::now();
-        let (times, _) = trainer.step(it % c.views, &settings, [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0], &adam)?;
+        let (times, _) =
+            trainer.step(it % c.views, &settings, [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0], &adam)?;
         if it >= c.views {
             walls.push(start.elapsed().as_secs_f64());
             passes.push(super::splat::top_level_ms(&[times]));
         }
     }
-    let names: Vec<String> = passes.first().map(|p: &BTreeMap<String, f64>| p.keys().cloned().collect()).unwrap_or_default();
-    let passes_ms = names.into_iter().map(|name| (name.clone(), super::median(passes.iter().map(|p| p.get(&name).copied().unwrap_or(0.0)).collect()))).collect();
+    let names: Vec<String> = passes
+        .first()
+        .map(|p: &BTreeMap<String, f64>| p.keys().cloned().collect())
+        .unwrap_or_default();
+    let passes_ms = names
+        .into_iter()
+        .map(|name| {
+            (
+                name.clone(),
+                super::median(
+                    passes.iter().map(|p| p.get(&name).copied().unwrap_or(0.0)).collect(),
+                ),
+            )
+        })
+        .collect();
     let s_per_iter = super::median(walls);
     let splat = bench_splat(ctx, &SplatBenchConfig { rounds: 2, ..*c })?;
     Ok(TrainBenchReport {

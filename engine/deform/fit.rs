@@ -19,10 +19,14 @@ pub fn fit_nodes(rest: &[[f32; 3]], posed: &[[f32; 3]], graph: &DeformGraph) -> 
     for (i, (bound, weights)) in graph.bound_nodes.iter().zip(&graph.bound_weights).enumerate() {
         for s in (0..NODES_PER_VERTEX).filter(|&s| weights[s] > 0.0) {
             let (w, sum) = (weights[s] as f64, &mut sums[bound[s] as usize]);
-            (sum.0, sum.1, sum.2) = (sum.0 + w, sum.1 + w * point(&rest[i]), sum.2 + w * point(&posed[i]));
+            (sum.0, sum.1, sum.2) =
+                (sum.0 + w, sum.1 + w * point(&rest[i]), sum.2 + w * point(&posed[i]));
         }
     }
-    let centroids: Vec<(DVec3, DVec3)> = sums.iter().map(|&(w, r, p)| if w > 0.0 { (r / w, p / w) } else { (DVec3::ZERO, DVec3::ZERO) }).collect();
+    let centroids: Vec<(DVec3, DVec3)> = sums
+        .iter()
+        .map(|&(w, r, p)| if w > 0.0 { (r / w, p / w) } else { (DVec3::ZERO, DVec3::ZERO) })
+        .collect();
     let mut covariance = vec![DMat3::ZERO; nodes];
     for (i, (bound, weights)) in graph.bound_nodes.iter().zip(&graph.bound_weights).enumerate() {
         for s in (0..NODES_PER_VERTEX).filter(|&s| weights[s] > 0.0) {
@@ -48,7 +52,8 @@ pub fn fit_nodes(rest: &[[f32; 3]], posed: &[[f32; 3]], graph: &DeformGraph) -> 
 /// shifted to be positive semidefinite (so the largest eigenvalue is also the largest in size).
 fn best_rotation(s: &DMat3) -> DQuat {
     let e = |i: usize, j: usize| s.col(j)[i];
-    let (sxx, sxy, sxz, syx, syy, syz, szx, szy, szz) = (e(0, 0), e(0, 1), e(0, 2), e(1, 0), e(1, 1), e(1, 2), e(2, 0), e(2, 1), e(2, 2));
+    let (sxx, sxy, sxz, syx, syy, syz, szx, szy, szz) =
+        (e(0, 0), e(0, 1), e(0, 2), e(1, 0), e(1, 1), e(1, 2), e(2, 0), e(2, 1), e(2, 2));
     let n = [
         [sxx + syy + szz, syz - szy, szx - sxz, sxy - syx],
         [syz - szy, sxx - syy - szz, sxy + syx, szx + sxz],
@@ -113,10 +118,18 @@ mod tests {
         let graph = build_graph(&rest, |i| &adjacency[i], 20);
         let rotation = DQuat::from_axis_angle(DVec3::new(0.3, -1.0, 0.5).normalize(), 2.4);
         let shift = DVec3::new(0.7, -0.2, 1.5);
-        let posed: Vec<[f32; 3]> = rest.iter().map(|p| (rotation * DVec3::from(p.map(f64::from)) + shift).as_vec3().to_array()).collect();
+        let posed: Vec<[f32; 3]> = rest
+            .iter()
+            .map(|p| (rotation * DVec3::from(p.map(f64::from)) + shift).as_vec3().to_array())
+            .collect();
         let nodes = fit_nodes(&rest, &posed, &graph);
         for k in 0..graph.node_vertices.len() {
-            let q = DQuat::from_xyzw(nodes.rotations[k][1], nodes.rotations[k][2], nodes.rotations[k][3], nodes.rotations[k][0]);
+            let q = DQuat::from_xyzw(
+                nodes.rotations[k][1],
+                nodes.rotations[k][2],
+                nodes.rotations[k][3],
+                nodes.rotations[k][0],
+            );
             assert!(q.dot(rotation).abs() > 1.0 - 1e-9, "node {k}: {q:?} against {rotation:?}");
         }
         let rotations = vec![[1.0f32, 0.0, 0.0, 0.0]; rest.len()];
@@ -135,6 +148,11 @@ mod tests {
         assert!(same.translations.iter().flatten().all(|t| t.abs() < 1e-6));
         let collapsed = vec![[0.5f32, 0.5, 0.5]; rest.len()];
         let nodes = fit_nodes(&rest, &collapsed, &graph);
-        assert!(nodes.rotations.iter().flatten().chain(nodes.translations.iter().flatten()).all(|v| v.is_finite()));
+        assert!(nodes
+            .rotations
+            .iter()
+            .flatten()
+            .chain(nodes.translations.iter().flatten())
+            .all(|v| v.is_finite()));
     }
 }

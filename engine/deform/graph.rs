@@ -31,7 +31,11 @@ pub struct DeformGraph {
 /// `NODES_PER_VERTEX` geodesically nearest nodes (edge-path lengths), weighted
 /// (1 − d / d_next)² as Sumner's, normalised; a vertex in a component without nodes binds
 /// nothing (zero weights) and stays put.
-pub fn build_graph<'a>(positions: &[[f32; 3]], adjacency: impl Fn(usize) -> &'a [u32], nodes: usize) -> DeformGraph {
+pub fn build_graph<'a>(
+    positions: &[[f32; 3]],
+    adjacency: impl Fn(usize) -> &'a [u32],
+    nodes: usize,
+) -> DeformGraph {
     let node_vertices = farthest_points(positions, nodes);
     let nearest = nearest_nodes(positions, &adjacency, &node_vertices);
     let mut graph = DeformGraph { node_vertices, ..Default::default() };
@@ -98,11 +102,16 @@ fn farthest_points(positions: &[[f32; 3]], count: usize) -> Vec<u32> {
 /// Per vertex, its `NODES_PER_VERTEX + 1` nearest nodes by edge-path length, nearest first
 /// (the last one only sets the weights' falloff): one Dijkstra over (vertex, node) labels,
 /// each vertex settling at most that many distinct nodes.
-fn nearest_nodes<'a>(positions: &[[f32; 3]], adjacency: &impl Fn(usize) -> &'a [u32], nodes: &[u32]) -> Vec<Vec<(u32, f64)>> {
+fn nearest_nodes<'a>(
+    positions: &[[f32; 3]],
+    adjacency: &impl Fn(usize) -> &'a [u32],
+    nodes: &[u32],
+) -> Vec<Vec<(u32, f64)>> {
     let keep = NODES_PER_VERTEX + 1;
     let mut labels: Vec<Vec<(u32, f64)>> = vec![Vec::new(); positions.len()];
     // Distances as ordered bits: non-negative f64s order as their bit patterns do.
-    let mut queue: BinaryHeap<Reverse<(u64, u32, u32)>> = nodes.iter().enumerate().map(|(k, &v)| Reverse((0f64.to_bits(), v, k as u32))).collect();
+    let mut queue: BinaryHeap<Reverse<(u64, u32, u32)>> =
+        nodes.iter().enumerate().map(|(k, &v)| Reverse((0f64.to_bits(), v, k as u32))).collect();
     while let Some(Reverse((bits, v, k))) = queue.pop() {
         let here = &mut labels[v as usize];
         if here.len() >= keep || here.iter().any(|&(n, _)| n == k) {
@@ -130,7 +139,10 @@ fn weights_of(labels: &[(u32, f64)]) -> ([u32; NODES_PER_VERTEX], [f32; NODES_PE
         return (bound, weights);
     }
     let d_max = labels.get(NODES_PER_VERTEX).map_or(1.5 * labels[used - 1].1, |l| l.1);
-    let raw: Vec<f64> = labels[..used].iter().map(|&(_, d)| if d_max > 0.0 { (1.0 - d / d_max).max(0.0).powi(2) } else { 1.0 }).collect();
+    let raw: Vec<f64> = labels[..used]
+        .iter()
+        .map(|&(_, d)| if d_max > 0.0 { (1.0 - d / d_max).max(0.0).powi(2) } else { 1.0 })
+        .collect();
     let total: f64 = raw.iter().sum();
     for s in 0..used {
         bound[s] = labels[s].0;
@@ -147,7 +159,15 @@ mod tests {
     /// A strip of `n` vertices along x, each linked to its neighbours.
     fn strip(n: usize) -> (Vec<[f32; 3]>, Vec<Vec<u32>>) {
         let positions = (0..n).map(|i| [i as f32, 0.0, 0.0]).collect();
-        let adjacency = (0..n).map(|i| [i.checked_sub(1), (i + 1 < n).then_some(i + 1)].into_iter().flatten().map(|j| j as u32).collect()).collect();
+        let adjacency = (0..n)
+            .map(|i| {
+                [i.checked_sub(1), (i + 1 < n).then_some(i + 1)]
+                    .into_iter()
+                    .flatten()
+                    .map(|j| j as u32)
+                    .collect()
+            })
+            .collect();
         (positions, adjacency)
     }
 
@@ -176,13 +196,19 @@ mod tests {
         let (mut positions, mut adjacency) = strip(20);
         let (other, other_adjacency) = strip(20);
         positions.extend(other.iter().map(|p| [p[0], 0.1, 0.0]));
-        adjacency.extend(other_adjacency.into_iter().map(|l| l.into_iter().map(|j| j + 20).collect()));
+        adjacency
+            .extend(other_adjacency.into_iter().map(|l| l.into_iter().map(|j| j + 20).collect()));
         let graph = build_graph(&positions, |i| &adjacency[i], 6);
         let strip_of = |v: u32| v / 20;
-        for (v, (nodes, weights)) in graph.bound_nodes.iter().zip(&graph.bound_weights).enumerate() {
+        for (v, (nodes, weights)) in graph.bound_nodes.iter().zip(&graph.bound_weights).enumerate()
+        {
             for (k, w) in nodes.iter().zip(weights) {
                 if *w > 0.0 {
-                    assert_eq!(strip_of(graph.node_vertices[*k as usize]), strip_of(v as u32), "vertex {v}");
+                    assert_eq!(
+                        strip_of(graph.node_vertices[*k as usize]),
+                        strip_of(v as u32),
+                        "vertex {v}"
+                    );
                 }
             }
         }

@@ -75,12 +75,31 @@ impl GraphDeformer {
     /// Uploads `graph` over the start pose `rest` (its positions and rotations; one row per
     /// vertex) with every node at the identity. `arap_weight` weighs the mean squared ARAP
     /// residual measured in node spacings.
-    pub fn new(ctx: &Arc<GpuContext>, graph: &DeformGraph, rest: &GaussianScene, arap_weight: f32) -> Result<Self, super::DeformError> {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        graph: &DeformGraph,
+        rest: &GaussianScene,
+        arap_weight: f32,
+    ) -> Result<Self, super::DeformError> {
         let (n, m) = (rest.len(), graph.node_vertices.len());
         if graph.bound_nodes.len() != n {
-            return Err(super::DeformError::Shape(format!("a graph over {} vertices for {n} Gaussians", graph.bound_nodes.len())));
+            return Err(super::DeformError::Shape(format!(
+                "a graph over {} vertices for {n} Gaussians",
+                graph.bound_nodes.len()
+            )));
         }
-        let pipeline = |name, spirv, bindings| ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes: size_of::<Push>() as u32, specialization: &[WORKGROUP] });
+        let pipeline = |name, spirv, bindings| {
+            ComputePipeline::new(
+                ctx,
+                &PipelineDesc {
+                    name,
+                    spirv,
+                    bindings,
+                    push_constant_bytes: size_of::<Push>() as u32,
+                    specialization: &[WORKGROUP],
+                },
+            )
+        };
         let node_scene = GaussianScene {
             positions: vec![[0.0; 3]; m],
             log_scales: vec![[0.0; 3]; m],
@@ -98,25 +117,49 @@ impl GraphDeformer {
         let members = members_of(graph);
         let spacing = graph.node_spacing.max(f32::MIN_POSITIVE);
         let directed_edges = graph.neighbours.len().max(1) as f32;
-        let node_rest: Vec<[f32; 4]> = graph.node_vertices.iter().map(|&v| { let p = rest.positions[v as usize]; [p[0], p[1], p[2], 0.0] }).collect();
+        let node_rest: Vec<[f32; 4]> = graph
+            .node_vertices
+            .iter()
+            .map(|&v| {
+                let p = rest.positions[v as usize];
+                [p[0], p[1], p[2], 0.0]
+            })
+            .collect();
         Ok(Self {
             blend: pipeline("deform blend", shaders::DEFORM_BLEND, 9)?,
             node_gradients: pipeline("deform node gradients", shaders::DEFORM_NODE_GRADIENTS, 13)?,
-            rest_positions: GpuBuffer::from_slice(ctx, "deform rest positions", &rest.positions.concat())?,
+            rest_positions: GpuBuffer::from_slice(
+                ctx,
+                "deform rest positions",
+                &rest.positions.concat(),
+            )?,
             rest_rotations: GpuBuffer::from_slice(ctx, "deform rest rotations", &rest.rotations)?,
             bound_nodes: GpuBuffer::from_slice(ctx, "deform bound nodes", &graph.bound_nodes)?,
-            bound_weights: GpuBuffer::from_slice(ctx, "deform bound weights", &graph.bound_weights)?,
+            bound_weights: GpuBuffer::from_slice(
+                ctx,
+                "deform bound weights",
+                &graph.bound_weights,
+            )?,
             node_rest: GpuBuffer::from_slice(ctx, "deform node rest positions", &node_rest)?,
             member_ranges: GpuBuffer::from_slice(ctx, "deform member ranges", &members.ranges)?,
             members: GpuBuffer::from_slice(ctx, "deform members", &members.vertices)?,
             member_weights: GpuBuffer::from_slice(ctx, "deform member weights", &members.weights)?,
-            neighbour_ranges: GpuBuffer::from_slice(ctx, "deform neighbour ranges", &graph.neighbour_ranges)?,
+            neighbour_ranges: GpuBuffer::from_slice(
+                ctx,
+                "deform neighbour ranges",
+                &graph.neighbour_ranges,
+            )?,
             neighbours: GpuBuffer::from_slice(ctx, "deform neighbours", &graph.neighbours)?,
             node_grads,
             adam: Adam::new(ctx, &nodes)?,
             nodes,
             losses: GpuBuffer::from_slice(ctx, "deform ARAP loss", &[0.0])?,
-            push: Push { vertices: n as u32, nodes: m as u32, arap_scale: arap_weight / (directed_edges * spacing * spacing), unused: 0 },
+            push: Push {
+                vertices: n as u32,
+                nodes: m as u32,
+                arap_scale: arap_weight / (directed_edges * spacing * spacing),
+                unused: 0,
+            },
         })
     }
 
@@ -125,7 +168,11 @@ impl GraphDeformer {
     }
 
     /// Records writing the blended positions and rotations into `target` (one row per vertex).
-    pub fn record_blend<'a>(&'a self, rec: &mut Recorder<'a>, target: &'a GaussianBuffers) -> GpuResult<()> {
+    pub fn record_blend<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        target: &'a GaussianBuffers,
+    ) -> GpuResult<()> {
         let buffers = [
             self.rest_positions.binding(),
             self.rest_rotations.binding(),
@@ -137,13 +184,22 @@ impl GraphDeformer {
             target.positions.binding(),
             target.rotations.binding(),
         ];
-        rec.dispatch_1d(&self.blend, &buffers, &self.push, (self.push.vertices as u64).div_ceil(WORKGROUP as u64))
+        rec.dispatch_1d(
+            &self.blend,
+            &buffers,
+            &self.push,
+            (self.push.vertices as u64).div_ceil(WORKGROUP as u64),
+        )
     }
 
     /// Records the node gradients from the vertex position gradients `grad_positions` (3
     /// floats per vertex) plus ARAP, overwriting the previous ones; the ARAP energy goes to
     /// [`Self::take_arap_loss`]'s sum.
-    pub fn record_gradients<'a>(&'a self, rec: &mut Recorder<'a>, grad_positions: &'a GpuBuffer<f32>) -> GpuResult<()> {
+    pub fn record_gradients<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        grad_positions: &'a GpuBuffer<f32>,
+    ) -> GpuResult<()> {
         let buffers = [
             self.rest_positions.binding(),
             self.node_rest.binding(),
@@ -159,13 +215,36 @@ impl GraphDeformer {
             self.node_grads.rotations.binding(),
             self.losses.binding(),
         ];
-        rec.dispatch_1d(&self.node_gradients, &buffers, &self.push, (self.push.nodes as u64).div_ceil(WORKGROUP as u64))
+        rec.dispatch_1d(
+            &self.node_gradients,
+            &buffers,
+            &self.push,
+            (self.push.nodes as u64).div_ceil(WORKGROUP as u64),
+        )
     }
 
     /// Records one Adam step of the node transforms (`step` counts from 1).
-    pub fn record_adam<'a>(&'a self, rec: &mut Recorder<'a>, translation_rate: f32, rotation_rate: f32, step: u32) -> GpuResult<()> {
-        let rates = LearningRates { positions: translation_rate, log_scales: 0.0, rotations: rotation_rate, opacity_logits: 0.0, sh_dc: 0.0, sh_rest: 0.0 };
-        self.adam.record_step(rec, &self.nodes, &self.node_grads, &AdamParams::new(&rates, step, self.nodes(), 0))
+    pub fn record_adam<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        translation_rate: f32,
+        rotation_rate: f32,
+        step: u32,
+    ) -> GpuResult<()> {
+        let rates = LearningRates {
+            positions: translation_rate,
+            log_scales: 0.0,
+            rotations: rotation_rate,
+            opacity_logits: 0.0,
+            sh_dc: 0.0,
+            sh_rest: 0.0,
+        };
+        self.adam.record_step(
+            rec,
+            &self.nodes,
+            &self.node_grads,
+            &AdamParams::new(&rates, step, self.nodes(), 0),
+        )
     }
 
     /// The ARAP energy summed since the last call (which restarts the sum).
@@ -189,7 +268,9 @@ impl GraphDeformer {
     pub fn write_nodes(&mut self, nodes: &NodeTransforms) -> GpuResult<()> {
         let t: Vec<f32> = nodes.translations.iter().flatten().map(|&v| v as f32).collect();
         self.nodes.positions.write(&t)?;
-        self.nodes.rotations.write(&nodes.rotations.iter().map(|q| q.map(|v| v as f32)).collect::<Vec<_>>())
+        self.nodes
+            .rotations
+            .write(&nodes.rotations.iter().map(|q| q.map(|v| v as f32)).collect::<Vec<_>>())
     }
 
     /// ARAP's weight per squared residual (for the reference).

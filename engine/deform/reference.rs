@@ -20,7 +20,11 @@ impl NodeTransforms {
 
 fn unit([w, x, y, z]: [f64; 4]) -> DQuat {
     let q = DQuat::from_xyzw(x, y, z, w);
-    if q.length() > 0.0 { q.normalize() } else { DQuat::IDENTITY }
+    if q.length() > 0.0 {
+        q.normalize()
+    } else {
+        DQuat::IDENTITY
+    }
 }
 
 fn rest_of(positions: &[[f32; 3]], graph: &DeformGraph, k: usize) -> DVec3 {
@@ -28,7 +32,11 @@ fn rest_of(positions: &[[f32; 3]], graph: &DeformGraph, k: usize) -> DVec3 {
 }
 
 /// The blended pose (blend.comp): positions and unit rotations per vertex.
-pub fn blend(rest: (&[[f32; 3]], &[[f32; 4]]), graph: &DeformGraph, nodes: &NodeTransforms) -> (Vec<[f64; 3]>, Vec<[f64; 4]>) {
+pub fn blend(
+    rest: (&[[f32; 3]], &[[f32; 4]]),
+    graph: &DeformGraph,
+    nodes: &NodeTransforms,
+) -> (Vec<[f64; 3]>, Vec<[f64; 4]>) {
     let (positions, rotations) = rest;
     let mut out = (Vec::new(), Vec::new());
     for (i, x) in positions.iter().enumerate() {
@@ -44,7 +52,8 @@ pub fn blend(rest: (&[[f32; 3]], &[[f32; 4]]), graph: &DeformGraph, nodes: &Node
             }
         }
         let [w, qx, qy, qz] = rotations[i].map(f64::from);
-        let r = if q.length() > 0.0 { q.normalize() } else { DQuat::IDENTITY } * DQuat::from_xyzw(qx, qy, qz, w);
+        let r = if q.length() > 0.0 { q.normalize() } else { DQuat::IDENTITY }
+            * DQuat::from_xyzw(qx, qy, qz, w);
         out.0.push(p.to_array());
         out.1.push([r.w, r.x, r.y, r.z]);
     }
@@ -67,15 +76,29 @@ fn neighbours(graph: &DeformGraph, k: usize) -> impl Iterator<Item = usize> + '_
     graph.neighbours[start as usize..(start + count) as usize].iter().map(|&j| j as usize)
 }
 
-fn residual(rest: &[[f32; 3]], graph: &DeformGraph, nodes: &NodeTransforms, k: usize, j: usize) -> DVec3 {
+fn residual(
+    rest: &[[f32; 3]],
+    graph: &DeformGraph,
+    nodes: &NodeTransforms,
+    k: usize,
+    j: usize,
+) -> DVec3 {
     let (gk, gj) = (rest_of(rest, graph, k), rest_of(rest, graph, j));
-    unit(nodes.rotations[k]) * (gj - gk) + gk + DVec3::from(nodes.translations[k]) - gj - DVec3::from(nodes.translations[j])
+    unit(nodes.rotations[k]) * (gj - gk) + gk + DVec3::from(nodes.translations[k])
+        - gj
+        - DVec3::from(nodes.translations[j])
 }
 
 /// node_gradients.comp: per node, the gradient of Σ_i ⟨∂L/∂p_i, p_i⟩ (the vertex gradients
 /// pulled back through the blend, rotations of vertices excluded) plus the ARAP energy's;
 /// returns (translation gradients, rotation gradients, ARAP energy).
-pub fn node_gradients(rest: &[[f32; 3]], graph: &DeformGraph, nodes: &NodeTransforms, grad_positions: &[[f64; 3]], c: f64) -> (Vec<[f64; 3]>, Vec<[f64; 4]>, f64) {
+pub fn node_gradients(
+    rest: &[[f32; 3]],
+    graph: &DeformGraph,
+    nodes: &NodeTransforms,
+    grad_positions: &[[f64; 3]],
+    c: f64,
+) -> (Vec<[f64; 3]>, Vec<[f64; 4]>, f64) {
     let m = graph.node_vertices.len();
     let (mut gt, mut gr) = (vec![DVec3::ZERO; m], vec![DMat3::ZERO; m]);
     for (i, x) in rest.iter().enumerate() {
@@ -92,12 +115,18 @@ pub fn node_gradients(rest: &[[f32; 3]], graph: &DeformGraph, nodes: &NodeTransf
     for k in 0..m {
         for j in neighbours(graph, k) {
             let d = rest_of(rest, graph, j) - rest_of(rest, graph, k);
-            let (own, theirs) = (residual(rest, graph, nodes, k, j), residual(rest, graph, nodes, j, k));
+            let (own, theirs) =
+                (residual(rest, graph, nodes, k, j), residual(rest, graph, nodes, j, k));
             gt[k] += 2.0 * c * (own - theirs);
             gr[k] += outer(2.0 * c * own, d);
         }
     }
-    let rotations = (0..m).map(|k| normalize_backward(nodes.rotations[k], rotation_backward(nodes.rotations[k], gr[k])).to_array()).collect();
+    let rotations = (0..m)
+        .map(|k| {
+            normalize_backward(nodes.rotations[k], rotation_backward(nodes.rotations[k], gr[k]))
+                .to_array()
+        })
+        .collect();
     (gt.iter().map(|v| v.to_array()).collect(), rotations, arap_energy(rest, graph, nodes, c))
 }
 

@@ -89,7 +89,9 @@ mod tests {
         for n in 0..=7 {
             for _ in 0..20 {
                 // Few distinct values too, so ties are exercised.
-                let cost: Vec<f64> = (0..n * n).map(|_| if n % 2 == 0 { rng.next_f64() } else { (rng.next_u32() % 3) as f64 }).collect();
+                let cost: Vec<f64> = (0..n * n)
+                    .map(|_| if n % 2 == 0 { rng.next_f64() } else { (rng.next_u32() % 3) as f64 })
+                    .collect();
                 let col = min_cost_assignment(n, &cost);
                 let mut seen = vec![false; n];
                 for &c in &col {

@@ -105,7 +105,10 @@ mod tests {
         let mut sq = 0.0;
         let mut d = 0.0;
         for p in from {
-            let m = to.iter().map(|q| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>()).fold(f64::INFINITY, f64::min);
+            let m = to
+                .iter()
+                .map(|q| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>())
+                .fold(f64::INFINITY, f64::min);
             sq += m;
             d += m.sqrt();
         }
@@ -115,7 +118,11 @@ mod tests {
     #[test]
     fn matches_brute_force_on_random_clouds() {
         let mut rng = SplitMix64::new(11);
-        let mut cloud = |n: usize| (0..n).map(|_| [rng.next_f64(), rng.next_f64() * 2.0, rng.next_f64() - 3.0]).collect::<Vec<_>>();
+        let mut cloud = |n: usize| {
+            (0..n)
+                .map(|_| [rng.next_f64(), rng.next_f64() * 2.0, rng.next_f64() - 3.0])
+                .collect::<Vec<_>>()
+        };
         let a = cloud(700);
         let b = cloud(500);
         let r = chamfer_distance(&a, &b).unwrap();
@@ -129,7 +136,8 @@ mod tests {
     fn plane_shifted_along_its_normal_by_d() {
         // A planar grid (many equal coordinates on one axis) shifted by d: every nearest
         // neighbour is the same grid point, at distance exactly d.
-        let a: Vec<[f64; 3]> = (0..400).map(|i| [(i % 20) as f64 * 0.1, (i / 20) as f64 * 0.1, 0.0]).collect();
+        let a: Vec<[f64; 3]> =
+            (0..400).map(|i| [(i % 20) as f64 * 0.1, (i / 20) as f64 * 0.1, 0.0]).collect();
         let d = 0.037;
         let b: Vec<[f64; 3]> = a.iter().map(|p| [p[0], p[1], p[2] + d]).collect();
         let r = chamfer_distance(&a, &b).unwrap();
@@ -143,6 +151,9 @@ mod tests {
     #[test]
     fn bad_input() {
         assert!(matches!(chamfer_distance(&[], &[[0.0; 3]]), Err(EvalError::Empty(_))));
-        assert!(matches!(chamfer_distance(&[[f64::NAN, 0.0, 0.0]], &[[0.0; 3]]), Err(EvalError::NonFinite(_))));
+        assert!(matches!(
+            chamfer_distance(&[[f64::NAN, 0.0, 0.0]], &[[0.0; 3]]),
+            Err(EvalError::NonFinite(_))
+        ));
     }
 }

@@ -37,16 +37,28 @@ pub fn emd_points(pred: &[[f64; 3]], gt: &[[f64; 3]]) -> Result<EmdReport, EvalE
     let n = pred.len();
     let mut cost = Vec::with_capacity(n * n);
     for p in pred {
-        cost.extend(gt.iter().map(|g| ((p[0] - g[0]).powi(2) + (p[1] - g[1]).powi(2) + (p[2] - g[2]).powi(2)).sqrt()));
+        cost.extend(gt.iter().map(|g| {
+            ((p[0] - g[0]).powi(2) + (p[1] - g[1]).powi(2) + (p[2] - g[2]).powi(2)).sqrt()
+        }));
     }
     let col = min_cost_assignment(n, &cost);
     let mean = col.iter().enumerate().map(|(i, &j)| cost[i * n + j]).sum::<f64>() / n as f64;
     let gt_diagonal = bbox_diagonal(gt);
-    Ok(EmdReport { samples: n, mean, gt_diagonal, mean_fraction: if gt_diagonal > 0.0 { mean / gt_diagonal } else { f64::NAN } })
+    Ok(EmdReport {
+        samples: n,
+        mean,
+        gt_diagonal,
+        mean_fraction: if gt_diagonal > 0.0 { mean / gt_diagonal } else { f64::NAN },
+    })
 }
 
 /// EMD between `n` area-uniform samples of each mesh (seeded, see [`sample_surface`]).
-pub fn emd_meshes(pred: (&[[f32; 3]], &[[u32; 3]]), gt: (&[[f32; 3]], &[[u32; 3]]), n: usize, seed: u64) -> Result<EmdReport, EvalError> {
+pub fn emd_meshes(
+    pred: (&[[f32; 3]], &[[u32; 3]]),
+    gt: (&[[f32; 3]], &[[u32; 3]]),
+    n: usize,
+    seed: u64,
+) -> Result<EmdReport, EvalError> {
     let a = surface_points(pred.0, pred.1, &sample_surface(pred.0, pred.1, n, seed)?)?;
     let b = surface_points(gt.0, gt.1, &sample_surface(gt.0, gt.1, n, seed)?)?;
     emd_points(&a, &b)
@@ -60,7 +72,8 @@ mod tests {
     fn translated_set_costs_the_translation_and_a_permutation_costs_nothing() {
         let a: Vec<[f64; 3]> = (0..50).map(|i| [(i % 7) as f64, (i / 7) as f64, 0.0]).collect();
         let shift = [0.3, -0.4, 0.0]; // length 0.5, less than half the grid spacing
-        let b: Vec<[f64; 3]> = a.iter().rev().map(|p| [p[0] + shift[0], p[1] + shift[1], p[2]]).collect();
+        let b: Vec<[f64; 3]> =
+            a.iter().rev().map(|p| [p[0] + shift[0], p[1] + shift[1], p[2]]).collect();
         let r = emd_points(&a, &b).unwrap();
         assert!((r.mean - 0.5).abs() < 1e-12, "{}", r.mean);
         let mut perm = a.clone();
@@ -80,6 +93,9 @@ mod tests {
     fn bad_input() {
         assert!(matches!(emd_points(&[[0.0; 3]], &[]), Err(EvalError::SizeMismatch(1, 0))));
         assert!(matches!(emd_points(&[], &[]), Err(EvalError::Empty(_))));
-        assert!(matches!(emd_points(&[[f64::INFINITY; 3]], &[[0.0; 3]]), Err(EvalError::NonFinite(_))));
+        assert!(matches!(
+            emd_points(&[[f64::INFINITY; 3]], &[[0.0; 3]]),
+            Err(EvalError::NonFinite(_))
+        ));
     }
 }

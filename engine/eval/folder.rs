@@ -9,7 +9,10 @@
 //! - `images/<camera>/<t>.png`: PSNR and SSIM for every predicted image that has a
 //!   ground-truth image of the same name (RGB; an alpha channel is ignored).
 
-use super::{chamfer_meshes, emd_meshes, psnr, read_trajectories_csv, ssim, tracking_error, ChamferReport, EmdReport, EvalError, TrackingReport};
+use super::{
+    chamfer_meshes, emd_meshes, psnr, read_trajectories_csv, ssim, tracking_error, ChamferReport,
+    EmdReport, EvalError, TrackingReport,
+};
 use crate::io::image::{read_image, Image, ImageError};
 use crate::mesh::{MeshError, TriMesh};
 use serde::Serialize;
@@ -77,17 +80,26 @@ fn list(dir: &Path, ext: &str) -> Result<Vec<PathBuf>, FolderError> {
     if !dir.is_dir() {
         return Ok(Vec::new());
     }
-    let entries = std::fs::read_dir(dir).map_err(|source| FolderError::Io { path: dir.to_owned(), source })?;
-    let mut files: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|e| e == ext) && p.is_file()).collect();
+    let entries = std::fs::read_dir(dir)
+        .map_err(|source| FolderError::Io { path: dir.to_owned(), source })?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == ext) && p.is_file())
+        .collect();
     files.sort();
     Ok(files)
 }
 
-pub fn evaluate_folders(pred: &Path, gt: &Path, o: &FolderOptions) -> Result<FolderReport, FolderError> {
+pub fn evaluate_folders(
+    pred: &Path,
+    gt: &Path,
+    o: &FolderOptions,
+) -> Result<FolderReport, FolderError> {
     let mut meshes = Vec::new();
     // Mesh metrics when the prediction has a meshes/ folder at all (a tracking-only result
     // has none); then every ground-truth frame needs its prediction.
-    let gt_meshes = if pred.join("meshes").is_dir() { list(&gt.join("meshes"), "ply")? } else { Vec::new() };
+    let gt_meshes =
+        if pred.join("meshes").is_dir() { list(&gt.join("meshes"), "ply")? } else { Vec::new() };
     for gt_path in gt_meshes {
         let name = gt_path.file_name().expect("listed files have names");
         let pred_path = pred.join("meshes").join(name);
@@ -96,15 +108,31 @@ pub fn evaluate_folders(pred: &Path, gt: &Path, o: &FolderOptions) -> Result<Fol
         }
         let (a, b) = (TriMesh::read_ply(&pred_path)?, TriMesh::read_ply(&gt_path)?);
         let metric = |source| FolderError::Metric { path: pred_path.clone(), source };
-        let chamfer = chamfer_meshes((&a.positions, &a.faces), (&b.positions, &b.faces), o.chamfer_samples, o.seed).map_err(metric)?;
-        let emd = emd_meshes((&a.positions, &a.faces), (&b.positions, &b.faces), o.emd_samples, o.seed).map_err(metric)?;
-        meshes.push(MeshFrameReport { frame: name.to_string_lossy().trim_end_matches(".ply").to_owned(), chamfer, emd });
+        let chamfer = chamfer_meshes(
+            (&a.positions, &a.faces),
+            (&b.positions, &b.faces),
+            o.chamfer_samples,
+            o.seed,
+        )
+        .map_err(metric)?;
+        let emd =
+            emd_meshes((&a.positions, &a.faces), (&b.positions, &b.faces), o.emd_samples, o.seed)
+                .map_err(metric)?;
+        meshes.push(MeshFrameReport {
+            frame: name.to_string_lossy().trim_end_matches(".ply").to_owned(),
+            chamfer,
+            emd,
+        });
     }
-    let mean = |f: &dyn Fn(&MeshFrameReport) -> f64| (!meshes.is_empty()).then(|| meshes.iter().map(f).sum::<f64>() / meshes.len() as f64);
+    let mean = |f: &dyn Fn(&MeshFrameReport) -> f64| {
+        (!meshes.is_empty()).then(|| meshes.iter().map(f).sum::<f64>() / meshes.len() as f64)
+    };
     let tracking = match (pred.join("trajectories.csv"), gt.join("trajectories.csv")) {
         (p, g) if p.is_file() && g.is_file() => {
-            let a = read_trajectories_csv(&p).map_err(|source| FolderError::Metric { path: p.clone(), source })?;
-            let b = read_trajectories_csv(&g).map_err(|source| FolderError::Metric { path: g.clone(), source })?;
+            let a = read_trajectories_csv(&p)
+                .map_err(|source| FolderError::Metric { path: p.clone(), source })?;
+            let b = read_trajectories_csv(&g)
+                .map_err(|source| FolderError::Metric { path: g.clone(), source })?;
             Some(tracking_error(&a, &b).map_err(|source| FolderError::Metric { path: p, source })?)
         }
         _ => None,
@@ -127,7 +155,11 @@ pub fn evaluate_folders(pred: &Path, gt: &Path, o: &FolderOptions) -> Result<Fol
 
 /// RGB values of an image (the first three channels; grey repeated).
 fn rgb(image: &Image) -> Vec<f32> {
-    image.data.chunks_exact(image.channels as usize).flat_map(|p| if p.len() >= 3 { [p[0], p[1], p[2]] } else { [p[0]; 3] }).collect()
+    image
+        .data
+        .chunks_exact(image.channels as usize)
+        .flat_map(|p| if p.len() >= 3 { [p[0], p[1], p[2]] } else { [p[0]; 3] })
+        .collect()
 }
 
 fn compare_images(pred: &Path, gt: &Path) -> Result<Option<ImageReport>, FolderError> {
@@ -135,21 +167,31 @@ fn compare_images(pred: &Path, gt: &Path) -> Result<Option<ImageReport>, FolderE
     if !root.is_dir() {
         return Ok(None);
     }
-    let cameras = std::fs::read_dir(&root).map_err(|source| FolderError::Io { path: root.clone(), source })?;
-    let mut dirs: Vec<PathBuf> = cameras.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_dir()).collect();
+    let cameras = std::fs::read_dir(&root)
+        .map_err(|source| FolderError::Io { path: root.clone(), source })?;
+    let mut dirs: Vec<PathBuf> =
+        cameras.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_dir()).collect();
     dirs.sort();
     let (mut n, mut p_sum, mut s_sum) = (0usize, 0.0, 0.0);
     for dir in dirs {
         let camera = dir.file_name().expect("listed dirs have names").to_owned();
         for path in list(&dir, "png")? {
-            let gt_path = gt.join("images").join(&camera).join(path.file_name().expect("listed files have names"));
+            let gt_path = gt
+                .join("images")
+                .join(&camera)
+                .join(path.file_name().expect("listed files have names"));
             if !gt_path.is_file() {
                 continue;
             }
             let (a, b) = (read_image(&path)?, read_image(&gt_path)?);
             let metric = |source| FolderError::Metric { path: path.clone(), source };
             if (a.width, a.height) != (b.width, b.height) {
-                return Err(metric(EvalError::ImageShape { len: a.data.len(), width: b.width as usize, height: b.height as usize, channels: a.channels as usize }));
+                return Err(metric(EvalError::ImageShape {
+                    len: a.data.len(),
+                    width: b.width as usize,
+                    height: b.height as usize,
+                    channels: a.channels as usize,
+                }));
             }
             let (w, h) = (b.width as usize, b.height as usize);
             let (a, b) = (rgb(&a), rgb(&b));
@@ -158,5 +200,9 @@ fn compare_images(pred: &Path, gt: &Path) -> Result<Option<ImageReport>, FolderE
             n += 1;
         }
     }
-    Ok((n > 0).then(|| ImageReport { images: n, psnr_db: p_sum / n as f64, ssim: s_sum / n as f64 }))
+    Ok((n > 0).then(|| ImageReport {
+        images: n,
+        psnr_db: p_sum / n as f64,
+        ssim: s_sum / n as f64,
+    }))
 }

@@ -31,7 +31,10 @@ pub use emd::{emd_meshes, emd_points, EmdReport};
 pub use folder::{evaluate_folders, FolderError, FolderOptions, FolderReport};
 pub use psnr::psnr;
 pub use sample::{sample_surface, surface_points, SurfaceSample};
-pub use sequence::{evaluate_sequence, find_ground_truth, write_sequence_eval, GroundTruth, SequenceEval, SequenceEvalError, SequenceEvalOptions, SequenceSummary};
+pub use sequence::{
+    evaluate_sequence, find_ground_truth, write_sequence_eval, GroundTruth, SequenceEval,
+    SequenceEvalError, SequenceEvalOptions, SequenceSummary,
+};
 pub use ssim::ssim;
 pub use surface_chamfer::{chamfer_to_surface, SurfaceChamferReport};
 pub use tracking::{tracking_error, TrackingReport};

@@ -32,10 +32,16 @@ mod tests {
     fn known_values() {
         // Every value off by 0.1: MSE = 0.01, PSNR = 20 dB.
         let gt = vec![0.5f32; 12];
-        let pred: Vec<f32> = gt.iter().enumerate().map(|(i, v)| if i % 2 == 0 { v + 0.1 } else { v - 0.1 }).collect();
+        let pred: Vec<f32> = gt
+            .iter()
+            .enumerate()
+            .map(|(i, v)| if i % 2 == 0 { v + 0.1 } else { v - 0.1 })
+            .collect();
         assert!((psnr(&pred, &gt).unwrap() - 20.0).abs() < 1e-5);
         // One value of four off by 1: MSE = 0.25, PSNR = 10·log10(4).
-        assert!((psnr(&[1.0, 0.0, 0.0, 0.0], &[0.0; 4]).unwrap() - 10.0 * 4f64.log10()).abs() < 1e-12);
+        assert!(
+            (psnr(&[1.0, 0.0, 0.0, 0.0], &[0.0; 4]).unwrap() - 10.0 * 4f64.log10()).abs() < 1e-12
+        );
         assert_eq!(psnr(&gt, &gt).unwrap(), f64::INFINITY);
     }
 

@@ -41,12 +41,21 @@ pub fn triangle_area(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
 /// `n` points distributed uniformly by area over the mesh surface (faces picked with
 /// probability proportional to area, barycentrics uniform on the triangle), deterministic for
 /// `seed`. Zero-area faces are never picked; a mesh with no area is an error.
-pub fn sample_surface(positions: &[[f32; 3]], faces: &[[u32; 3]], n: usize, seed: u64) -> Result<Vec<SurfaceSample>, EvalError> {
+pub fn sample_surface(
+    positions: &[[f32; 3]],
+    faces: &[[u32; 3]],
+    n: usize,
+    seed: u64,
+) -> Result<Vec<SurfaceSample>, EvalError> {
     check_mesh(positions, faces)?;
     let mut cumulative = Vec::with_capacity(faces.len());
     let mut total = 0.0f64;
     for f in faces {
-        total += triangle_area(corner(positions, f[0]), corner(positions, f[1]), corner(positions, f[2]));
+        total += triangle_area(
+            corner(positions, f[0]),
+            corner(positions, f[1]),
+            corner(positions, f[2]),
+        );
         cumulative.push(total);
     }
     if total <= 0.0 || !total.is_finite() {
@@ -69,12 +78,18 @@ pub fn sample_surface(positions: &[[f32; 3]], faces: &[[u32; 3]], n: usize, seed
 
 /// Positions of `samples` on a mesh with the faces they were drawn on (any frame of the
 /// sequence). Faces and samples must come from [`sample_surface`] on the same face list.
-pub fn surface_points(positions: &[[f32; 3]], faces: &[[u32; 3]], samples: &[SurfaceSample]) -> Result<Vec<[f64; 3]>, EvalError> {
+pub fn surface_points(
+    positions: &[[f32; 3]],
+    faces: &[[u32; 3]],
+    samples: &[SurfaceSample],
+) -> Result<Vec<[f64; 3]>, EvalError> {
     check_mesh(positions, faces)?;
     samples
         .iter()
         .map(|s| {
-            let f = faces.get(s.face as usize).ok_or(EvalError::SampleFace { face: s.face, faces: faces.len() })?;
+            let f = faces
+                .get(s.face as usize)
+                .ok_or(EvalError::SampleFace { face: s.face, faces: faces.len() })?;
             let mut p = [0.0; 3];
             for (k, &b) in s.bary.iter().enumerate() {
                 let v = corner(positions, f[k]);
@@ -94,18 +109,23 @@ mod tests {
     #[test]
     fn samples_follow_area_and_stay_inside() {
         // Two triangles, areas 1/2 and 3/2 (a 1×1 and a 3×1 right triangle) in the z = 0 plane.
-        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [3.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+        let p =
+            [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [3.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
         let faces = [[0, 1, 2], [0, 3, 4], [1, 1, 2]];
         let s = sample_surface(&p, &faces, 20_000, 3).unwrap();
         assert!(s.iter().all(|s| s.face != 2), "a zero-area face was picked");
         let first = s.iter().filter(|s| s.face == 0).count() as f64 / s.len() as f64;
         assert!((first - 0.25).abs() < 0.015, "share of the small face {first}");
         for x in &s {
-            assert!(x.bary.iter().all(|&b| b >= 0.0) && (x.bary.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+            assert!(
+                x.bary.iter().all(|&b| b >= 0.0)
+                    && (x.bary.iter().sum::<f64>() - 1.0).abs() < 1e-12
+            );
         }
         // Uniform on the triangle: the mean of the samples is the centroid.
         let pts = surface_points(&p, &faces, &s).unwrap();
-        let on0: Vec<_> = s.iter().zip(&pts).filter(|(s, _)| s.face == 0).map(|(_, p)| *p).collect();
+        let on0: Vec<_> =
+            s.iter().zip(&pts).filter(|(s, _)| s.face == 0).map(|(_, p)| *p).collect();
         let mx = on0.iter().map(|p| p[0]).sum::<f64>() / on0.len() as f64;
         assert!((mx - 1.0 / 3.0).abs() < 0.02);
         assert_eq!(s, sample_surface(&p, &faces, 20_000, 3).unwrap());
@@ -113,9 +133,18 @@ mod tests {
 
     #[test]
     fn bad_meshes() {
-        assert!(matches!(sample_surface(&[[0.0; 3]; 3], &[[0, 1, 2]], 4, 0), Err(EvalError::NoArea)));
+        assert!(matches!(
+            sample_surface(&[[0.0; 3]; 3], &[[0, 1, 2]], 4, 0),
+            Err(EvalError::NoArea)
+        ));
         assert!(matches!(sample_surface(&[[0.0; 3]; 3], &[], 4, 0), Err(EvalError::NoArea)));
-        assert!(matches!(sample_surface(&[[0.0; 3]; 3], &[[0, 1, 3]], 4, 0), Err(EvalError::FaceIndex { face: 0, index: 3, .. })));
-        assert!(matches!(sample_surface(&[[f32::NAN; 3]; 3], &[[0, 1, 2]], 4, 0), Err(EvalError::NonFinite(_))));
+        assert!(matches!(
+            sample_surface(&[[0.0; 3]; 3], &[[0, 1, 3]], 4, 0),
+            Err(EvalError::FaceIndex { face: 0, index: 3, .. })
+        ));
+        assert!(matches!(
+            sample_surface(&[[f32::NAN; 3]; 3], &[[0, 1, 2]], 4, 0),
+            Err(EvalError::NonFinite(_))
+        ));
     }
 }

@@ -19,11 +19,19 @@ pub(crate) const C2: f64 = 0.03 * 0.03;
 
 /// Mean SSIM (unitless, ≤ 1) of `pred` against `gt`: interleaved `height × width × channels`
 /// arrays with values in [0, 1]. Both images must be at least 11×11.
-pub fn ssim(pred: &[f32], gt: &[f32], width: usize, height: usize, channels: usize) -> Result<f64, EvalError> {
+pub fn ssim(
+    pred: &[f32],
+    gt: &[f32],
+    width: usize,
+    height: usize,
+    channels: usize,
+) -> Result<f64, EvalError> {
     if pred.len() != gt.len() {
         return Err(EvalError::SizeMismatch(pred.len(), gt.len()));
     }
-    if width.checked_mul(height).and_then(|n| n.checked_mul(channels)) != Some(pred.len()) || channels == 0 {
+    if width.checked_mul(height).and_then(|n| n.checked_mul(channels)) != Some(pred.len())
+        || channels == 0
+    {
         return Err(EvalError::ImageShape { len: pred.len(), width, height, channels });
     }
     if width < WINDOW || height < WINDOW {
@@ -33,7 +41,8 @@ pub fn ssim(pred: &[f32], gt: &[f32], width: usize, height: usize, channels: usi
         return Err(EvalError::NonFinite("image"));
     }
     let weights = gaussian_weights();
-    let total: f64 = (0..channels).map(|c| ssim_channel(pred, gt, width, height, channels, c, &weights)).sum();
+    let total: f64 =
+        (0..channels).map(|c| ssim_channel(pred, gt, width, height, channels, c, &weights)).sum();
     Ok(total / channels as f64)
 }
 
@@ -49,7 +58,15 @@ pub(crate) fn gaussian_weights() -> [f64; WINDOW] {
 
 /// The five filtered moments (x, y, xx, yy, xy) of one channel, horizontal pass first over the
 /// valid columns, then vertical over the valid rows; returns the mean of S.
-fn ssim_channel(pred: &[f32], gt: &[f32], width: usize, height: usize, channels: usize, c: usize, w: &[f64; WINDOW]) -> f64 {
+fn ssim_channel(
+    pred: &[f32],
+    gt: &[f32],
+    width: usize,
+    height: usize,
+    channels: usize,
+    c: usize,
+    w: &[f64; WINDOW],
+) -> f64 {
     let out_w = width - 2 * RADIUS;
     let out_h = height - 2 * RADIUS;
     let at = |img: &[f32], x: usize, y: usize| img[(y * width + x) * channels + c] as f64;
@@ -119,8 +136,14 @@ mod tests {
 
     #[test]
     fn bad_input() {
-        assert!(matches!(ssim(&[0.0; 100], &[0.0; 100], 10, 10, 1), Err(EvalError::ImageTooSmall { .. })));
-        assert!(matches!(ssim(&[0.0; 100], &[0.0; 100], 11, 11, 1), Err(EvalError::ImageShape { .. })));
+        assert!(matches!(
+            ssim(&[0.0; 100], &[0.0; 100], 10, 10, 1),
+            Err(EvalError::ImageTooSmall { .. })
+        ));
+        assert!(matches!(
+            ssim(&[0.0; 100], &[0.0; 100], 11, 11, 1),
+            Err(EvalError::ImageShape { .. })
+        ));
         assert!(matches!(ssim(&[0.0; 2], &[0.0; 3], 1, 1, 1), Err(EvalError::SizeMismatch(2, 3))));
         let mut a = vec![0.5f32; 121];
         a[7] = f32::INFINITY;

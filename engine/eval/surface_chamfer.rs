@@ -40,11 +40,21 @@ pub fn chamfer_to_surface(
     }
     let pred_to_gt = directed(pred, gt, n, seed)?;
     let gt_to_pred = directed(gt, pred, n, seed)?;
-    Ok(SurfaceChamferReport { samples: n, pred_to_gt, gt_to_pred, mean: 0.5 * (pred_to_gt + gt_to_pred) })
+    Ok(SurfaceChamferReport {
+        samples: n,
+        pred_to_gt,
+        gt_to_pred,
+        mean: 0.5 * (pred_to_gt + gt_to_pred),
+    })
 }
 
 /// Mean distance from `n` samples of `from` to the surface of `to`.
-fn directed(from: (&[[f32; 3]], &[[u32; 3]]), to: (&[[f32; 3]], &[[u32; 3]]), n: usize, seed: u64) -> Result<f64, EvalError> {
+fn directed(
+    from: (&[[f32; 3]], &[[u32; 3]]),
+    to: (&[[f32; 3]], &[[u32; 3]]),
+    n: usize,
+    seed: u64,
+) -> Result<f64, EvalError> {
     let points = surface_points(from.0, from.1, &sample_surface(from.0, from.1, n, seed)?)?;
     // Sampling checked `to` only when it was `from`: check it before building its BVH.
     super::sample::check_mesh(to.0, to.1)?;
@@ -64,7 +74,10 @@ mod tests {
 
     /// Two triangles over the unit square at height z.
     fn square(z: f32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-        (vec![[0.0, 0.0, z], [1.0, 0.0, z], [1.0, 1.0, z], [0.0, 1.0, z]], vec![[0, 1, 2], [0, 2, 3]])
+        (
+            vec![[0.0, 0.0, z], [1.0, 0.0, z], [1.0, 1.0, z], [0.0, 1.0, z]],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
     }
 
     #[test]
@@ -83,8 +96,14 @@ mod tests {
         let (a, f) = square(0.0);
         assert!(matches!(chamfer_to_surface((&a, &f), (&a, &f), 0, 0), Err(EvalError::Empty(_))));
         assert!(matches!(chamfer_to_surface((&a, &f), (&a, &[]), 10, 0), Err(EvalError::NoArea)));
-        assert!(matches!(chamfer_to_surface((&a, &f), (&a, &[[0, 1, 9]]), 10, 0), Err(EvalError::FaceIndex { .. })));
+        assert!(matches!(
+            chamfer_to_surface((&a, &f), (&a, &[[0, 1, 9]]), 10, 0),
+            Err(EvalError::FaceIndex { .. })
+        ));
         let nan = vec![[f32::NAN; 3]; 4];
-        assert!(matches!(chamfer_to_surface((&a, &f), (&nan, &f), 10, 0), Err(EvalError::NonFinite(_))));
+        assert!(matches!(
+            chamfer_to_surface((&a, &f), (&nan, &f), 10, 0),
+            Err(EvalError::NonFinite(_))
+        ));
     }
 }

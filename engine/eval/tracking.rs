@@ -35,13 +35,16 @@ pub fn tracking_error(pred: &[TrackPoint], gt: &[TrackPoint]) -> Result<Tracking
     if gt.is_empty() {
         return Err(EvalError::Empty("ground-truth trajectories"));
     }
-    let lookup: HashMap<(&str, u32), [f64; 3]> = pred.iter().map(|p| ((p.id.as_str(), p.frame), p.position)).collect();
+    let lookup: HashMap<(&str, u32), [f64; 3]> =
+        pred.iter().map(|p| ((p.id.as_str(), p.frame), p.position)).collect();
     // Per frame: sum of squares, pairs, largest error.
     let mut per_frame: BTreeMap<u32, (f64, usize, f64)> = BTreeMap::new();
     let mut ids = BTreeSet::new();
     let (mut sum, mut max) = (0.0f64, 0.0f64);
     for g in gt {
-        let p = lookup.get(&(g.id.as_str(), g.frame)).ok_or_else(|| EvalError::MissingPrediction { id: g.id.clone(), frame: g.frame })?;
+        let p = lookup
+            .get(&(g.id.as_str(), g.frame))
+            .ok_or_else(|| EvalError::MissingPrediction { id: g.id.clone(), frame: g.frame })?;
         let e2: f64 = (0..3).map(|k| (p[k] - g.position[k]).powi(2)).sum();
         if !e2.is_finite() {
             return Err(EvalError::NonFinite("trajectories"));
@@ -63,7 +66,10 @@ pub fn tracking_error(pred: &[TrackPoint], gt: &[TrackPoint]) -> Result<Tracking
         mse,
         rmse: mse.sqrt(),
         max,
-        rmse_per_frame: per_frame.iter().map(|(&f, &(s, n, _))| (f, (s / n as f64).sqrt())).collect(),
+        rmse_per_frame: per_frame
+            .iter()
+            .map(|(&f, &(s, n, _))| (f, (s / n as f64).sqrt()))
+            .collect(),
         max_per_frame: per_frame.iter().map(|(&f, &(_, _, m))| (f, m)).collect(),
         ignored: pred.iter().filter(|p| !gt_keys.contains(&(p.id.as_str(), p.frame))).count(),
     })
@@ -79,9 +85,16 @@ mod tests {
 
     #[test]
     fn hand_computed() {
-        let gt = [pt(0, 0, [0.0; 3]), pt(1, 0, [1.0, 0.0, 0.0]), pt(0, 1, [0.0; 3]), pt(1, 1, [0.0; 3])];
+        let gt =
+            [pt(0, 0, [0.0; 3]), pt(1, 0, [1.0, 0.0, 0.0]), pt(0, 1, [0.0; 3]), pt(1, 1, [0.0; 3])];
         // Errors: 0, 3 (along x), 0, 5 (3 along x, 4 along y).
-        let pred = [pt(1, 1, [3.0, 4.0, 0.0]), pt(0, 0, [0.0; 3]), pt(1, 0, [4.0, 0.0, 0.0]), pt(0, 1, [0.0; 3]), pt(9, 0, [0.0; 3])];
+        let pred = [
+            pt(1, 1, [3.0, 4.0, 0.0]),
+            pt(0, 0, [0.0; 3]),
+            pt(1, 0, [4.0, 0.0, 0.0]),
+            pt(0, 1, [0.0; 3]),
+            pt(9, 0, [0.0; 3]),
+        ];
         let r = tracking_error(&pred, &gt).unwrap();
         assert_eq!((r.points, r.frames, r.pairs, r.ignored), (2, 2, 4, 1));
         assert!((r.mse - (9.0 + 25.0) / 4.0).abs() < 1e-12);
@@ -95,7 +108,9 @@ mod tests {
     #[test]
     fn missing_prediction_names_the_point() {
         let gt = [pt(4, 2, [0.0; 3])];
-        assert!(matches!(tracking_error(&[], &gt), Err(EvalError::MissingPrediction { ref id, frame: 2 }) if id == "4"));
+        assert!(
+            matches!(tracking_error(&[], &gt), Err(EvalError::MissingPrediction { ref id, frame: 2 }) if id == "4")
+        );
         assert!(matches!(tracking_error(&gt, &[]), Err(EvalError::Empty(_))));
     }
 }

@@ -21,7 +21,11 @@ const HEADER: &str = "id,frame,x,y,z";
 pub fn write_trajectories_csv(out: &mut impl Write, points: &[TrackPoint]) -> std::io::Result<()> {
     writeln!(out, "{HEADER}")?;
     for p in points {
-        writeln!(out, "{},{},{},{},{}", p.id, p.frame, p.position[0], p.position[1], p.position[2])?;
+        writeln!(
+            out,
+            "{},{},{},{},{}",
+            p.id, p.frame, p.position[0], p.position[1], p.position[2]
+        )?;
     }
     Ok(())
 }
@@ -29,8 +33,13 @@ pub fn write_trajectories_csv(out: &mut impl Write, points: &[TrackPoint]) -> st
 /// Reads the CSV at `path`. Every malformed line, non-finite coordinate or repeated
 /// (id, frame) pair is an error naming the file and the line.
 pub fn read_trajectories_csv(path: &Path) -> Result<Vec<TrackPoint>, EvalError> {
-    let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io { path: path.to_owned(), source })?;
-    parse_trajectories_csv(&text).map_err(|(line, problem)| EvalError::Csv { path: path.to_owned(), line, problem })
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| EvalError::Io { path: path.to_owned(), source })?;
+    parse_trajectories_csv(&text).map_err(|(line, problem)| EvalError::Csv {
+        path: path.to_owned(),
+        line,
+        problem,
+    })
 }
 
 /// Parses CSV text; errors carry the 1-based line number.
@@ -38,7 +47,9 @@ pub fn parse_trajectories_csv(text: &str) -> Result<Vec<TrackPoint>, (usize, Str
     let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
     match lines.next() {
         Some((_, h)) if h.trim().replace(' ', "") == HEADER => {}
-        Some((i, h)) => return Err((i + 1, format!("expected the header `{HEADER}`, found `{h}`"))),
+        Some((i, h)) => {
+            return Err((i + 1, format!("expected the header `{HEADER}`, found `{h}`")))
+        }
         None => return Err((1, format!("empty file, expected the header `{HEADER}`"))),
     }
     let mut seen = HashSet::new();
@@ -52,10 +63,16 @@ pub fn parse_trajectories_csv(text: &str) -> Result<Vec<TrackPoint>, (usize, Str
         if id.is_empty() || id.contains('"') {
             return Err((i + 1, format!("invalid id `{id}` (empty or quoted)")));
         }
-        let frame: u32 = fields[1].parse().map_err(|_| (i + 1, format!("frame `{}` is not an unsigned integer", fields[1])))?;
+        let frame: u32 = fields[1]
+            .parse()
+            .map_err(|_| (i + 1, format!("frame `{}` is not an unsigned integer", fields[1])))?;
         let mut position = [0.0; 3];
         for (k, p) in position.iter_mut().enumerate() {
-            *p = fields[2 + k].parse::<f64>().ok().filter(|v| v.is_finite()).ok_or((i + 1, format!("coordinate `{}` is not a finite number", fields[2 + k])))?;
+            *p = fields[2 + k]
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or((i + 1, format!("coordinate `{}` is not a finite number", fields[2 + k])))?;
         }
         if !seen.insert((id.to_owned(), frame)) {
             return Err((i + 1, format!("point {id} at frame {frame} appears twice")));
@@ -81,7 +98,10 @@ mod tests {
         assert_eq!(parse_trajectories_csv("x,y\n").unwrap_err().0, 1);
         assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n1,0,1,2\n").unwrap_err().0, 2);
         assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n1,0,1,2,nan\n").unwrap_err().0, 2);
-        assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n1,0,1,2,3\n\n1,0,1,2,3\n").unwrap_err().0, 4);
+        assert_eq!(
+            parse_trajectories_csv("id,frame,x,y,z\n1,0,1,2,3\n\n1,0,1,2,3\n").unwrap_err().0,
+            4
+        );
         assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n,0,1,2,3\n").unwrap_err().0, 2);
         assert_eq!(parse_trajectories_csv("id,frame,x,y,z\na,-1,1,2,3\n").unwrap_err().0, 2);
         assert!(parse_trajectories_csv("").is_err());

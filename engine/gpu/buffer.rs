@@ -47,28 +47,56 @@ impl<T: Pod> GpuBuffer<T> {
         Ok(buffer)
     }
 
-    fn with_location(ctx: &Arc<GpuContext>, name: &str, len: usize, location: MemoryLocation) -> GpuResult<Self> {
+    fn with_location(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        len: usize,
+        location: MemoryLocation,
+    ) -> GpuResult<Self> {
         let bytes = checked_bytes::<T>(ctx, name, len)?;
         let device = ctx.device();
         // Vulkan forbids empty buffers; an empty one still gets a few bytes so it can be bound.
         let info = vk::BufferCreateInfo::default()
             .size(bytes.max(16))
-            .usage(vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST)
+            .usage(
+                vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_SRC
+                    | vk::BufferUsageFlags::TRANSFER_DST,
+            )
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { device.create_buffer(&info, None) }.during("vkCreateBuffer")?;
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
-        let allocated = ctx.allocator().as_mut().expect("allocator lives as long as the context").allocate(
-            &AllocationCreateDesc { name, requirements, location, linear: true, allocation_scheme: AllocationScheme::GpuAllocatorManaged },
-        );
+        let allocated =
+            ctx.allocator().as_mut().expect("allocator lives as long as the context").allocate(
+                &AllocationCreateDesc {
+                    name,
+                    requirements,
+                    location,
+                    linear: true,
+                    allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+                },
+            );
         let allocation = match allocated {
             Ok(allocation) => allocation,
             Err(e) => {
                 unsafe { device.destroy_buffer(raw, None) };
-                return Err(GpuError::OutOfMemory { name: name.into(), bytes, reason: e.to_string() });
+                return Err(GpuError::OutOfMemory {
+                    name: name.into(),
+                    bytes,
+                    reason: e.to_string(),
+                });
             }
         };
-        let bound = unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
-        let buffer = Self { ctx: ctx.clone(), raw, allocation: Some(allocation), len, name: name.into(), _element: PhantomData };
+        let bound =
+            unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+        let buffer = Self {
+            ctx: ctx.clone(),
+            raw,
+            allocation: Some(allocation),
+            len,
+            name: name.into(),
+            _element: PhantomData,
+        };
         bound.during("vkBindBufferMemory")?;
         Ok(buffer)
     }
@@ -121,7 +149,8 @@ impl<T: Pod> GpuBuffer<T> {
             unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), mapped, bytes.len()) };
             return Ok(());
         }
-        let mut staging = Self::with_location(&self.ctx, "staging upload", data.len(), MemoryLocation::CpuToGpu)?;
+        let mut staging =
+            Self::with_location(&self.ctx, "staging upload", data.len(), MemoryLocation::CpuToGpu)?;
         staging.write(data)?;
         let mut recorder = Recorder::new(&self.ctx)?;
         recorder.copy_buffer(&staging, self, data.len());
@@ -157,10 +186,17 @@ impl<T: Pod> GpuBuffer<T> {
         }
         if let Some(mapped) = self.coherent_mapping() {
             let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
-            unsafe { std::ptr::copy_nonoverlapping(mapped.add(start * size_of::<T>()), bytes.as_mut_ptr(), bytes.len()) };
+            unsafe {
+                std::ptr::copy_nonoverlapping(
+                    mapped.add(start * size_of::<T>()),
+                    bytes.as_mut_ptr(),
+                    bytes.len(),
+                )
+            };
             return Ok(out);
         }
-        let staging = Self::with_location(&self.ctx, "staging readback", len, MemoryLocation::GpuToCpu)?;
+        let staging =
+            Self::with_location(&self.ctx, "staging readback", len, MemoryLocation::GpuToCpu)?;
         let mut recorder = Recorder::new(&self.ctx)?;
         recorder.copy_buffer_range(self, start, &staging, len);
         recorder.submit_and_wait()?;
@@ -169,7 +205,12 @@ impl<T: Pod> GpuBuffer<T> {
 
     fn check_len(&self, what: &'static str, len: usize) -> GpuResult<()> {
         if len > self.len {
-            return Err(GpuError::LengthMismatch { what, name: self.name.clone(), len, capacity: self.len });
+            return Err(GpuError::LengthMismatch {
+                what,
+                name: self.name.clone(),
+                len,
+                capacity: self.len,
+            });
         }
         Ok(())
     }
@@ -177,7 +218,8 @@ impl<T: Pod> GpuBuffer<T> {
     /// The host pointer, if this memory is mapped and coherent (no flush or invalidate needed).
     fn coherent_mapping(&self) -> Option<*mut u8> {
         let allocation = self.allocation.as_ref()?;
-        let coherent = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+        let coherent =
+            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
         if !allocation.memory_properties().contains(coherent) {
             return None;
         }
@@ -200,10 +242,15 @@ impl<T: Pod> Drop for GpuBuffer<T> {
 /// Bytes for `len` elements of `T`, or the error naming the limit it breaks.
 fn checked_bytes<T>(ctx: &GpuContext, name: &str, len: usize) -> GpuResult<u64> {
     let limits = ctx.limits();
-    let too_large = |bytes, limit, limit_name| GpuError::BufferTooLarge { name: name.into(), bytes, limit, limit_name };
-    let bytes = (len as u64)
-        .checked_mul(size_of::<T>() as u64)
-        .ok_or_else(|| too_large(u64::MAX, limits.max_storage_buffer_range, "maxStorageBufferRange"))?;
+    let too_large = |bytes, limit, limit_name| GpuError::BufferTooLarge {
+        name: name.into(),
+        bytes,
+        limit,
+        limit_name,
+    };
+    let bytes = (len as u64).checked_mul(size_of::<T>() as u64).ok_or_else(|| {
+        too_large(u64::MAX, limits.max_storage_buffer_range, "maxStorageBufferRange")
+    })?;
     if bytes > limits.max_storage_buffer_range {
         return Err(too_large(bytes, limits.max_storage_buffer_range, "maxStorageBufferRange"));
     }

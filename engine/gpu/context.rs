@@ -56,13 +56,19 @@ pub struct GpuContext {
 impl GpuContext {
     /// Creates a context on the device chosen by `options` (see [`choose_device`]).
     pub fn new(options: &ContextOptions) -> GpuResult<Arc<Self>> {
-        let validation = options.validation.unwrap_or_else(|| std::env::var(VALIDATION_ENV).is_ok_and(|v| v == "1"));
+        let validation = options
+            .validation
+            .unwrap_or_else(|| std::env::var(VALIDATION_ENV).is_ok_and(|v| v == "1"));
         let wanted = options.device.clone().or_else(|| std::env::var(DEVICE_ENV).ok());
         let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loading(e.to_string()))?;
         let validation_log = Arc::<ValidationLog>::default();
         let instance = create_instance(&entry, validation, &validation_log)?;
         // From here on, a failure must destroy the instance: build the rest in a closure.
-        let messenger = if validation { Some(create_messenger(&entry, &instance, &validation_log)) } else { None };
+        let messenger = if validation {
+            Some(create_messenger(&entry, &instance, &validation_log))
+        } else {
+            None
+        };
         let rest = (|| {
             let (handles, devices) = unsafe { enumerate(&instance)? };
             let chosen = choose_device(&devices, wanted.as_deref())?;
@@ -75,7 +81,8 @@ impl GpuContext {
                 return Err(e);
             }
         };
-        let built = unsafe { create_device(&instance, physical_device, info.capabilities.full_subgroups) };
+        let built =
+            unsafe { create_device(&instance, physical_device, info.capabilities.full_subgroups) };
         let (device, queue_family) = match built {
             Ok(v) => v,
             Err(e) => {
@@ -83,7 +90,8 @@ impl GpuContext {
                 return Err(e);
             }
         };
-        let limits = unsafe { read_limits(&instance, physical_device, queue_family, &info.capabilities) };
+        let limits =
+            unsafe { read_limits(&instance, physical_device, queue_family, &info.capabilities) };
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
         let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
         let allocator = Allocator::new(&AllocatorCreateDesc {
@@ -94,9 +102,15 @@ impl GpuContext {
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         })
-        .map_err(|e| GpuError::OutOfMemory { name: "allocator".into(), bytes: 0, reason: e.to_string() });
+        .map_err(|e| GpuError::OutOfMemory {
+            name: "allocator".into(),
+            bytes: 0,
+            reason: e.to_string(),
+        });
         let pipeline_cache = allocator.and_then(|allocator| {
-            let cache = unsafe { device.create_pipeline_cache(&vk::PipelineCacheCreateInfo::default(), None) };
+            let cache = unsafe {
+                device.create_pipeline_cache(&vk::PipelineCacheCreateInfo::default(), None)
+            };
             cache.during("vkCreatePipelineCache").map(|cache| (allocator, cache))
         });
         let (allocator, pipeline_cache) = match pipeline_cache {
@@ -194,7 +208,11 @@ impl Drop for GpuContext {
     }
 }
 
-fn create_instance(entry: &ash::Entry, validation: bool, log: &ValidationLog) -> GpuResult<ash::Instance> {
+fn create_instance(
+    entry: &ash::Entry,
+    validation: bool,
+    log: &ValidationLog,
+) -> GpuResult<ash::Instance> {
     let app = vk::ApplicationInfo::default()
         .application_name(c"tagsplat")
         .engine_name(c"tagsplat")
@@ -202,11 +220,13 @@ fn create_instance(entry: &ash::Entry, validation: bool, log: &ValidationLog) ->
     let mut layers = Vec::new();
     let mut extensions = Vec::new();
     let sync_validation = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&sync_validation);
+    let mut features =
+        vk::ValidationFeaturesEXT::default().enabled_validation_features(&sync_validation);
     let mut messenger_info = messenger_create_info(log);
     let mut create_info = vk::InstanceCreateInfo::default().application_info(&app);
     if validation {
-        let available = unsafe { entry.enumerate_instance_layer_properties() }.during("vkEnumerateInstanceLayerProperties")?;
+        let available = unsafe { entry.enumerate_instance_layer_properties() }
+            .during("vkEnumerateInstanceLayerProperties")?;
         if !available.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)) {
             return Err(GpuError::NoValidationLayer);
         }
@@ -238,8 +258,9 @@ fn create_messenger(
 ) -> (ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT) {
     let loader = ash::ext::debug_utils::Instance::new(entry, instance);
     // A messenger that fails to appear only loses messages; the layer still prints them.
-    let messenger = unsafe { loader.create_debug_utils_messenger(&messenger_create_info(log), None) }
-        .unwrap_or(vk::DebugUtilsMessengerEXT::null());
+    let messenger =
+        unsafe { loader.create_debug_utils_messenger(&messenger_create_info(log), None) }
+            .unwrap_or(vk::DebugUtilsMessengerEXT::null());
     (loader, messenger)
 }
 
@@ -254,8 +275,11 @@ unsafe fn destroy_instance(
 }
 
 /// The physical devices and, at the same indices, what the user sees of them.
-unsafe fn enumerate(instance: &ash::Instance) -> GpuResult<(Vec<vk::PhysicalDevice>, Vec<DeviceInfo>)> {
-    let physical_devices = instance.enumerate_physical_devices().during("vkEnumeratePhysicalDevices")?;
+unsafe fn enumerate(
+    instance: &ash::Instance,
+) -> GpuResult<(Vec<vk::PhysicalDevice>, Vec<DeviceInfo>)> {
+    let physical_devices =
+        instance.enumerate_physical_devices().during("vkEnumeratePhysicalDevices")?;
     let infos = physical_devices
         .iter()
         .copied()
@@ -264,7 +288,11 @@ unsafe fn enumerate(instance: &ash::Instance) -> GpuResult<(Vec<vk::PhysicalDevi
             let properties = instance.get_physical_device_properties(pd);
             DeviceInfo {
                 index,
-                name: properties.device_name_as_c_str().unwrap_or(c"?").to_string_lossy().into_owned(),
+                name: properties
+                    .device_name_as_c_str()
+                    .unwrap_or(c"?")
+                    .to_string_lossy()
+                    .into_owned(),
                 kind: properties.device_type,
                 capabilities: DeviceCapabilities::query(instance, pd),
             }
@@ -274,7 +302,10 @@ unsafe fn enumerate(instance: &ash::Instance) -> GpuResult<(Vec<vk::PhysicalDevi
 }
 
 /// The compute queue family: one that also writes timestamps if any does.
-unsafe fn compute_queue_family(instance: &ash::Instance, physical_device: vk::PhysicalDevice) -> u32 {
+unsafe fn compute_queue_family(
+    instance: &ash::Instance,
+    physical_device: vk::PhysicalDevice,
+) -> u32 {
     let families = instance.get_physical_device_queue_family_properties(physical_device);
     let compute = |f: &vk::QueueFamilyProperties| f.queue_flags.contains(vk::QueueFlags::COMPUTE);
     let position = families
@@ -292,15 +323,21 @@ unsafe fn create_device(
 ) -> GpuResult<(ash::Device, u32)> {
     let queue_family = compute_queue_family(instance, physical_device);
     let priorities = [1.0];
-    let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+    let queues = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(queue_family)
+        .queue_priorities(&priorities)];
     let mut extensions: Vec<*const i8> = REQUIRED_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
     let core = vk::PhysicalDeviceFeatures::default().shader_int64(true);
     let mut vk12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
     let mut atomic_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
         .shader_buffer_float32_atomics(true)
         .shader_buffer_float32_atomic_add(true);
-    let mut size_control = vk::PhysicalDeviceSubgroupSizeControlFeatures::default().compute_full_subgroups(true);
-    let mut features = vk::PhysicalDeviceFeatures2::default().features(core).push_next(&mut vk12).push_next(&mut atomic_float);
+    let mut size_control =
+        vk::PhysicalDeviceSubgroupSizeControlFeatures::default().compute_full_subgroups(true);
+    let mut features = vk::PhysicalDeviceFeatures2::default()
+        .features(core)
+        .push_next(&mut vk12)
+        .push_next(&mut atomic_float);
     if full_subgroups {
         extensions.push(ash::ext::subgroup_size_control::NAME.as_ptr());
         features = features.push_next(&mut size_control);
@@ -309,7 +346,8 @@ unsafe fn create_device(
         .queue_create_infos(&queues)
         .enabled_extension_names(&extensions)
         .push_next(&mut features);
-    let device = instance.create_device(physical_device, &create_info, None).during("vkCreateDevice")?;
+    let device =
+        instance.create_device(physical_device, &create_info, None).during("vkCreateDevice")?;
     Ok((device, queue_family))
 }
 
@@ -323,7 +361,8 @@ unsafe fn read_limits(
     let mut properties2 = vk::PhysicalDeviceProperties2::default().push_next(&mut maintenance3);
     instance.get_physical_device_properties2(physical_device, &mut properties2);
     let limits = properties2.properties.limits;
-    let family = instance.get_physical_device_queue_family_properties(physical_device)[queue_family as usize];
+    let family = instance.get_physical_device_queue_family_properties(physical_device)
+        [queue_family as usize];
     DeviceLimits {
         max_storage_buffer_range: limits.max_storage_buffer_range as u64,
         max_memory_allocation_size: maintenance3.max_memory_allocation_size,
@@ -331,7 +370,8 @@ unsafe fn read_limits(
         max_workgroup_invocations: limits.max_compute_work_group_invocations,
         max_shared_memory_bytes: limits.max_compute_shared_memory_size,
         subgroup_size: capabilities.subgroup_size,
-        timestamp_period_ns: (family.timestamp_valid_bits > 0).then_some(limits.timestamp_period as f64),
+        timestamp_period_ns: (family.timestamp_valid_bits > 0)
+            .then_some(limits.timestamp_period as f64),
         timestamp_valid_bits: family.timestamp_valid_bits,
         full_subgroups: capabilities.full_subgroups,
         max_subgroup_size: capabilities.max_subgroup_size,

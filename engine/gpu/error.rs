@@ -14,7 +14,9 @@ pub enum GpuError {
     MissingFeatures { device: String, missing: Vec<&'static str> },
     #[error("validation was requested but VK_LAYER_KHRONOS_validation is not installed (Debian: vulkan-validationlayers)")]
     NoValidationLayer,
-    #[error("buffer \"{name}\" needs {bytes} bytes, over this device's {limit_name} of {limit} bytes")]
+    #[error(
+        "buffer \"{name}\" needs {bytes} bytes, over this device's {limit_name} of {limit} bytes"
+    )]
     BufferTooLarge { name: String, bytes: u64, limit: u64, limit_name: &'static str },
     #[error("out of GPU memory allocating buffer \"{name}\" ({bytes} bytes): {reason}")]
     OutOfMemory { name: String, bytes: u64, reason: String },
@@ -43,7 +45,11 @@ impl<T> VkContext<T> for Result<T, vk::Result> {
         self.map_err(|result| match result {
             vk::Result::ERROR_DEVICE_LOST => GpuError::DeviceLost(call),
             vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
-                GpuError::OutOfMemory { name: call.to_string(), bytes: 0, reason: result.to_string() }
+                GpuError::OutOfMemory {
+                    name: call.to_string(),
+                    bytes: 0,
+                    reason: result.to_string(),
+                }
             }
             _ => GpuError::Vulkan { call, result },
         })

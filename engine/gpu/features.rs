@@ -25,7 +25,8 @@ pub struct DeviceCapabilities {
 }
 
 /// Device extensions the engine enables.
-pub const REQUIRED_EXTENSIONS: [&CStr; 2] = [ash::khr::push_descriptor::NAME, ash::ext::shader_atomic_float::NAME];
+pub const REQUIRED_EXTENSIONS: [&CStr; 2] =
+    [ash::khr::push_descriptor::NAME, ash::ext::shader_atomic_float::NAME];
 
 impl DeviceCapabilities {
     /// Names of the required features this device lacks; empty when it has them all.
@@ -59,8 +60,10 @@ impl DeviceCapabilities {
     /// `physical_device` must come from `instance`.
     pub unsafe fn query(instance: &ash::Instance, physical_device: vk::PhysicalDevice) -> Self {
         let properties = instance.get_physical_device_properties(physical_device);
-        let extensions = instance.enumerate_device_extension_properties(physical_device).unwrap_or_default();
-        let has_extension = |name: &CStr| extensions.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
+        let extensions =
+            instance.enumerate_device_extension_properties(physical_device).unwrap_or_default();
+        let has_extension =
+            |name: &CStr| extensions.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
         let queues = instance.get_physical_device_queue_family_properties(physical_device);
         let mut capabilities = Self {
             api_version: properties.api_version,
@@ -73,7 +76,9 @@ impl DeviceCapabilities {
             subgroup_arithmetic: false,
             subgroup_ballot: false,
             subgroup_shuffle: false,
-            has_compute_queue: queues.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE)),
+            has_compute_queue: queues
+                .iter()
+                .any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE)),
             full_subgroups: false,
             max_subgroup_size: 0,
         };
@@ -91,7 +96,8 @@ impl DeviceCapabilities {
         let ops = subgroup.supported_operations;
         capabilities.subgroup_size = subgroup.subgroup_size;
         capabilities.max_subgroup_size = size_control.max_subgroup_size.max(subgroup.subgroup_size);
-        capabilities.subgroup_in_compute = subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE);
+        capabilities.subgroup_in_compute =
+            subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE);
         capabilities.subgroup_arithmetic = ops.contains(vk::SubgroupFeatureFlags::ARITHMETIC);
         capabilities.subgroup_ballot = ops.contains(vk::SubgroupFeatureFlags::BALLOT);
         capabilities.subgroup_shuffle = ops.contains(vk::SubgroupFeatureFlags::SHUFFLE);
@@ -109,7 +115,8 @@ impl DeviceCapabilities {
         instance.get_physical_device_features2(physical_device, &mut features2);
         capabilities.shader_int64 = features2.features.shader_int64 == vk::TRUE;
         capabilities.buffer_int64_atomics = vk12.shader_buffer_int64_atomics == vk::TRUE;
-        capabilities.buffer_float32_atomic_add = atomic_float.shader_buffer_float32_atomic_add == vk::TRUE;
+        capabilities.buffer_float32_atomic_add =
+            atomic_float.shader_buffer_float32_atomic_add == vk::TRUE;
         capabilities.full_subgroups = size_control_features.compute_full_subgroups == vk::TRUE;
         capabilities
     }

@@ -30,8 +30,12 @@ pub struct ComputePipeline {
 impl ComputePipeline {
     pub fn new(ctx: &Arc<GpuContext>, desc: &PipelineDesc) -> GpuResult<Self> {
         let device = ctx.device();
-        let code = ash::util::read_spv(&mut std::io::Cursor::new(desc.spirv))
-            .map_err(|_| GpuError::Vulkan { call: "read_spv (corrupt embedded SPIR-V)", result: vk::Result::ERROR_INVALID_SHADER_NV })?;
+        let code = ash::util::read_spv(&mut std::io::Cursor::new(desc.spirv)).map_err(|_| {
+            GpuError::Vulkan {
+                call: "read_spv (corrupt embedded SPIR-V)",
+                result: vk::Result::ERROR_INVALID_SHADER_NV,
+            }
+        })?;
         let bindings: Vec<_> = (0..desc.bindings)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
@@ -54,7 +58,9 @@ impl ComputePipeline {
             bindings: desc.bindings,
             push_constant_bytes: desc.push_constant_bytes,
         };
-        pipeline.set_layout = unsafe { device.create_descriptor_set_layout(&set_layout_info, None) }.during("vkCreateDescriptorSetLayout")?;
+        pipeline.set_layout =
+            unsafe { device.create_descriptor_set_layout(&set_layout_info, None) }
+                .during("vkCreateDescriptorSetLayout")?;
         let push_ranges = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::COMPUTE)
             .size(desc.push_constant_bytes)];
@@ -63,10 +69,13 @@ impl ComputePipeline {
         if desc.push_constant_bytes > 0 {
             layout_info = layout_info.push_constant_ranges(&push_ranges);
         }
-        pipeline.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.during("vkCreatePipelineLayout")?;
+        pipeline.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }
+            .during("vkCreatePipelineLayout")?;
 
-        let module = unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None) }
-            .during("vkCreateShaderModule")?;
+        let module = unsafe {
+            device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)
+        }
+        .during("vkCreateShaderModule")?;
         let entries: Vec<_> = (0..desc.specialization.len() as u32)
             .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: 4 * i, size: 4 })
             .collect();
@@ -79,7 +88,11 @@ impl ComputePipeline {
         let limits = ctx.limits();
         let workgroup_size = desc.specialization.first().copied().unwrap_or(1);
         let full = limits.full_subgroups && workgroup_size % limits.max_subgroup_size == 0;
-        let flags = if full { vk::PipelineShaderStageCreateFlags::REQUIRE_FULL_SUBGROUPS } else { Default::default() };
+        let flags = if full {
+            vk::PipelineShaderStageCreateFlags::REQUIRE_FULL_SUBGROUPS
+        } else {
+            Default::default()
+        };
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .flags(flags)
             .stage(vk::ShaderStageFlags::COMPUTE)
@@ -87,9 +100,11 @@ impl ComputePipeline {
             .name(c"main")
             .specialization_info(&specialization);
         let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(pipeline.layout);
-        let created = unsafe { device.create_compute_pipelines(ctx.pipeline_cache(), &[info], None) };
+        let created =
+            unsafe { device.create_compute_pipelines(ctx.pipeline_cache(), &[info], None) };
         unsafe { device.destroy_shader_module(module, None) };
-        pipeline.pipeline = created.map_err(|(_, result)| GpuError::Pipeline { name: desc.name, result })?[0];
+        pipeline.pipeline =
+            created.map_err(|(_, result)| GpuError::Pipeline { name: desc.name, result })?[0];
         Ok(pipeline)
     }
 }

@@ -43,7 +43,8 @@ impl<'a> Recorder<'a> {
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
         let mut recorder = Self {
             ctx: ctx.clone(),
-            pool: unsafe { device.create_command_pool(&pool_info, None) }.during("vkCreateCommandPool")?,
+            pool: unsafe { device.create_command_pool(&pool_info, None) }
+                .during("vkCreateCommandPool")?,
             cmd: vk::CommandBuffer::null(),
             fence: vk::Fence::null(),
             timestamps: Timestamps::new(ctx),
@@ -55,18 +56,38 @@ impl<'a> Recorder<'a> {
             .command_pool(recorder.pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
-        recorder.cmd = unsafe { device.allocate_command_buffers(&alloc_info) }.during("vkAllocateCommandBuffers")?[0];
-        recorder.fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.during("vkCreateFence")?;
-        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-        unsafe { device.begin_command_buffer(recorder.cmd, &begin) }.during("vkBeginCommandBuffer")?;
+        recorder.cmd = unsafe { device.allocate_command_buffers(&alloc_info) }
+            .during("vkAllocateCommandBuffers")?[0];
+        recorder.fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }
+            .during("vkCreateFence")?;
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        unsafe { device.begin_command_buffer(recorder.cmd, &begin) }
+            .during("vkBeginCommandBuffer")?;
         Ok(recorder)
     }
 
     /// Records `pipeline` over `groups` workgroups with `buffers` at bindings 0.. and `push` as
     /// push constants.
-    pub fn dispatch<P: Pod>(&mut self, pipeline: &'a ComputePipeline, buffers: &[BufferBinding<'a>], push: &P, groups: [u32; 3]) {
-        assert_eq!(buffers.len() as u32, pipeline.bindings, "{}: wrong number of buffers", pipeline.name);
-        assert_eq!(size_of::<P>() as u32, pipeline.push_constant_bytes, "{}: wrong push-constant size", pipeline.name);
+    pub fn dispatch<P: Pod>(
+        &mut self,
+        pipeline: &'a ComputePipeline,
+        buffers: &[BufferBinding<'a>],
+        push: &P,
+        groups: [u32; 3],
+    ) {
+        assert_eq!(
+            buffers.len() as u32,
+            pipeline.bindings,
+            "{}: wrong number of buffers",
+            pipeline.name
+        );
+        assert_eq!(
+            size_of::<P>() as u32,
+            pipeline.push_constant_bytes,
+            "{}: wrong push-constant size",
+            pipeline.name
+        );
         if groups.contains(&0) {
             return;
         }
@@ -74,7 +95,11 @@ impl<'a> Recorder<'a> {
         let device = self.ctx.device();
         let infos: Vec<_> = buffers
             .iter()
-            .map(|b| vk::DescriptorBufferInfo { buffer: b.buffer, offset: b.offset, range: b.range })
+            .map(|b| vk::DescriptorBufferInfo {
+                buffer: b.buffer,
+                offset: b.offset,
+                range: b.range,
+            })
             .collect();
         let writes: Vec<_> = infos
             .iter()
@@ -98,7 +123,13 @@ impl<'a> Recorder<'a> {
                 );
             }
             if size_of::<P>() > 0 {
-                device.cmd_push_constants(self.cmd, pipeline.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(push));
+                device.cmd_push_constants(
+                    self.cmd,
+                    pipeline.layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    bytemuck::bytes_of(push),
+                );
             }
             device.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]);
         }
@@ -108,31 +139,58 @@ impl<'a> Recorder<'a> {
     /// Like [`Self::dispatch`] for a 1-D grid of `groups` workgroups, folded into x and y when
     /// it exceeds `maxComputeWorkGroupCount[0]`. Shaders recover the flat index with
     /// `flat_workgroup_id()` (shaders/common/grid.glsl) and skip ids past their work.
-    pub fn dispatch_1d<P: Pod>(&mut self, pipeline: &'a ComputePipeline, buffers: &[BufferBinding<'a>], push: &P, groups: u64) -> GpuResult<()> {
-        let grid = grid_for(groups, self.ctx.limits().max_workgroup_count).ok_or_else(|| GpuError::LimitExceeded {
-            what: format!("{}: workgroups", pipeline.name),
-            count: groups,
-            limit: self.ctx.limits().max_workgroup_count[0] as u64 * self.ctx.limits().max_workgroup_count[1] as u64,
-            limit_name: "maxComputeWorkGroupCount[0] * [1]",
+    pub fn dispatch_1d<P: Pod>(
+        &mut self,
+        pipeline: &'a ComputePipeline,
+        buffers: &[BufferBinding<'a>],
+        push: &P,
+        groups: u64,
+    ) -> GpuResult<()> {
+        let grid = grid_for(groups, self.ctx.limits().max_workgroup_count).ok_or_else(|| {
+            GpuError::LimitExceeded {
+                what: format!("{}: workgroups", pipeline.name),
+                count: groups,
+                limit: self.ctx.limits().max_workgroup_count[0] as u64
+                    * self.ctx.limits().max_workgroup_count[1] as u64,
+                limit_name: "maxComputeWorkGroupCount[0] * [1]",
+            }
         })?;
         self.dispatch(pipeline, buffers, push, grid);
         Ok(())
     }
 
     /// Copies the first `len` elements of `src` to `dst`.
-    pub fn copy_buffer<T: Pod>(&mut self, src: &'a GpuBuffer<T>, dst: &'a GpuBuffer<T>, len: usize) {
+    pub fn copy_buffer<T: Pod>(
+        &mut self,
+        src: &'a GpuBuffer<T>,
+        dst: &'a GpuBuffer<T>,
+        len: usize,
+    ) {
         self.copy_buffer_range(src, 0, dst, len);
     }
 
     /// Copies elements `src_start..src_start + len` of `src` to the start of `dst`.
-    pub fn copy_buffer_range<T: Pod>(&mut self, src: &'a GpuBuffer<T>, src_start: usize, dst: &'a GpuBuffer<T>, len: usize) {
-        assert!(src_start + len <= src.len() && len <= dst.len(), "copy of {len} elements out of bounds");
+    pub fn copy_buffer_range<T: Pod>(
+        &mut self,
+        src: &'a GpuBuffer<T>,
+        src_start: usize,
+        dst: &'a GpuBuffer<T>,
+        len: usize,
+    ) {
+        assert!(
+            src_start + len <= src.len() && len <= dst.len(),
+            "copy of {len} elements out of bounds"
+        );
         if len == 0 {
             return;
         }
         self.barrier_if_needed();
         let element = size_of::<T>() as u64;
-        let region = vk::BufferCopy { src_offset: src_start as u64 * element, dst_offset: 0, size: len as u64 * element };
+        let region = vk::BufferCopy {
+            src_offset: src_start as u64 * element,
+            dst_offset: 0,
+            size: len as u64 * element,
+        };
         unsafe { self.ctx.device().cmd_copy_buffer(self.cmd, src.raw(), dst.raw(), &[region]) };
         self.pending_writes = true;
     }
@@ -165,7 +223,15 @@ impl<'a> Recorder<'a> {
             let to_host = vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
                 .dst_access_mask(vk::AccessFlags::HOST_READ);
-            device.cmd_pipeline_barrier(self.cmd, STAGES, vk::PipelineStageFlags::HOST, vk::DependencyFlags::empty(), &[to_host], &[], &[]);
+            device.cmd_pipeline_barrier(
+                self.cmd,
+                STAGES,
+                vk::PipelineStageFlags::HOST,
+                vk::DependencyFlags::empty(),
+                &[to_host],
+                &[],
+                &[],
+            );
             device.end_command_buffer(self.cmd).during("vkEndCommandBuffer")?;
             let cmds = [self.cmd];
             let submit = vk::SubmitInfo::default().command_buffers(&cmds);
@@ -193,7 +259,15 @@ impl<'a> Recorder<'a> {
                     | vk::AccessFlags::TRANSFER_WRITE,
             );
         unsafe {
-            self.ctx.device().cmd_pipeline_barrier(self.cmd, STAGES, STAGES, vk::DependencyFlags::empty(), &[barrier], &[], &[]);
+            self.ctx.device().cmd_pipeline_barrier(
+                self.cmd,
+                STAGES,
+                STAGES,
+                vk::DependencyFlags::empty(),
+                &[barrier],
+                &[],
+                &[],
+            );
         }
         self.pending_writes = false;
     }

@@ -136,7 +136,10 @@ mod tests {
         ];
         assert_eq!(choose_device(&devices, Some("0")).unwrap(), 0);
         assert_eq!(choose_device(&devices, Some("LLVMpipe")).unwrap(), 0);
-        assert!(matches!(choose_device(&devices, Some("radeon")), Err(GpuError::DeviceNotFound { .. })));
+        assert!(matches!(
+            choose_device(&devices, Some("radeon")),
+            Err(GpuError::DeviceNotFound { .. })
+        ));
         let err = choose_device(&devices, Some("old")).unwrap_err().to_string();
         assert!(err.contains("old GPU") && err.contains("64-bit buffer atomics"), "{err}");
         assert!(matches!(choose_device(&[], None), Err(GpuError::NoDevice)));

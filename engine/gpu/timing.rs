@@ -62,7 +62,9 @@ impl Timestamps {
     fn write(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) -> Option<u32> {
         self.period_ns?;
         if self.used == self.pools.len() as u32 * QUERIES_PER_POOL {
-            let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(QUERIES_PER_POOL);
+            let info = vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::TIMESTAMP)
+                .query_count(QUERIES_PER_POOL);
             // Without a pool the pass simply goes untimed.
             let pool = unsafe { device.create_query_pool(&info, None) }.ok()?;
             unsafe { device.cmd_reset_query_pool(cmd, pool, 0, QUERIES_PER_POOL) };
@@ -70,7 +72,14 @@ impl Timestamps {
         }
         let query = self.used;
         let pool = self.pools[(query / QUERIES_PER_POOL) as usize];
-        unsafe { device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, query % QUERIES_PER_POOL) };
+        unsafe {
+            device.cmd_write_timestamp(
+                cmd,
+                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                pool,
+                query % QUERIES_PER_POOL,
+            )
+        };
         self.used += 1;
         Some(query)
     }
@@ -81,7 +90,12 @@ impl Timestamps {
         let mut ticks = vec![0u64; self.used as usize];
         for (i, chunk) in ticks.chunks_mut(QUERIES_PER_POOL as usize).enumerate() {
             unsafe {
-                device.get_query_pool_results(self.pools[i], 0, chunk, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+                device.get_query_pool_results(
+                    self.pools[i],
+                    0,
+                    chunk,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
             }
             .during("vkGetQueryPoolResults")?;
         }
@@ -89,8 +103,13 @@ impl Timestamps {
             .passes
             .iter()
             .filter_map(|(name, depth, start, end)| {
-                let elapsed = ticks[(*end)? as usize].wrapping_sub(ticks[(*start)? as usize]) & self.valid_mask;
-                Some(PassTime { name: name.clone(), ms: elapsed as f64 * period_ns * 1e-6, depth: *depth })
+                let elapsed = ticks[(*end)? as usize].wrapping_sub(ticks[(*start)? as usize])
+                    & self.valid_mask;
+                Some(PassTime {
+                    name: name.clone(),
+                    ms: elapsed as f64 * period_ns * 1e-6,
+                    depth: *depth,
+                })
             })
             .collect();
         Ok(PassTimes { passes })

@@ -44,15 +44,18 @@ impl ValidationLog {
 }
 
 /// Severities the messenger listens to: everything that signals a problem.
-pub(crate) const SEVERITIES: vk::DebugUtilsMessageSeverityFlagsEXT = vk::DebugUtilsMessageSeverityFlagsEXT::from_raw(
-    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING.as_raw() | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR.as_raw(),
-);
+pub(crate) const SEVERITIES: vk::DebugUtilsMessageSeverityFlagsEXT =
+    vk::DebugUtilsMessageSeverityFlagsEXT::from_raw(
+        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING.as_raw()
+            | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR.as_raw(),
+    );
 
-pub(crate) const TYPES: vk::DebugUtilsMessageTypeFlagsEXT = vk::DebugUtilsMessageTypeFlagsEXT::from_raw(
-    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL.as_raw()
-        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION.as_raw()
-        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE.as_raw(),
-);
+pub(crate) const TYPES: vk::DebugUtilsMessageTypeFlagsEXT =
+    vk::DebugUtilsMessageTypeFlagsEXT::from_raw(
+        vk::DebugUtilsMessageTypeFlagsEXT::GENERAL.as_raw()
+            | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION.as_raw()
+            | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE.as_raw(),
+    );
 
 /// The messenger callback; `user_data` is the context's `ValidationLog`, which outlives it.
 pub(crate) unsafe extern "system" fn on_message(

@@ -46,7 +46,8 @@ pub fn hull_bounds(views: &[ViewField], tolerance: usize) -> Result<Aabb, Bounds
     let tables: Vec<Coverage> = views.iter().map(Coverage::new).collect();
     let near: Vec<f64> = views.iter().map(|v| 0.01 * v.camera.center().distance(center)).collect();
     for _ in 0..12 {
-        let next = carve_round(views, &tables, &near, tolerance, aabb).ok_or(BoundsProblem::Disjoint)?;
+        let next =
+            carve_round(views, &tables, &near, tolerance, aabb).ok_or(BoundsProblem::Disjoint)?;
         let shrink = next.volume() / aabb.volume();
         aabb = next;
         if shrink > 0.8 {
@@ -87,7 +88,9 @@ impl Coverage {
         for y in 0..h {
             for x in 0..w {
                 let inside = u32::from(d.values[y * w + x] > 0.0);
-                sums[(y + 1) * (w + 1) + x + 1] = inside + sums[y * (w + 1) + x + 1] + sums[(y + 1) * (w + 1) + x] - sums[y * (w + 1) + x];
+                sums[(y + 1) * (w + 1) + x + 1] =
+                    inside + sums[y * (w + 1) + x + 1] + sums[(y + 1) * (w + 1) + x]
+                        - sums[y * (w + 1) + x];
             }
         }
         Self { width: w, height: h, sums }
@@ -104,7 +107,8 @@ impl Coverage {
         }
         let (x0, y0, x1, y1) = (x0 as usize, y0 as usize, x1 as usize, y1 as usize);
         let w = self.width + 1;
-        self.sums[y1 * w + x1] + self.sums[y0 * w + x0] > self.sums[y0 * w + x1] + self.sums[y1 * w + x0]
+        self.sums[y1 * w + x1] + self.sums[y0 * w + x0]
+            > self.sums[y0 * w + x1] + self.sums[y1 * w + x0]
     }
 }
 
@@ -136,7 +140,8 @@ fn cell_may_be_inside(view: &ViewField, coverage: &Coverage, cell: &Aabb, near: 
         return false;
     }
     let cam = &view.camera;
-    let (mut u0, mut u1, mut v0, mut v1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    let (mut u0, mut u1, mut v0, mut v1) =
+        (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
     for c in front {
         let (u, v) = (cam.fx * c.x / c.z + cam.cx, cam.fy * c.y / c.z + cam.cy);
         (u0, u1, v0, v1) = (u0.min(u), u1.max(u), v0.min(v), v1.max(v));
@@ -146,7 +151,13 @@ fn cell_may_be_inside(view: &ViewField, coverage: &Coverage, cell: &Aabb, near: 
 
 /// One conservative round on a CELLS³ grid over `aabb`: the box of surviving cells grown by
 /// one cell (clipped to `aabb`), or `None` when nothing survives.
-fn carve_round(views: &[ViewField], tables: &[Coverage], near: &[f64], tolerance: usize, aabb: Aabb) -> Option<Aabb> {
+fn carve_round(
+    views: &[ViewField],
+    tables: &[Coverage],
+    near: &[f64],
+    tolerance: usize,
+    aabb: Aabb,
+) -> Option<Aabb> {
     let cell = aabb.size() / CELLS as f64;
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     for k in 0..CELLS {
@@ -187,9 +198,17 @@ mod tests {
     #[test]
     fn box_holds_the_sphere_and_is_tight() {
         // A surround rig and a forward-facing one (cameras within 50° of each other).
-        let surround = check(&[3.0 * DVec3::X, 3.0 * DVec3::Z, -3.0 * DVec3::X, DVec3::new(0.1, 3.0, 0.2)], 0.5);
+        let surround = check(
+            &[3.0 * DVec3::X, 3.0 * DVec3::Z, -3.0 * DVec3::X, DVec3::new(0.1, 3.0, 0.2)],
+            0.5,
+        );
         assert!(surround.size().max_element() < 1.6, "{surround:?}");
-        let forward = [DVec3::new(0.0, 0.0, 3.0), DVec3::new(1.2, 0.3, 2.7), DVec3::new(-1.2, -0.3, 2.7), DVec3::new(0.3, 1.3, 2.6)];
+        let forward = [
+            DVec3::new(0.0, 0.0, 3.0),
+            DVec3::new(1.2, 0.3, 2.7),
+            DVec3::new(-1.2, -0.3, 2.7),
+            DVec3::new(0.3, 1.3, 2.6),
+        ];
         let b = check(&forward, 0.5);
         // Depth is poorly constrained by a narrow rig, but the box still shrinks far below
         // the 6-unit start.
@@ -204,7 +223,9 @@ mod tests {
         // one unit) lower: its cone passes a unit from the first one's axis and they miss.
         let mut off = sphere_view(camera(3.0 * DVec3::Z), 0.5);
         let shift = 18 * off.distance.width;
-        let shifted: Vec<f32> = (0..off.distance.values.len()).map(|p| if p >= shift { off.distance.values[p - shift] } else { -20.0 }).collect();
+        let shifted: Vec<f32> = (0..off.distance.values.len())
+            .map(|p| if p >= shift { off.distance.values[p - shift] } else { -20.0 })
+            .collect();
         off.distance.values = shifted;
         assert_eq!(hull_bounds(&[one.clone(), off.clone()], 0), Err(BoundsProblem::Disjoint));
         // One disagreeing view allowed: either cone alone is a hull.

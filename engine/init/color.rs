@@ -20,7 +20,11 @@ pub struct ColorSource<'a> {
 
 /// 8-bit colours per vertex row of a compacted `mesh` and how many vertices no view saw
 /// (coloured from neighbours).
-pub fn vertex_colors(mesh: &ManifoldMesh, views: &[ColorSource], tolerance: f64) -> Result<(Vec<[u8; 3]>, usize), TrackError> {
+pub fn vertex_colors(
+    mesh: &ManifoldMesh,
+    views: &[ColorSource],
+    tolerance: f64,
+) -> Result<(Vec<[u8; 3]>, usize), TrackError> {
     let (positions, faces) = (&mesh.positions, &mesh.live_faces());
     let bvh = SurfaceBvh::build(positions, faces)?;
     let normals = vertex_normals(mesh);
@@ -33,18 +37,36 @@ pub fn vertex_colors(mesh: &ManifoldMesh, views: &[ColorSource], tolerance: f64)
             scope.spawn(move || {
                 for (i, o) in out.iter_mut().enumerate() {
                     let v = t * chunk + i;
-                    *o = observed_color(bvh, DVec3::from(positions[v].map(f64::from)), DVec3::from(normals[v].map(f64::from)), views, tolerance);
+                    *o = observed_color(
+                        bvh,
+                        DVec3::from(positions[v].map(f64::from)),
+                        DVec3::from(normals[v].map(f64::from)),
+                        views,
+                        tolerance,
+                    );
                 }
             });
         }
     });
     let unseen = seen.iter().filter(|c| c.is_none()).count();
     let filled = fill_from_neighbours(seen, faces);
-    Ok((filled.iter().map(|c| c.to_array().map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)).collect(), unseen))
+    Ok((
+        filled
+            .iter()
+            .map(|c| c.to_array().map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8))
+            .collect(),
+        unseen,
+    ))
 }
 
 /// Weighted mean colour of `p` over the views that see it, `None` when none does.
-fn observed_color(bvh: &SurfaceBvh, p: DVec3, normal: DVec3, views: &[ColorSource], tolerance: f64) -> Option<DVec3> {
+fn observed_color(
+    bvh: &SurfaceBvh,
+    p: DVec3,
+    normal: DVec3,
+    views: &[ColorSource],
+    tolerance: f64,
+) -> Option<DVec3> {
     let (mut sum, mut weight) = (DVec3::ZERO, 0.0);
     for view in views {
         let origin = view.camera.center();
@@ -70,7 +92,11 @@ fn observed_color(bvh: &SurfaceBvh, p: DVec3, normal: DVec3, views: &[ColorSourc
             continue;
         }
         let at = |c: u8| view.image.at(x, y, c) as f64;
-        let color = if view.image.channels >= 3 { DVec3::new(at(0), at(1), at(2)) } else { DVec3::splat(at(0)) };
+        let color = if view.image.channels >= 3 {
+            DVec3::new(at(0), at(1), at(2))
+        } else {
+            DVec3::splat(at(0))
+        };
         sum += cosine * color;
         weight += cosine;
     }
@@ -121,11 +147,29 @@ mod tests {
         positions.extend(p.iter().map(|q| [q[0] as f32, q[1] as f32, q[2] as f32 - 3.0]));
         let mut faces = f.clone();
         faces.extend(f.iter().map(|t| t.map(|v| v + n)));
-        let camera = |z: f64| Camera::look_at(64, 64, 80.0, 80.0, 32.0, 32.0, DVec3::new(0.0, 0.0, z), DVec3::new(0.0, 0.0, -1.5), DVec3::Y).unwrap();
-        let flat = |rgb: [f32; 3]| Image { width: 64, height: 64, channels: 3, data: rgb.repeat(64 * 64) };
-        let (red, green, full) = (flat([1.0, 0.0, 0.0]), flat([0.0, 1.0, 0.0]), vec![1.0f32; 64 * 64]);
+        let camera = |z: f64| {
+            Camera::look_at(
+                64,
+                64,
+                80.0,
+                80.0,
+                32.0,
+                32.0,
+                DVec3::new(0.0, 0.0, z),
+                DVec3::new(0.0, 0.0, -1.5),
+                DVec3::Y,
+            )
+            .unwrap()
+        };
+        let flat =
+            |rgb: [f32; 3]| Image { width: 64, height: 64, channels: 3, data: rgb.repeat(64 * 64) };
+        let (red, green, full) =
+            (flat([1.0, 0.0, 0.0]), flat([0.0, 1.0, 0.0]), vec![1.0f32; 64 * 64]);
         let (c1, c2) = (camera(6.0), camera(-9.0));
-        let views = [ColorSource { camera: &c1, image: &red, mask: &full }, ColorSource { camera: &c2, image: &green, mask: &full }];
+        let views = [
+            ColorSource { camera: &c1, image: &red, mask: &full },
+            ColorSource { camera: &c2, image: &green, mask: &full },
+        ];
         let mesh = ManifoldMesh::new(positions.clone(), faces).unwrap();
         let (colors, unseen) = vertex_colors(&mesh, &views, 0.05).unwrap();
         assert!(unseen > 0);

@@ -3,7 +3,10 @@
 
 /// Faces of the connected component (faces sharing a vertex) with the largest area, with the
 /// vertices renumbered in first-use order; returns (positions, faces, components dropped).
-pub fn largest_component(positions: &[[f32; 3]], faces: &[[u32; 3]]) -> (Vec<[f32; 3]>, Vec<[u32; 3]>, usize) {
+pub fn largest_component(
+    positions: &[[f32; 3]],
+    faces: &[[u32; 3]],
+) -> (Vec<[f32; 3]>, Vec<[u32; 3]>, usize) {
     let mut parent: Vec<u32> = (0..positions.len() as u32).collect();
     for f in faces {
         union(&mut parent, f[0], f[1]);
@@ -59,7 +62,8 @@ mod tests {
     #[test]
     fn keeps_the_larger_tetrahedron() {
         let tetra = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
-        let mut positions = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let mut positions =
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         positions.extend([[5.0, 0.0, 0.0], [7.0, 0.0, 0.0], [5.0, 2.0, 0.0], [5.0, 0.0, 2.0]]);
         let mut faces: Vec<[u32; 3]> = tetra.to_vec();
         faces.extend(tetra.iter().map(|f| f.map(|v| v + 4)));

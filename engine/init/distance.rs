@@ -18,7 +18,8 @@ impl SignedDistance {
     pub fn from_mask(mask: &[f32], width: usize, height: usize) -> Self {
         let mask: Vec<f32> = mask.iter().map(|&m| if m.is_finite() { m } else { 0.0 }).collect();
         let inside: Vec<bool> = mask.iter().map(|&m| m > 0.5).collect();
-        let to_outside = nearest_feature(&inside.iter().map(|&i| !i).collect::<Vec<_>>(), width, height);
+        let to_outside =
+            nearest_feature(&inside.iter().map(|&i| !i).collect::<Vec<_>>(), width, height);
         let to_inside = nearest_feature(&inside, width, height);
         let cap = (width + height) as f64;
         // How far past its centre the outline lies from pixel q, toward the other class.
@@ -91,7 +92,8 @@ pub fn nearest_feature(feature: &[bool], width: usize, height: usize) -> Vec<Opt
         for x in 0..width {
             if out[x].is_finite() {
                 let column = arg[x];
-                result[y * width + x] = Some((out[x].sqrt(), row_of[y * width + column] * width + column));
+                result[y * width + x] =
+                    Some((out[x].sqrt(), row_of[y * width + column] * width + column));
             }
         }
     }
@@ -128,7 +130,8 @@ impl Envelope {
             let mut s;
             loop {
                 let p = self.apex[k];
-                s = ((f[q] + (q * q) as f64) - (f[p] + (p * p) as f64)) / (2.0 * (q as f64 - p as f64));
+                s = ((f[q] + (q * q) as f64) - (f[p] + (p * p) as f64))
+                    / (2.0 * (q as f64 - p as f64));
                 if s > self.bound[k] {
                     break;
                 }
@@ -163,12 +166,20 @@ mod tests {
         for density in [0.02, 0.2, 0.7] {
             let feature: Vec<bool> = (0..w * h).map(|_| rng.next_f64() < density).collect();
             let nearest = nearest_feature(&feature, w, h);
-            let dist = |p: usize, q: usize| ((q % w) as f64 - (p % w) as f64).hypot((q / w) as f64 - (p / w) as f64);
+            let dist = |p: usize, q: usize| {
+                ((q % w) as f64 - (p % w) as f64).hypot((q / w) as f64 - (p / w) as f64)
+            };
             for (p, found) in nearest.iter().enumerate() {
-                let brute = (0..w * h).filter(|&q| feature[q]).map(|q| dist(p, q)).fold(f64::INFINITY, f64::min);
+                let brute = (0..w * h)
+                    .filter(|&q| feature[q])
+                    .map(|q| dist(p, q))
+                    .fold(f64::INFINITY, f64::min);
                 match *found {
                     Some((d, q)) => {
-                        assert!(feature[q] && (d - brute).abs() < 1e-9 && (dist(p, q) - d).abs() < 1e-9, "pixel {p}: {d} vs {brute}");
+                        assert!(
+                            feature[q] && (d - brute).abs() < 1e-9 && (dist(p, q) - d).abs() < 1e-9,
+                            "pixel {p}: {d} vs {brute}"
+                        );
                     }
                     None => assert!(brute.is_infinite()),
                 }
@@ -179,13 +190,28 @@ mod tests {
     #[test]
     fn disk_distance_is_radius_minus_centre_distance() {
         let (n, r) = (64usize, 20.0);
-        let mask: Vec<f32> = (0..n * n).map(|p| (((p % n) as f64 + 0.5 - 32.0).hypot((p / n) as f64 + 0.5 - 32.0) < r) as u8 as f32).collect();
+        let mask: Vec<f32> = (0..n * n)
+            .map(|p| {
+                (((p % n) as f64 + 0.5 - 32.0).hypot((p / n) as f64 + 0.5 - 32.0) < r) as u8 as f32
+            })
+            .collect();
         let sd = SignedDistance::from_mask(&mask, n, n);
         // A binary mask places the outline to within half a pixel; bilinear interpolation
         // rounds off the cone's apex at the centre by about a pixel more.
-        for (u, v, tolerance) in [(32.0, 32.0, 1.5), (40.3, 30.1, 0.75), (50.0, 32.0, 0.75), (52.4, 33.3, 0.75), (60.0, 60.0, 0.75), (5.5, 32.0, 0.75)] {
+        for (u, v, tolerance) in [
+            (32.0, 32.0, 1.5),
+            (40.3, 30.1, 0.75),
+            (50.0, 32.0, 0.75),
+            (52.4, 33.3, 0.75),
+            (60.0, 60.0, 0.75),
+            (5.5, 32.0, 0.75),
+        ] {
             let exact = r - (u - 32.0f64).hypot(v - 32.0);
-            assert!((sd.sample(u, v) - exact).abs() < tolerance, "({u}, {v}): {} vs {exact}", sd.sample(u, v));
+            assert!(
+                (sd.sample(u, v) - exact).abs() < tolerance,
+                "({u}, {v}): {} vs {exact}",
+                sd.sample(u, v)
+            );
         }
         // Past the border it keeps falling.
         assert!(sd.sample(-3.0, 32.0) < sd.sample(0.0, 32.0) - 2.9);
@@ -208,6 +234,8 @@ mod tests {
         nan[5] = f32::NAN;
         nan[6] = f32::INFINITY;
         let sd = SignedDistance::from_mask(&nan, 4, 4);
-        assert!(sd.values.iter().all(|v| v.is_finite()) && sd.values[5] < 0.0 && sd.values[6] < 0.0);
+        assert!(
+            sd.values.iter().all(|v| v.is_finite()) && sd.values[5] < 0.0 && sd.values[6] < 0.0
+        );
     }
 }

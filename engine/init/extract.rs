@@ -11,11 +11,13 @@ use super::field::GridFrame;
 use std::collections::HashMap;
 
 /// The seven edge directions of the Kuhn triangulation, as offsets in {0, 1}³.
-const DIRECTIONS: [[usize; 3]; 7] = [[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [1, 0, 1], [0, 1, 1], [1, 1, 1]];
+const DIRECTIONS: [[usize; 3]; 7] =
+    [[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [1, 0, 1], [0, 1, 1], [1, 1, 1]];
 
 /// The six tetrahedra of a cube, as cube-corner bit masks (bit 0 = x, 1 = y, 2 = z): each path
 /// 0 → one axis → two axes → 7.
-const TETS: [[usize; 4]; 6] = [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]];
+const TETS: [[usize; 4]; 6] =
+    [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]];
 
 /// Forces the outermost layer of grid vertices outside (value ≤ 0) so the surface closes
 /// inside the grid, and turns enclosed outside regions (cavities: negative vertices not
@@ -37,7 +39,14 @@ pub fn close_grid(values: &mut [f32], grid: &GridFrame) -> usize {
         }
     }
     while let Some([i, j, k]) = stack.pop() {
-        let neighbours = [[i.wrapping_sub(1), j, k], [i + 1, j, k], [i, j.wrapping_sub(1), k], [i, j + 1, k], [i, j, k.wrapping_sub(1)], [i, j, k + 1]];
+        let neighbours = [
+            [i.wrapping_sub(1), j, k],
+            [i + 1, j, k],
+            [i, j.wrapping_sub(1), k],
+            [i, j + 1, k],
+            [i, j, k.wrapping_sub(1)],
+            [i, j, k + 1],
+        ];
         for n in neighbours {
             if n[0] < nx && n[1] < ny && n[2] < nz {
                 let v = grid.index(n);
@@ -78,8 +87,16 @@ pub fn marching_tetrahedra(values: &[f32], grid: &GridFrame) -> (Vec<[f32; 3]>, 
                     let mut edge_vertex = |a: usize, b: usize| -> u32 {
                         // Key: the lower corner of the edge and its direction.
                         let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-                        let delta = [(hi & 1) - (lo & 1), ((hi >> 1) & 1) - ((lo >> 1) & 1), ((hi >> 2) & 1) - ((lo >> 2) & 1)];
-                        let direction = DIRECTIONS.iter().position(|&d| d == delta).expect("Kuhn edges go up in every axis") as u8;
+                        let delta = [
+                            (hi & 1) - (lo & 1),
+                            ((hi >> 1) & 1) - ((lo >> 1) & 1),
+                            ((hi >> 2) & 1) - ((lo >> 2) & 1),
+                        ];
+                        let direction = DIRECTIONS
+                            .iter()
+                            .position(|&d| d == delta)
+                            .expect("Kuhn edges go up in every axis")
+                            as u8;
                         *vertex_of.entry((grid.index(corner(lo)), direction)).or_insert_with(|| {
                             let (fa, fb) = (value(a) as f64, value(b) as f64);
                             let t = (fa / (fa - fb)).clamp(1e-3, 1.0 - 1e-3);
@@ -88,7 +105,13 @@ pub fn marching_tetrahedra(values: &[f32], grid: &GridFrame) -> (Vec<[f32; 3]>, 
                             positions.len() as u32 - 1
                         })
                     };
-                    tet_triangles(tet, |c| value(c) > 0.0, |c| grid.point(corner(c)), &mut edge_vertex, &mut faces);
+                    tet_triangles(
+                        tet,
+                        |c| value(c) > 0.0,
+                        |c| grid.point(corner(c)),
+                        &mut edge_vertex,
+                        &mut faces,
+                    );
                 }
             }
         }
@@ -100,7 +123,13 @@ pub fn marching_tetrahedra(values: &[f32], grid: &GridFrame) -> (Vec<[f32; 3]>, 
 /// the edge midpoints (never degenerate): its normal must point from the inside corners to
 /// the outside ones. The true triangle moves its corners along the same edges, which keeps
 /// the combinatorial orientation, so neighbours always agree.
-fn tet_triangles(tet: [usize; 4], inside: impl Fn(usize) -> bool, point: impl Fn(usize) -> glam::DVec3, edge_vertex: &mut impl FnMut(usize, usize) -> u32, faces: &mut Vec<[u32; 3]>) {
+fn tet_triangles(
+    tet: [usize; 4],
+    inside: impl Fn(usize) -> bool,
+    point: impl Fn(usize) -> glam::DVec3,
+    edge_vertex: &mut impl FnMut(usize, usize) -> u32,
+    faces: &mut Vec<[u32; 3]>,
+) {
     let (ins, outs): (Vec<usize>, Vec<usize>) = tet.iter().partition(|&&c| inside(c));
     let edges: Vec<(usize, usize)> = match (ins.len(), outs.len()) {
         (1, 3) => vec![(ins[0], outs[0]), (ins[0], outs[1]), (ins[0], outs[2])],
@@ -115,7 +144,11 @@ fn tet_triangles(tet: [usize; 4], inside: impl Fn(usize) -> bool, point: impl Fn
     let mut emit = |tri: [(usize, usize); 3]| {
         let [p, q, r] = tri.map(mid);
         let ids = tri.map(|(a, b)| edge_vertex(a, b));
-        faces.push(if (q - p).cross(r - p).dot(outward) > 0.0 { ids } else { [ids[0], ids[2], ids[1]] });
+        faces.push(if (q - p).cross(r - p).dot(outward) > 0.0 {
+            ids
+        } else {
+            [ids[0], ids[2], ids[1]]
+        });
     };
     emit([edges[0], edges[1], edges[2]]);
     if edges.len() == 4 {
@@ -130,7 +163,15 @@ mod tests {
     use glam::DVec3;
 
     fn sampled(grid: &GridFrame, f: impl Fn(DVec3) -> f64) -> Vec<f32> {
-        (0..grid.len()).map(|v| f(grid.point([v % grid.dims[0], (v / grid.dims[0]) % grid.dims[1], v / (grid.dims[0] * grid.dims[1])])) as f32).collect()
+        (0..grid.len())
+            .map(|v| {
+                f(grid.point([
+                    v % grid.dims[0],
+                    (v / grid.dims[0]) % grid.dims[1],
+                    v / (grid.dims[0] * grid.dims[1]),
+                ])) as f32
+            })
+            .collect()
     }
 
     #[test]
@@ -147,10 +188,13 @@ mod tests {
             assert!((d - r).abs() < 0.01, "{d}");
         }
         // Outward winding: the signed volume is positive and near the sphere's.
-        let volume: f64 = faces.iter().map(|f| {
-            let [a, b, c] = f.map(|i| DVec3::from(positions[i as usize].map(f64::from)));
-            a.dot(b.cross(c)) / 6.0
-        }).sum();
+        let volume: f64 = faces
+            .iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|i| DVec3::from(positions[i as usize].map(f64::from)));
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum();
         let exact = 4.0 / 3.0 * std::f64::consts::PI;
         assert!((volume - exact).abs() < 0.02 * exact, "{volume} vs {exact}");
     }
@@ -160,7 +204,9 @@ mod tests {
         // Two spheres touching at a point (a generic PL level set is still a manifold), a shell
         // with a cavity (filled), and a slab running through the grid border (closed there).
         let grid = GridFrame { origin: DVec3::splat(-2.05), step: 0.1, dims: [42, 42, 42] };
-        let blobs = |p: DVec3| (0.8 - (p - DVec3::X * 0.8).length()).max(0.8 - (p + DVec3::X * 0.8).length());
+        let blobs = |p: DVec3| {
+            (0.8 - (p - DVec3::X * 0.8).length()).max(0.8 - (p + DVec3::X * 0.8).length())
+        };
         let mut values = sampled(&grid, blobs);
         close_grid(&mut values, &grid);
         let (p, f) = marching_tetrahedra(&values, &grid);
@@ -171,7 +217,10 @@ mod tests {
         assert!(close_grid(&mut values, &grid) > 100, "the cavity is filled");
         let (p, f) = marching_tetrahedra(&values, &grid);
         assert_eq!(closed_manifold_problem(p.len(), &f), None);
-        assert!(p.iter().all(|q| DVec3::from(q.map(f64::from)).length() > 1.4), "no inner surface is left");
+        assert!(
+            p.iter().all(|q| DVec3::from(q.map(f64::from)).length() > 1.4),
+            "no inner surface is left"
+        );
 
         let mut values = sampled(&grid, |p: DVec3| 0.5 - p.z.abs());
         close_grid(&mut values, &grid);

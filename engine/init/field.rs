@@ -24,7 +24,10 @@ impl ViewField {
         if c.z.is_nan() || c.z <= 0.0 {
             return behind;
         }
-        let (u, v) = (self.camera.fx * c.x / c.z + self.camera.cx, self.camera.fy * c.y / c.z + self.camera.cy);
+        let (u, v) = (
+            self.camera.fx * c.x / c.z + self.camera.cx,
+            self.camera.fy * c.y / c.z + self.camera.cy,
+        );
         self.distance.sample(u, v) * c.z / (self.camera.fx * self.camera.fy).sqrt()
     }
 }
@@ -133,7 +136,10 @@ pub(crate) mod tests {
     #[test]
     fn sphere_hull_field_crosses_zero_near_the_sphere() {
         let r = 0.5;
-        let views: Vec<ViewField> = [DVec3::X, DVec3::Y + 0.01 * DVec3::Z, DVec3::Z, -DVec3::X].iter().map(|&d| sphere_view(camera(3.0 * d), r)).collect();
+        let views: Vec<ViewField> = [DVec3::X, DVec3::Y + 0.01 * DVec3::Z, DVec3::Z, -DVec3::X]
+            .iter()
+            .map(|&d| sphere_view(camera(3.0 * d), r))
+            .collect();
         let field = HullField { views, tolerance: 0, far: 100.0 };
         let mut scratch = Vec::new();
         // Along the axis diagonal to all cameras the hull reaches past the sphere, but it never
@@ -146,7 +152,11 @@ pub(crate) mod tests {
         // Behind a camera: far outside.
         assert!(field.value(DVec3::new(4.0, 0.0, 0.0), &mut scratch) <= -100.0);
         // Two views: a point outside the +Z cone only is carved, unless one view may disagree.
-        let two = HullField { views: vec![field.views[0].clone(), field.views[2].clone()], tolerance: 0, far: 100.0 };
+        let two = HullField {
+            views: vec![field.views[0].clone(), field.views[2].clone()],
+            tolerance: 0,
+            far: 100.0,
+        };
         let outside_one = DVec3::new(0.6, 0.0, 0.0);
         assert!(two.value(outside_one, &mut scratch) < 0.0);
         assert!(HullField { tolerance: 1, ..two }.value(outside_one, &mut scratch) > 0.0);
@@ -154,7 +164,10 @@ pub(crate) mod tests {
 
     #[test]
     fn grid_samples_match_point_values() {
-        let views = vec![sphere_view(camera(3.0 * DVec3::X), 0.5), sphere_view(camera(3.0 * DVec3::Z), 0.5)];
+        let views = vec![
+            sphere_view(camera(3.0 * DVec3::X), 0.5),
+            sphere_view(camera(3.0 * DVec3::Z), 0.5),
+        ];
         let field = HullField { views, tolerance: 0, far: 100.0 };
         let grid = GridFrame { origin: DVec3::splat(-0.7), step: 0.1, dims: [15, 13, 11] };
         let values = field.sample_grid(&grid);

@@ -24,7 +24,12 @@ pub fn fill_small_holes(mask: &mut [f32], width: usize, height: usize, max_fract
             region.push(p);
             let (x, y) = (p % width, p / width);
             touches_border |= x == 0 || y == 0 || x + 1 == width || y + 1 == height;
-            let neighbours = [(x > 0).then(|| p - 1), (x + 1 < width).then(|| p + 1), (y > 0).then(|| p - width), (y + 1 < height).then(|| p + width)];
+            let neighbours = [
+                (x > 0).then(|| p - 1),
+                (x + 1 < width).then(|| p + 1),
+                (y > 0).then(|| p - width),
+                (y + 1 < height).then(|| p + width),
+            ];
             for q in neighbours.into_iter().flatten() {
                 if !seen[q] && mask[q] <= 0.5 {
                     seen[q] = true;

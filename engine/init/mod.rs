@@ -64,7 +64,16 @@ pub struct InitOptions {
 
 impl Default for InitOptions {
     fn default() -> Self {
-        Self { tolerance: 0, voxel_pixels: 2.0, max_grid_bytes: 256 << 20, mask_hole_fraction: 0.005, edge_pixels: 3.0, vertices: None, remesh_rounds: 6, colors: true }
+        Self {
+            tolerance: 0,
+            voxel_pixels: 2.0,
+            max_grid_bytes: 256 << 20,
+            mask_hole_fraction: 0.005,
+            edge_pixels: 3.0,
+            vertices: None,
+            remesh_rounds: 6,
+            colors: true,
+        }
     }
 }
 
@@ -90,7 +99,14 @@ pub enum InitError {
     #[error("view {name}: the mask has {len} values but the camera is {width}×{height} pixels")]
     MaskSize { name: String, len: usize, width: u32, height: u32 },
     #[error("view {name}: the image is {image_width}×{image_height} with {channels} channels but the camera is {width}×{height} pixels")]
-    ImageSize { name: String, image_width: u32, image_height: u32, channels: u8, width: u32, height: u32 },
+    ImageSize {
+        name: String,
+        image_width: u32,
+        image_height: u32,
+        channels: u8,
+        width: u32,
+        height: u32,
+    },
     #[error("the masks are empty in all {count} views [{names}]: nothing marks the subject")]
     EmptyMasks { count: usize, names: String },
     #[error("the rays through the silhouette centres of [{names}] are (nearly) parallel or fewer than 2 masks are non-empty: the cameras cannot locate the subject")]
@@ -154,9 +170,17 @@ pub struct InitMesh {
 
 /// Builds the initial mesh of `frame` from the dataset's training views (held-out cameras are
 /// not used).
-pub fn init_mesh(dataset: &Dataset, frame: usize, options: &InitOptions) -> Result<InitMesh, InitError> {
+pub fn init_mesh(
+    dataset: &Dataset,
+    frame: usize,
+    options: &InitOptions,
+) -> Result<InitMesh, InitError> {
     let Some(f) = dataset.frames.get(frame) else {
-        return Err(InitError::NoFrame { root: dataset.root.clone(), frame, frames: dataset.frames.len() });
+        return Err(InitError::NoFrame {
+            root: dataset.root.clone(),
+            frame,
+            frames: dataset.frames.len(),
+        });
     };
     let mut views = Vec::new();
     for (k, v) in f.views.iter().enumerate().filter(|(_, v)| dataset.train.contains(&v.camera)) {
@@ -171,18 +195,27 @@ pub fn init_mesh(dataset: &Dataset, frame: usize, options: &InitOptions) -> Resu
 }
 
 /// Builds the mesh from plain views (see the module doc for the stages).
-pub fn init_mesh_from_views(views: &[HullView], options: &InitOptions) -> Result<InitMesh, InitError> {
+pub fn init_mesh_from_views(
+    views: &[HullView],
+    options: &InitOptions,
+) -> Result<InitMesh, InitError> {
     let start = std::time::Instant::now();
     check(views, options)?;
-    let names = |vs: &mut dyn Iterator<Item = &HullView>| vs.map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ");
+    let names = |vs: &mut dyn Iterator<Item = &HullView>| {
+        vs.map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ")
+    };
     let mut mask_hole_pixels = 0;
     let fields: Vec<ViewField> = views
         .iter()
         .map(|v| {
             let (w, h) = (v.camera.width as usize, v.camera.height as usize);
             let mut mask = v.mask.clone();
-            mask_hole_pixels += holes::fill_small_holes(&mut mask, w, h, options.mask_hole_fraction);
-            ViewField { camera: v.camera, distance: distance::SignedDistance::from_mask(&mask, w, h) }
+            mask_hole_pixels +=
+                holes::fill_small_holes(&mut mask, w, h, options.mask_hole_fraction);
+            ViewField {
+                camera: v.camera,
+                distance: distance::SignedDistance::from_mask(&mask, w, h),
+            }
         })
         .collect();
     let empty: Vec<&HullView> = views.iter().filter(|v| !v.mask.iter().any(|&m| m > 0.5)).collect();
@@ -191,28 +224,52 @@ pub fn init_mesh_from_views(views: &[HullView], options: &InitOptions) -> Result
     }
     let disjoint = || InitError::Disjoint {
         count: views.len(),
-        tolerance: if options.tolerance > 0 { format!(" (even with {} views allowed to disagree)", options.tolerance) } else { String::new() },
-        empty: if empty.is_empty() { String::new() } else { format!("; empty masks in [{}]", names(&mut empty.iter().copied())) },
+        tolerance: if options.tolerance > 0 {
+            format!(" (even with {} views allowed to disagree)", options.tolerance)
+        } else {
+            String::new()
+        },
+        empty: if empty.is_empty() {
+            String::new()
+        } else {
+            format!("; empty masks in [{}]", names(&mut empty.iter().copied()))
+        },
     };
     let aabb = hull_bounds(&fields, options.tolerance).map_err(|p| match p {
         BoundsProblem::Parallel => InitError::Parallel { names: names(&mut views.iter()) },
         BoundsProblem::Disjoint => disjoint(),
     })?;
-    let mut seconds = StageSeconds { silhouettes: start.elapsed().as_secs_f64(), ..StageSeconds::default() };
+    let mut seconds =
+        StageSeconds { silhouettes: start.elapsed().as_secs_f64(), ..StageSeconds::default() };
     let pixel = typical_pixel(&fields, aabb);
-    let field = HullField { views: fields, tolerance: options.tolerance, far: 1e3 * aabb.size().length() };
+    let field =
+        HullField { views: fields, tolerance: options.tolerance, far: 1e3 * aabb.size().length() };
 
-    let Surface { mesh: hull, voxel, grid, cavity_samples, components_dropped } = extract_surface(&field, aabb, pixel * options.voxel_pixels, options.max_grid_bytes).ok_or_else(disjoint)?;
+    let Surface { mesh: hull, voxel, grid, cavity_samples, components_dropped } =
+        extract_surface(&field, aabb, pixel * options.voxel_pixels, options.max_grid_bytes)
+            .ok_or_else(disjoint)?;
     seconds.extract = start.elapsed().as_secs_f64() - seconds.silhouettes;
     let area = surface_area(&hull);
-    let edge_length = options.vertices.map_or(options.edge_pixels * pixel, |n| remesh::edge_for_vertices(area, n));
+    let edge_length = options
+        .vertices
+        .map_or(options.edge_pixels * pixel, |n| remesh::edge_for_vertices(area, n));
     let (mesh, stats) = remeshed(&hull, edge_length, options)?;
     seconds.remesh = start.elapsed().as_secs_f64() - seconds.silhouettes - seconds.extract;
     let mut unseen_vertices = 0;
     let mut colors = None;
     if options.colors && views.iter().all(|v| v.image.is_some()) {
-        let sources: Vec<color::ColorSource> = views.iter().filter_map(|v| Some(color::ColorSource { camera: &v.camera, image: v.image.as_deref()?, mask: &v.mask })).collect();
-        let (c, unseen) = color::vertex_colors(&mesh, &sources, crate::topology::mean_edge_length(&mesh) as f64)?;
+        let sources: Vec<color::ColorSource> = views
+            .iter()
+            .filter_map(|v| {
+                Some(color::ColorSource {
+                    camera: &v.camera,
+                    image: v.image.as_deref()?,
+                    mask: &v.mask,
+                })
+            })
+            .collect();
+        let (c, unseen) =
+            color::vertex_colors(&mesh, &sources, crate::topology::mean_edge_length(&mesh) as f64)?;
         colors = Some(c);
         unseen_vertices = unseen;
     }
@@ -257,20 +314,41 @@ fn check(views: &[HullView], o: &InitOptions) -> Result<(), InitError> {
         return bad(format!("grid budget {} bytes is below 4 KiB", o.max_grid_bytes));
     }
     if views.len() < 2 {
-        return Err(InitError::TooFewViews { count: views.len(), names: views.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ") });
+        return Err(InitError::TooFewViews {
+            count: views.len(),
+            names: views.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", "),
+        });
     }
     if o.tolerance + 2 > views.len() {
-        return bad(format!("tolerating {} disagreeing views leaves fewer than 2 of the {} views to carve", o.tolerance, views.len()));
+        return bad(format!(
+            "tolerating {} disagreeing views leaves fewer than 2 of the {} views to carve",
+            o.tolerance,
+            views.len()
+        ));
     }
     for v in views {
         let (width, height) = (v.camera.width, v.camera.height);
         if v.mask.len() != width as usize * height as usize {
-            return Err(InitError::MaskSize { name: v.name.clone(), len: v.mask.len(), width, height });
+            return Err(InitError::MaskSize {
+                name: v.name.clone(),
+                len: v.mask.len(),
+                width,
+                height,
+            });
         }
         if let Some(image) = &v.image {
-            let wrong = (image.width, image.height) != (width, height) || image.channels == 0 || image.data.len() != (width * height) as usize * image.channels as usize;
+            let wrong = (image.width, image.height) != (width, height)
+                || image.channels == 0
+                || image.data.len() != (width * height) as usize * image.channels as usize;
             if wrong {
-                return Err(InitError::ImageSize { name: v.name.clone(), image_width: image.width, image_height: image.height, channels: image.channels, width, height });
+                return Err(InitError::ImageSize {
+                    name: v.name.clone(),
+                    image_width: image.width,
+                    image_height: image.height,
+                    channels: image.channels,
+                    width,
+                    height,
+                });
             }
         }
     }
@@ -317,7 +395,11 @@ fn extract_surface(field: &HullField, aabb: Aabb, voxel: f64, max_bytes: usize) 
         step *= (samples(step) / budget).cbrt().max(1.01);
     }
     let c = cells(step);
-    let grid = GridFrame { origin: aabb.lo - DVec3::splat(2.0 * step), step, dims: [c.x as usize, c.y as usize, c.z as usize] };
+    let grid = GridFrame {
+        origin: aabb.lo - DVec3::splat(2.0 * step),
+        step,
+        dims: [c.x as usize, c.y as usize, c.z as usize],
+    };
     let mut values = field.sample_grid(&grid);
     let cavity_samples = extract::close_grid(&mut values, &grid);
     let (positions, faces) = extract::marching_tetrahedra(&values, &grid);
@@ -325,12 +407,22 @@ fn extract_surface(field: &HullField, aabb: Aabb, voxel: f64, max_bytes: usize) 
         return None;
     }
     let (positions, faces, components_dropped) = components::largest_component(&positions, &faces);
-    Some(Surface { mesh: TriMesh { positions, faces, colors: None }, voxel: step, grid: grid.dims, cavity_samples, components_dropped })
+    Some(Surface {
+        mesh: TriMesh { positions, faces, colors: None },
+        voxel: step,
+        grid: grid.dims,
+        cavity_samples,
+        components_dropped,
+    })
 }
 
 /// The hull remeshed to `edge_length` (with a wanted count: corrected once by the count it
 /// reached, counts going as 1 / length²), compacted; the hull itself with no rounds.
-fn remeshed(hull: &TriMesh, edge_length: f64, options: &InitOptions) -> Result<(ManifoldMesh, remesh::RemeshStats), InitError> {
+fn remeshed(
+    hull: &TriMesh,
+    edge_length: f64,
+    options: &InitOptions,
+) -> Result<(ManifoldMesh, remesh::RemeshStats), InitError> {
     let mut mesh = ManifoldMesh::new(hull.positions.clone(), hull.faces.clone())?;
     if options.remesh_rounds == 0 {
         return Ok((mesh, remesh::RemeshStats::default()));
@@ -339,8 +431,13 @@ fn remeshed(hull: &TriMesh, edge_length: f64, options: &InitOptions) -> Result<(
     let mut stats = remesh::remesh(&mut mesh, &reference, edge_length, options.remesh_rounds);
     if let Some(n) = options.vertices {
         let corrected = edge_length * (mesh.vertex_count() as f64 / n as f64).sqrt();
-        let more = remesh::remesh(&mut mesh, &reference, corrected, options.remesh_rounds.div_ceil(2));
-        stats = remesh::RemeshStats { splits: stats.splits + more.splits, collapses: stats.collapses + more.collapses, flips: stats.flips + more.flips };
+        let more =
+            remesh::remesh(&mut mesh, &reference, corrected, options.remesh_rounds.div_ceil(2));
+        stats = remesh::RemeshStats {
+            splits: stats.splits + more.splits,
+            collapses: stats.collapses + more.collapses,
+            flips: stats.flips + more.flips,
+        };
     }
     mesh.compact();
     Ok((mesh, stats))

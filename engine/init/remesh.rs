@@ -23,7 +23,12 @@ pub struct RemeshStats {
 
 /// Runs `rounds` rounds towards edge length `target` (scene units), projecting onto
 /// `reference`. Tombstones stay; the caller compacts.
-pub fn remesh(mesh: &mut ManifoldMesh, reference: &SurfaceBvh, target: f64, rounds: usize) -> RemeshStats {
+pub fn remesh(
+    mesh: &mut ManifoldMesh,
+    reference: &SurfaceBvh,
+    target: f64,
+    rounds: usize,
+) -> RemeshStats {
     let (lo, hi) = (0.8 * target, 4.0 / 3.0 * target);
     let mut stats = RemeshStats::default();
     for _ in 0..rounds {
@@ -51,7 +56,8 @@ fn split_long(mesh: &mut ManifoldMesh, hi: f64) -> usize {
         let (p, q) = (mesh.point(pair.0), mesh.point(pair.1));
         if p.distance(q) > hi {
             if let Some(h) = live_edge(mesh, pair) {
-                count += usize::from(mesh.split_edge(h, (0.5 * (p + q)).as_vec3().to_array()).is_ok());
+                count +=
+                    usize::from(mesh.split_edge(h, (0.5 * (p + q)).as_vec3().to_array()).is_ok());
             }
         }
     }
@@ -86,7 +92,8 @@ fn flip_towards_valence_six(mesh: &mut ManifoldMesh) -> usize {
         }
         let corners = [mesh.origin(h), mesh.dest(h), mesh.origin(prev(h)), mesh.origin(prev(t))];
         let valence = corners.map(|v| mesh.valence(v) as i64);
-        let deviation = |delta: [i64; 4]| (0..4).map(|k| (valence[k] + delta[k] - 6).pow(2)).sum::<i64>();
+        let deviation =
+            |delta: [i64; 4]| (0..4).map(|k| (valence[k] + delta[k] - 6).pow(2)).sum::<i64>();
         if deviation([-1, -1, 1, 1]) < deviation([0; 4]) {
             count += usize::from(mesh.flip_edge(h).is_ok());
         }
@@ -98,7 +105,8 @@ fn flip_towards_valence_six(mesh: &mut ManifoldMesh) -> usize {
 /// since undoing one vertex can leave a neighbour's face folded against the old shape).
 fn smooth_tangentially(mesh: &mut ManifoldMesh, reference: &SurfaceBvh) {
     let faces = mesh.live_faces();
-    let normals: Vec<DVec3> = vertex_normals(mesh).iter().map(|n| DVec3::from(n.map(f64::from))).collect();
+    let normals: Vec<DVec3> =
+        vertex_normals(mesh).iter().map(|n| DVec3::from(n.map(f64::from))).collect();
     let old: Vec<DVec3> = (0..mesh.vertex_rows() as u32).map(|v| mesh.point(v)).collect();
     let mut new = old.clone();
     for v in mesh.vertices() {
@@ -111,7 +119,9 @@ fn smooth_tangentially(mesh: &mut ManifoldMesh, reference: &SurfaceBvh) {
             new[v as usize] = s.position;
         }
     }
-    let area = |x: &[DVec3], f: &[u32; 3]| (x[f[1] as usize] - x[f[0] as usize]).cross(x[f[2] as usize] - x[f[0] as usize]);
+    let area = |x: &[DVec3], f: &[u32; 3]| {
+        (x[f[1] as usize] - x[f[0] as usize]).cross(x[f[2] as usize] - x[f[0] as usize])
+    };
     for _ in 0..8 {
         let mut undone = false;
         for f in &faces {
@@ -161,7 +171,10 @@ mod tests {
         let expected = 4.0 * std::f64::consts::PI / (3f64.sqrt() / 2.0 * target * target);
         let n = mesh.vertex_count() as f64;
         assert!((n / expected - 1.0).abs() < 0.3, "{n} vertices, expected about {expected}");
-        let lengths: Vec<f64> = mesh.edges().map(|h| mesh.point(mesh.origin(h)).distance(mesh.point(mesh.dest(h)))).collect();
+        let lengths: Vec<f64> = mesh
+            .edges()
+            .map(|h| mesh.point(mesh.origin(h)).distance(mesh.point(mesh.dest(h))))
+            .collect();
         let mean = lengths.iter().sum::<f64>() / lengths.len() as f64;
         assert!((mean / target - 1.0).abs() < 0.2, "mean edge {mean}");
         for v in mesh.vertices() {

@@ -217,12 +217,24 @@ impl Body {
     fn view(&mut self, values: impl IntoIterator<Item = [u8; 4]>, target: Option<u32>) -> usize {
         let start = self.bytes.len();
         self.bytes.extend(values.into_iter().flatten());
-        self.views.push(BufferView { buffer: 0, byte_offset: start, byte_length: self.bytes.len() - start, byte_stride: None, target });
+        self.views.push(BufferView {
+            buffer: 0,
+            byte_offset: start,
+            byte_length: self.bytes.len() - start,
+            byte_stride: None,
+            target,
+        });
         self.views.len() - 1
     }
 }
 
-fn float_accessor(view: Option<usize>, count: usize, kind: &str, values: &[f32], components: usize) -> Accessor {
+fn float_accessor(
+    view: Option<usize>,
+    count: usize,
+    kind: &str,
+    values: &[f32],
+    components: usize,
+) -> Accessor {
     // Bounds as the doubles equal to the f32 data, so they match it exactly (not a decimal
     // rounding of it).
     let (mut min, mut max) = (vec![f64::INFINITY; components], vec![f64::NEG_INFINITY; components]);
@@ -233,7 +245,17 @@ fn float_accessor(view: Option<usize>, count: usize, kind: &str, values: &[f32],
     if values.is_empty() {
         (min, max) = (vec![0.0; components], vec![0.0; components]);
     }
-    Accessor { buffer_view: view, byte_offset: 0, component_type: FLOAT, normalized: false, count, kind: kind.into(), min: Some(min), max: Some(max), sparse: None }
+    Accessor {
+        buffer_view: view,
+        byte_offset: 0,
+        component_type: FLOAT,
+        normalized: false,
+        count,
+        kind: kind.into(),
+        min: Some(min),
+        max: Some(max),
+        sparse: None,
+    }
 }
 
 /// Writes `sequence` as a GLB whose animation shows frame t at t / `fps` seconds, atomically.
@@ -257,7 +279,8 @@ pub fn write_glb(path: &Path, sequence: &MeshSequence, fps: f64) -> Result<(), G
     let mut body = Body::default();
     let doc = document(sequence, fps, &mut body);
     let json = serde_json::to_vec(&doc).map_err(|e| error(path, format!("cannot write: {e}")))?;
-    crate::io::write_atomically(path, |w| write_container(w, &json, &body.bytes)).map_err(|e| error(path, format!("cannot write: {e}")))
+    crate::io::write_atomically(path, |w| write_container(w, &json, &body.bytes))
+        .map_err(|e| error(path, format!("cannot write: {e}")))
 }
 
 /// The glTF document of a checked sequence, its binary data appended to `body`.
@@ -286,23 +309,38 @@ fn document(sequence: &MeshSequence, fps: f64, body: &mut Body) -> Document {
     let mut attributes = BTreeMap::new();
     let values = flat(base);
     let view = body.view(values.iter().map(|v| v.to_le_bytes()), Some(ARRAY_BUFFER));
-    attributes.insert("POSITION".to_string(), add(float_accessor(Some(view), base.len(), "VEC3", &values, 3)));
+    attributes.insert(
+        "POSITION".to_string(),
+        add(float_accessor(Some(view), base.len(), "VEC3", &values, 3)),
+    );
     if let Some(colors) = sequence.colors.as_ref().and_then(|c| c.first()) {
         let linear: Vec<f32> = colors.iter().flatten().map(|&c| srgb_to_linear(c)).collect();
         let view = body.view(linear.iter().map(|v| v.to_le_bytes()), Some(ARRAY_BUFFER));
-        attributes.insert("COLOR_0".to_string(), add(float_accessor(Some(view), base.len(), "VEC3", &linear, 3)));
+        attributes.insert(
+            "COLOR_0".to_string(),
+            add(float_accessor(Some(view), base.len(), "VEC3", &linear, 3)),
+        );
     }
     let mut targets = Vec::with_capacity(frames);
     for (t, frame) in sequence.frames.iter().enumerate() {
-        let delta: Vec<f32> = frame.iter().zip(base).flat_map(|(v, b)| [v[0] - b[0], v[1] - b[1], v[2] - b[2]]).collect();
-        let view = (t > 0).then(|| body.view(delta.iter().map(|v| v.to_le_bytes()), Some(ARRAY_BUFFER)));
-        targets.push(BTreeMap::from([("POSITION".to_string(), add(float_accessor(view, base.len(), "VEC3", &delta, 3)))]));
+        let delta: Vec<f32> = frame
+            .iter()
+            .zip(base)
+            .flat_map(|(v, b)| [v[0] - b[0], v[1] - b[1], v[2] - b[2]])
+            .collect();
+        let view =
+            (t > 0).then(|| body.view(delta.iter().map(|v| v.to_le_bytes()), Some(ARRAY_BUFFER)));
+        targets.push(BTreeMap::from([(
+            "POSITION".to_string(),
+            add(float_accessor(view, base.len(), "VEC3", &delta, 3)),
+        )]));
     }
     let times: Vec<f32> = (0..frames).map(|t| (t as f64 / fps) as f32).collect();
     let view = body.view(times.iter().map(|v| v.to_le_bytes()), None);
     let input = add(float_accessor(Some(view), frames, "SCALAR", &times, 1));
     // Keyframe k, target k: element k·frames + k of the frames × frames weight table.
-    let one_hot = body.view((0..frames as u32).map(|k| (k * frames as u32 + k).to_le_bytes()), None);
+    let one_hot =
+        body.view((0..frames as u32).map(|k| (k * frames as u32 + k).to_le_bytes()), None);
     let ones = body.view((0..frames).map(|_| 1.0f32.to_le_bytes()), None);
     let output = add(Accessor {
         buffer_view: None,
@@ -315,18 +353,30 @@ fn document(sequence: &MeshSequence, fps: f64, body: &mut Body) -> Document {
         max: None,
         sparse: Some(Sparse {
             count: frames,
-            indices: SparseIndices { buffer_view: one_hot, byte_offset: 0, component_type: UNSIGNED_INT },
+            indices: SparseIndices {
+                buffer_view: one_hot,
+                byte_offset: 0,
+                component_type: UNSIGNED_INT,
+            },
             values: SparseValues { buffer_view: ones, byte_offset: 0 },
         }),
     });
     let names: Vec<String> = (0..frames).map(|t| format!("frame_{t:06}")).collect();
     Document {
-        asset: Asset { version: "2.0".into(), generator: Some(format!("tagsplat {}", env!("CARGO_PKG_VERSION"))) },
+        asset: Asset {
+            version: "2.0".into(),
+            generator: Some(format!("tagsplat {}", env!("CARGO_PKG_VERSION"))),
+        },
         scene: Some(0),
         scenes: vec![Scene { nodes: vec![0] }],
         nodes: vec![Node { mesh: Some(0), name: Some("sequence".into()) }],
         meshes: vec![Mesh {
-            primitives: vec![Primitive { attributes, indices: Some(indices), mode: Some(TRIANGLES), targets }],
+            primitives: vec![Primitive {
+                attributes,
+                indices: Some(indices),
+                mode: Some(TRIANGLES),
+                targets,
+            }],
             weights: None,
             extras: Some(serde_json::json!({ "targetNames": names })),
         }],
@@ -334,7 +384,10 @@ fn document(sequence: &MeshSequence, fps: f64, body: &mut Body) -> Document {
         buffers: vec![Buffer { byte_length: body.bytes.len(), uri: None }],
         buffer_views: std::mem::take(&mut body.views),
         animations: vec![Animation {
-            channels: vec![Channel { sampler: 0, target: ChannelTarget { node: Some(0), path: "weights".into() } }],
+            channels: vec![Channel {
+                sampler: 0,
+                target: ChannelTarget { node: Some(0), path: "weights".into() },
+            }],
             samplers: vec![Sampler { input, output, interpolation: Some("STEP".into()) }],
         }],
     }
@@ -346,7 +399,8 @@ fn write_container(w: &mut impl Write, json: &[u8], bin: &[u8]) -> std::io::Resu
     let json_len = json.len() + pad(json.len());
     let bin_len = bin.len() + pad(bin.len());
     let total = 12 + 8 + json_len + if bin.is_empty() { 0 } else { 8 + bin_len };
-    let total = u32::try_from(total).map_err(|_| std::io::Error::other("larger than the 4 GiB a GLB can hold"))?;
+    let total = u32::try_from(total)
+        .map_err(|_| std::io::Error::other("larger than the 4 GiB a GLB can hold"))?;
     w.write_all(MAGIC)?;
     w.write_all(&2u32.to_le_bytes())?;
     w.write_all(&total.to_le_bytes())?;
@@ -388,7 +442,8 @@ pub fn read_glb(path: &Path) -> Result<MeshSequence, GlbError> {
 /// ([`MeshSequence::problem`]).
 pub fn parse_glb(path: &Path, bytes: &[u8]) -> Result<MeshSequence, GlbError> {
     let (json, bin) = read_container(path, bytes)?;
-    let doc: Document = serde_json::from_slice(json).map_err(|e| error(path, format!("invalid glTF JSON: {e}")))?;
+    let doc: Document =
+        serde_json::from_slice(json).map_err(|e| error(path, format!("invalid glTF JSON: {e}")))?;
     let reader = Reader { path, doc: &doc, bin };
     let sequence = reader.sequence()?;
     match sequence.problem() {
@@ -399,7 +454,8 @@ pub fn parse_glb(path: &Path, bytes: &[u8]) -> Result<MeshSequence, GlbError> {
 
 /// The JSON and BIN chunks of a GLB container.
 fn read_container<'a>(path: &Path, bytes: &'a [u8]) -> Result<(&'a [u8], &'a [u8]), GlbError> {
-    let word = |at: usize| bytes.get(at..at + 4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]));
+    let word =
+        |at: usize| bytes.get(at..at + 4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]));
     if bytes.len() < 12 || &bytes[..4] != MAGIC {
         return Err(error(path, "not a GLB file (no glTF header)"));
     }
@@ -408,7 +464,13 @@ fn read_container<'a>(path: &Path, bytes: &'a [u8]) -> Result<(&'a [u8], &'a [u8
     }
     let declared = word(8).unwrap_or(0) as usize;
     if declared != bytes.len() {
-        return Err(error(path, format!("truncated or padded: the header says {declared} bytes, the file has {}", bytes.len())));
+        return Err(error(
+            path,
+            format!(
+                "truncated or padded: the header says {declared} bytes, the file has {}",
+                bytes.len()
+            ),
+        ));
     }
     let (mut json, mut bin) = (None, &[][..]);
     let mut at = 12;
@@ -416,7 +478,9 @@ fn read_container<'a>(path: &Path, bytes: &'a [u8]) -> Result<(&'a [u8], &'a [u8
         let (Some(length), Some(kind)) = (word(at), word(at + 4)) else {
             return Err(error(path, format!("chunk header at byte {at} is cut off")));
         };
-        let data = bytes.get(at + 8..at + 8 + length as usize).ok_or_else(|| error(path, format!("chunk at byte {at} runs past the end")))?;
+        let data = bytes
+            .get(at + 8..at + 8 + length as usize)
+            .ok_or_else(|| error(path, format!("chunk at byte {at} runs past the end")))?;
         match kind {
             CHUNK_JSON if json.is_none() => json = Some(data),
             CHUNK_BIN if bin.is_empty() => bin = data,
@@ -442,9 +506,16 @@ impl Reader<'_> {
     /// The sequence of the animated mesh node (or the first mesh node, as one frame).
     fn sequence(&self) -> Result<MeshSequence, GlbError> {
         let doc = self.doc;
-        let animated = doc.animations.iter().flat_map(|a| a.channels.iter().map(move |c| (a, c))).find(|(_, c)| {
-            c.target.path == "weights" && c.target.node.and_then(|n| doc.nodes.get(n)).is_some_and(|n| n.mesh.is_some())
-        });
+        let animated =
+            doc.animations.iter().flat_map(|a| a.channels.iter().map(move |c| (a, c))).find(
+                |(_, c)| {
+                    c.target.path == "weights"
+                        && c.target
+                            .node
+                            .and_then(|n| doc.nodes.get(n))
+                            .is_some_and(|n| n.mesh.is_some())
+                },
+            );
         let node = match animated {
             Some((_, c)) => c.target.node.and_then(|n| doc.nodes.get(n)),
             None => doc.nodes.iter().find(|n| n.mesh.is_some()),
@@ -452,12 +523,21 @@ impl Reader<'_> {
         let mesh_index = node.and_then(|n| n.mesh).unwrap_or(0);
         let mesh = doc.meshes.get(mesh_index).ok_or_else(|| self.error("no mesh"))?;
         let [primitive] = mesh.primitives.as_slice() else {
-            return Err(self.error(format!("mesh {mesh_index} has {} primitives; one is read", mesh.primitives.len())));
+            return Err(self.error(format!(
+                "mesh {mesh_index} has {} primitives; one is read",
+                mesh.primitives.len()
+            )));
         };
         if primitive.mode.unwrap_or(TRIANGLES) != TRIANGLES {
-            return Err(self.error(format!("mesh {mesh_index} is not made of triangles (mode {:?})", primitive.mode)));
+            return Err(self.error(format!(
+                "mesh {mesh_index} is not made of triangles (mode {:?})",
+                primitive.mode
+            )));
         }
-        let position = primitive.attributes.get("POSITION").ok_or_else(|| self.error("the primitive has no POSITION"))?;
+        let position = primitive
+            .attributes
+            .get("POSITION")
+            .ok_or_else(|| self.error("the primitive has no POSITION"))?;
         let base = self.vec3_f32(*position, "POSITION")?;
         let faces = self.faces(primitive.indices, base.len())?;
         let targets = primitive
@@ -469,13 +549,20 @@ impl Reader<'_> {
             })
             .collect::<Result<Vec<_>, _>>()?;
         if let Some(t) = targets.iter().position(|t| t.len() != base.len()) {
-            return Err(self.error(format!("morph target {t} has {} positions, the mesh has {}", targets[t].len(), base.len())));
+            return Err(self.error(format!(
+                "morph target {t} has {} positions, the mesh has {}",
+                targets[t].len(),
+                base.len()
+            )));
         }
         let weights = match animated {
-            Some((animation, channel)) => self.keyframe_weights(animation, channel.sampler, targets.len())?,
+            Some((animation, channel)) => {
+                self.keyframe_weights(animation, channel.sampler, targets.len())?
+            }
             None => vec![mesh.weights.clone().unwrap_or_default()],
         };
-        let frames: Vec<Vec<[f32; 3]>> = weights.iter().map(|w| morph(&base, &targets, w)).collect();
+        let frames: Vec<Vec<[f32; 3]>> =
+            weights.iter().map(|w| morph(&base, &targets, w)).collect();
         let colors = match primitive.attributes.get("COLOR_0") {
             Some(&a) => Some(vec![self.colors(a, base.len())?; frames.len()]),
             None => None,
@@ -484,16 +571,30 @@ impl Reader<'_> {
     }
 
     /// Morph weights at each keyframe of the sampler (the middle value for CUBICSPLINE).
-    fn keyframe_weights(&self, animation: &Animation, sampler: usize, targets: usize) -> Result<Vec<Vec<f32>>, GlbError> {
-        let sampler = animation.samplers.get(sampler).ok_or_else(|| self.error(format!("animation sampler {sampler} does not exist")))?;
+    fn keyframe_weights(
+        &self,
+        animation: &Animation,
+        sampler: usize,
+        targets: usize,
+    ) -> Result<Vec<Vec<f32>>, GlbError> {
+        let sampler = animation
+            .samplers
+            .get(sampler)
+            .ok_or_else(|| self.error(format!("animation sampler {sampler} does not exist")))?;
         let keyframes = self.accessor(sampler.input)?.0.len();
         let (values, _) = self.accessor(sampler.output)?;
         let per_key = if sampler.interpolation.as_deref() == Some("CUBICSPLINE") { 3 } else { 1 };
         if targets == 0 || values.len() != keyframes * targets * per_key {
-            return Err(self.error(format!("{} morph weights for {keyframes} keyframes of {targets} targets", values.len())));
+            return Err(self.error(format!(
+                "{} morph weights for {keyframes} keyframes of {targets} targets",
+                values.len()
+            )));
         }
         let skip = if per_key == 3 { targets } else { 0 };
-        Ok(values.chunks(targets * per_key).map(|k| k[skip..skip + targets].iter().map(|&w| w as f32).collect()).collect())
+        Ok(values
+            .chunks(targets * per_key)
+            .map(|k| k[skip..skip + targets].iter().map(|&w| w as f32).collect())
+            .collect())
     }
 
     /// Triangle indices (or 0, 1, 2, … for an unindexed primitive).
@@ -501,15 +602,22 @@ impl Reader<'_> {
         let flat: Vec<u32> = match indices {
             Some(a) => {
                 let (values, accessor) = self.accessor(a)?;
-                if accessor.kind != "SCALAR" || ![UNSIGNED_BYTE, UNSIGNED_SHORT, UNSIGNED_INT].contains(&accessor.component_type) {
-                    return Err(self.error(format!("indices accessor {a} is not unsigned integer scalars")));
+                if accessor.kind != "SCALAR"
+                    || ![UNSIGNED_BYTE, UNSIGNED_SHORT, UNSIGNED_INT]
+                        .contains(&accessor.component_type)
+                {
+                    return Err(
+                        self.error(format!("indices accessor {a} is not unsigned integer scalars"))
+                    );
                 }
                 values.iter().map(|&i| i as u32).collect()
             }
             None => (0..vertices as u32).collect(),
         };
         if flat.len() % 3 != 0 {
-            return Err(self.error(format!("{} indices is not a whole number of triangles", flat.len())));
+            return Err(
+                self.error(format!("{} indices is not a whole number of triangles", flat.len()))
+            );
         }
         Ok(flat.chunks_exact(3).map(|f| [f[0], f[1], f[2]]).collect())
     }
@@ -531,50 +639,97 @@ impl Reader<'_> {
             (FLOAT, _) => 1.0,
             (UNSIGNED_BYTE, true) => 255.0,
             (UNSIGNED_SHORT, true) => 65535.0,
-            _ => return Err(self.error(format!("COLOR_0 accessor {index} has an unsupported component type"))),
+            _ => {
+                return Err(self
+                    .error(format!("COLOR_0 accessor {index} has an unsupported component type")))
+            }
         };
         if !["VEC3", "VEC4"].contains(&accessor.kind.as_str()) || accessor.count != vertices {
-            return Err(self.error(format!("COLOR_0 accessor {index} is not one VEC3/VEC4 per vertex")));
+            return Err(
+                self.error(format!("COLOR_0 accessor {index} is not one VEC3/VEC4 per vertex"))
+            );
         }
-        Ok(values.chunks_exact(components).map(|c| [0, 1, 2].map(|k| linear_to_srgb(c[k] / scale))).collect())
+        Ok(values
+            .chunks_exact(components)
+            .map(|c| [0, 1, 2].map(|k| linear_to_srgb(c[k] / scale)))
+            .collect())
     }
 
     /// All components of an accessor as f64 (exact for every glTF component type), sparse
     /// substitutions applied, normalization not applied.
     fn accessor(&self, index: usize) -> Result<(Vec<f64>, &Accessor), GlbError> {
-        let a = self.doc.accessors.get(index).ok_or_else(|| self.error(format!("accessor {index} does not exist")))?;
+        let a = self
+            .doc
+            .accessors
+            .get(index)
+            .ok_or_else(|| self.error(format!("accessor {index} does not exist")))?;
         let components = match a.kind.as_str() {
             "SCALAR" => 1,
             "VEC2" => 2,
             "VEC3" => 3,
             "VEC4" => 4,
-            other => return Err(self.error(format!("accessor {index} has unsupported type {other}"))),
+            other => {
+                return Err(self.error(format!("accessor {index} has unsupported type {other}")))
+            }
         };
         let total = a.count.checked_mul(components).filter(|&n| n <= MAX_COMPONENTS);
-        let total = total.ok_or_else(|| self.error(format!("accessor {index} is too large ({} elements)", a.count)))?;
+        let total = total.ok_or_else(|| {
+            self.error(format!("accessor {index} is too large ({} elements)", a.count))
+        })?;
         let mut values = match a.buffer_view {
-            Some(view) => self.components(view, a.byte_offset, a.component_type, a.count, components, index)?,
+            Some(view) => {
+                self.components(view, a.byte_offset, a.component_type, a.count, components, index)?
+            }
             None => vec![0.0; total],
         };
         if let Some(sparse) = &a.sparse {
             if sparse.count > a.count {
-                return Err(self.error(format!("accessor {index}: {} sparse values for {} elements", sparse.count, a.count)));
+                return Err(self.error(format!(
+                    "accessor {index}: {} sparse values for {} elements",
+                    sparse.count, a.count
+                )));
             }
-            let targets = self.components(sparse.indices.buffer_view, sparse.indices.byte_offset, sparse.indices.component_type, sparse.count, 1, index)?;
-            let replacements = self.components(sparse.values.buffer_view, sparse.values.byte_offset, a.component_type, sparse.count, components, index)?;
+            let targets = self.components(
+                sparse.indices.buffer_view,
+                sparse.indices.byte_offset,
+                sparse.indices.component_type,
+                sparse.count,
+                1,
+                index,
+            )?;
+            let replacements = self.components(
+                sparse.values.buffer_view,
+                sparse.values.byte_offset,
+                a.component_type,
+                sparse.count,
+                components,
+                index,
+            )?;
             for (k, &element) in targets.iter().enumerate() {
                 let element = element as usize;
                 if element >= a.count {
-                    return Err(self.error(format!("accessor {index}: sparse index {element} is past its {} elements", a.count)));
+                    return Err(self.error(format!(
+                        "accessor {index}: sparse index {element} is past its {} elements",
+                        a.count
+                    )));
                 }
-                values[element * components..(element + 1) * components].copy_from_slice(&replacements[k * components..(k + 1) * components]);
+                values[element * components..(element + 1) * components]
+                    .copy_from_slice(&replacements[k * components..(k + 1) * components]);
             }
         }
         Ok((values, a))
     }
 
     /// `count` elements of `components` values of `component_type` from a buffer view.
-    fn components(&self, view: usize, offset: usize, component_type: u32, count: usize, components: usize, accessor: usize) -> Result<Vec<f64>, GlbError> {
+    fn components(
+        &self,
+        view: usize,
+        offset: usize,
+        component_type: u32,
+        count: usize,
+        components: usize,
+        accessor: usize,
+    ) -> Result<Vec<f64>, GlbError> {
         let err = |problem: String| self.error(format!("accessor {accessor}: {problem}"));
         let size = match component_type {
             5120 | UNSIGNED_BYTE => 1,
@@ -582,18 +737,30 @@ impl Reader<'_> {
             UNSIGNED_INT | FLOAT => 4,
             other => return Err(err(format!("unknown component type {other}"))),
         };
-        let v = self.doc.buffer_views.get(view).ok_or_else(|| err(format!("buffer view {view} does not exist")))?;
+        let v = self
+            .doc
+            .buffer_views
+            .get(view)
+            .ok_or_else(|| err(format!("buffer view {view} does not exist")))?;
         if v.buffer != 0 || self.doc.buffers.first().is_some_and(|b| b.uri.is_some()) {
             return Err(err("data outside the GLB's binary chunk is not read".into()));
         }
-        let data = self.bin.get(v.byte_offset..v.byte_offset.saturating_add(v.byte_length)).ok_or_else(|| err(format!("buffer view {view} runs past the binary chunk")))?;
+        let data = self
+            .bin
+            .get(v.byte_offset..v.byte_offset.saturating_add(v.byte_length))
+            .ok_or_else(|| err(format!("buffer view {view} runs past the binary chunk")))?;
         let stride = v.byte_stride.unwrap_or(size * components);
         if stride < size * components {
-            return Err(err(format!("buffer view {view} has a byte stride of {stride}, smaller than one element")));
+            return Err(err(format!(
+                "buffer view {view} has a byte stride of {stride}, smaller than one element"
+            )));
         }
         let needed = if count == 0 { 0 } else { offset + (count - 1) * stride + size * components };
         if needed > data.len() {
-            return Err(err(format!("needs {needed} bytes of buffer view {view}, which has {}", data.len())));
+            return Err(err(format!(
+                "needs {needed} bytes of buffer view {view}, which has {}",
+                data.len()
+            )));
         }
         let mut out = Vec::with_capacity(count * components);
         for i in 0..count {
@@ -647,7 +814,11 @@ mod tests {
         for (bytes, needle) in [
             (b"PK\x03\x04".to_vec(), "not a GLB file"),
             (header.clone(), "the header says 40 bytes, the file has 12"),
-            ([&header[..], &100u32.to_le_bytes(), &CHUNK_JSON.to_le_bytes(), &[0u8; 20]].concat(), "chunk at byte 12 runs past the end"),
+            (
+                [&header[..], &100u32.to_le_bytes(), &CHUNK_JSON.to_le_bytes(), &[0u8; 20]]
+                    .concat(),
+                "chunk at byte 12 runs past the end",
+            ),
             ([&header[..], &[0u8; 28]].concat(), "chunk header at byte 36 is cut off"),
         ] {
             let e = parse_glb(p, &bytes).unwrap_err().to_string();

@@ -35,7 +35,9 @@ impl Image {
 
     /// The alpha channel (last of 2 or 4 channels), if there is one.
     pub fn alpha(&self) -> Option<Vec<f32>> {
-        matches!(self.channels, 2 | 4).then(|| self.data.chunks_exact(self.channels as usize).map(|p| p[p.len() - 1]).collect())
+        matches!(self.channels, 2 | 4).then(|| {
+            self.data.chunks_exact(self.channels as usize).map(|p| p[p.len() - 1]).collect()
+        })
     }
 
     /// The first channel of every pixel (a mask stored as grey or as any colour).
@@ -46,8 +48,10 @@ impl Image {
 
 /// Reads a PNG (8 or 16 bit, grey / grey+alpha / RGB / RGBA) or an EXR.
 pub fn read_image(path: &Path) -> Result<Image, ImageError> {
-    let reader = image::ImageReader::open(path).map_err(|e| fail(path, format!("cannot open: {e}")))?;
-    let reader = reader.with_guessed_format().map_err(|e| fail(path, format!("cannot read: {e}")))?;
+    let reader =
+        image::ImageReader::open(path).map_err(|e| fail(path, format!("cannot open: {e}")))?;
+    let reader =
+        reader.with_guessed_format().map_err(|e| fail(path, format!("cannot read: {e}")))?;
     let decoded = reader.decode().map_err(|e| fail(path, format!("cannot decode: {e}")))?;
     let (width, height) = (decoded.width(), decoded.height());
     let channels = decoded.color().channel_count();
@@ -71,13 +75,27 @@ pub fn read_image(path: &Path) -> Result<Image, ImageError> {
 
 /// Width and height from the file header, without decoding the pixels.
 pub fn image_size(path: &Path) -> Result<(u32, u32), ImageError> {
-    image::image_dimensions(path).map_err(|e| fail(path, format!("cannot read the image header: {e}")))
+    image::image_dimensions(path)
+        .map_err(|e| fail(path, format!("cannot read the image header: {e}")))
 }
 
 fn check_shape(path: &Path, image: &Image) -> Result<(), ImageError> {
     let expect = image.width as usize * image.height as usize * image.channels as usize;
-    if image.data.len() != expect || !(1..=4).contains(&image.channels) || image.width == 0 || image.height == 0 {
-        return Err(fail(path, format!("cannot write {} values as a {}×{}×{} image", image.data.len(), image.width, image.height, image.channels)));
+    if image.data.len() != expect
+        || !(1..=4).contains(&image.channels)
+        || image.width == 0
+        || image.height == 0
+    {
+        return Err(fail(
+            path,
+            format!(
+                "cannot write {} values as a {}×{}×{} image",
+                image.data.len(),
+                image.width,
+                image.height,
+                image.channels
+            ),
+        ));
     }
     Ok(())
 }
@@ -85,10 +103,18 @@ fn check_shape(path: &Path, image: &Image) -> Result<(), ImageError> {
 /// Writes an 8-bit PNG (values clamped to [0, 1], rounded), atomically.
 pub fn write_png(path: &Path, image: &Image) -> Result<(), ImageError> {
     check_shape(path, image)?;
-    let bytes: Vec<u8> = image.data.iter().map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8).collect();
-    let color = [ExtendedColorType::L8, ExtendedColorType::La8, ExtendedColorType::Rgb8, ExtendedColorType::Rgba8][image.channels as usize - 1];
+    let bytes: Vec<u8> =
+        image.data.iter().map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8).collect();
+    let color = [
+        ExtendedColorType::L8,
+        ExtendedColorType::La8,
+        ExtendedColorType::Rgb8,
+        ExtendedColorType::Rgba8,
+    ][image.channels as usize - 1];
     super::write_atomically(path, |w| {
-        image::codecs::png::PngEncoder::new(w).write_image(&bytes, image.width, image.height, color).map_err(std::io::Error::other)
+        image::codecs::png::PngEncoder::new(w)
+            .write_image(&bytes, image.width, image.height, color)
+            .map_err(std::io::Error::other)
     })
     .map_err(|e| fail(path, format!("cannot write: {e}")))
 }
@@ -102,7 +128,9 @@ pub fn write_exr(path: &Path, image: &Image) -> Result<(), ImageError> {
         n => return Err(fail(path, format!("EXR output takes 3 or 4 channels, not {n}"))),
     };
     super::write_atomically(path, |w| {
-        image::codecs::openexr::OpenExrEncoder::new(w).write_image(bytemuck::cast_slice(&image.data), image.width, image.height, color).map_err(std::io::Error::other)
+        image::codecs::openexr::OpenExrEncoder::new(w)
+            .write_image(bytemuck::cast_slice(&image.data), image.width, image.height, color)
+            .map_err(std::io::Error::other)
     })
     .map_err(|e| fail(path, format!("cannot write: {e}")))
 }
@@ -116,21 +144,34 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("tagsplat-image-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         for channels in 1..=4u8 {
-            let data: Vec<f32> = (0..5 * 3 * channels as usize).map(|i| (i * 17 % 256) as f32 / 255.0).collect();
+            let data: Vec<f32> =
+                (0..5 * 3 * channels as usize).map(|i| (i * 17 % 256) as f32 / 255.0).collect();
             let img = Image { width: 5, height: 3, channels, data };
             let path = dir.join(format!("c{channels}.png"));
             write_png(&path, &img).unwrap();
             assert_eq!(read_image(&path).unwrap(), img);
             assert_eq!(image_size(&path).unwrap(), (5, 3));
         }
-        let hdr = Image { width: 2, height: 2, channels: 3, data: vec![0.0, 1.5, 1e-3, 7.0, -0.25, 2.0, 0.5, 0.5, 0.5, 100.0, 0.0, 3.0] };
+        let hdr = Image {
+            width: 2,
+            height: 2,
+            channels: 3,
+            data: vec![0.0, 1.5, 1e-3, 7.0, -0.25, 2.0, 0.5, 0.5, 0.5, 100.0, 0.0, 3.0],
+        };
         write_exr(&dir.join("a.exr"), &hdr).unwrap();
         assert_eq!(read_image(&dir.join("a.exr")).unwrap(), hdr);
         std::fs::write(dir.join("bad.png"), b"\x89PNG\r\n\x1a\nnot really").unwrap();
         let e = read_image(&dir.join("bad.png")).unwrap_err();
         assert!(e.to_string().contains("bad.png"), "{e}");
-        assert!(read_image(&dir.join("missing.png")).unwrap_err().to_string().contains("missing.png"));
-        assert!(write_png(&dir.join("x.png"), &Image { width: 2, height: 2, channels: 3, data: vec![0.0; 3] }).is_err());
+        assert!(read_image(&dir.join("missing.png"))
+            .unwrap_err()
+            .to_string()
+            .contains("missing.png"));
+        assert!(write_png(
+            &dir.join("x.png"),
+            &Image { width: 2, height: 2, channels: 3, data: vec![0.0; 3] }
+        )
+        .is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -20,7 +20,10 @@ use std::path::{Path, PathBuf};
 
 /// Writes `path` through `write` into a temporary file beside it, then renames it into place.
 /// On any error the temporary file is removed and `path` is left as it was.
-pub fn write_atomically(path: &Path, write: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>) -> std::io::Result<()> {
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> std::io::Result<()> {
     let temporary = temporary_name(path);
     let result = File::create(&temporary).and_then(|file| {
         let mut writer = BufWriter::new(file);

@@ -43,7 +43,10 @@ pub fn read_pc2(path: &Path) -> Result<PointCache, Pc2Error> {
 /// a non-finite coordinate.
 pub fn parse_pc2(path: &Path, bytes: &[u8]) -> Result<PointCache, Pc2Error> {
     if bytes.len() < HEADER_BYTES {
-        return Err(error(path, format!("truncated: {} bytes, a PC2 header alone has {HEADER_BYTES}", bytes.len())));
+        return Err(error(
+            path,
+            format!("truncated: {} bytes, a PC2 header alone has {HEADER_BYTES}", bytes.len()),
+        ));
     }
     if &bytes[..12] != SIGNATURE {
         return Err(error(path, "not a PC2 file (no POINTCACHE2 signature)"));
@@ -68,7 +71,13 @@ pub fn parse_pc2(path: &Path, bytes: &[u8]) -> Result<PointCache, Pc2Error> {
         )));
     }
     if (bytes.len() as u128) > expected {
-        return Err(error(path, format!("{} bytes after the {points} points x {samples} samples the header promises", bytes.len() as u128 - expected)));
+        return Err(error(
+            path,
+            format!(
+                "{} bytes after the {points} points x {samples} samples the header promises",
+                bytes.len() as u128 - expected
+            ),
+        ));
     }
     let mut out = Vec::with_capacity(samples);
     for s in 0..samples {
@@ -76,11 +85,18 @@ pub fn parse_pc2(path: &Path, bytes: &[u8]) -> Result<PointCache, Pc2Error> {
         let sample: Vec<[f32; 3]> = (0..points)
             .map(|p| {
                 let at = base + p * 12;
-                [f32::from_le_bytes(word(at)), f32::from_le_bytes(word(at + 4)), f32::from_le_bytes(word(at + 8))]
+                [
+                    f32::from_le_bytes(word(at)),
+                    f32::from_le_bytes(word(at + 4)),
+                    f32::from_le_bytes(word(at + 8)),
+                ]
             })
             .collect();
         if let Some(p) = sample.iter().position(|v| !v.iter().all(|c| c.is_finite())) {
-            return Err(error(path, format!("sample {s}, point {p} is not finite: {:?}", sample[p])));
+            return Err(error(
+                path,
+                format!("sample {s}, point {p} is not finite: {:?}", sample[p]),
+            ));
         }
         out.push(sample);
     }
@@ -91,7 +107,13 @@ pub fn parse_pc2(path: &Path, bytes: &[u8]) -> Result<PointCache, Pc2Error> {
 pub fn write_pc2(path: &Path, cache: &PointCache) -> Result<(), Pc2Error> {
     let points = cache.samples.first().map_or(0, Vec::len);
     if let Some(s) = cache.samples.iter().position(|s| s.len() != points) {
-        return Err(error(path, format!("cannot write: sample {s} has {} points, sample 0 has {points}", cache.samples[s].len())));
+        return Err(error(
+            path,
+            format!(
+                "cannot write: sample {s} has {} points, sample 0 has {points}",
+                cache.samples[s].len()
+            ),
+        ));
     }
     let (Ok(n), Ok(count)) = (i32::try_from(points), i32::try_from(cache.samples.len())) else {
         return Err(error(path, "cannot write: more points or samples than PC2's i32 counts hold"));
@@ -116,7 +138,14 @@ mod tests {
     use super::*;
 
     fn cache() -> PointCache {
-        PointCache { start_frame: 1.0, sample_rate: 1.0, samples: vec![vec![[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]], vec![[-1.5, 1e-30, 7.0], [8.0, 9.0, 1e30]]] }
+        PointCache {
+            start_frame: 1.0,
+            sample_rate: 1.0,
+            samples: vec![
+                vec![[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]],
+                vec![[-1.5, 1e-30, 7.0], [8.0, 9.0, 1e30]],
+            ],
+        }
     }
 
     #[test]
@@ -128,14 +157,19 @@ mod tests {
         assert_eq!(&bytes[..12], b"POINTCACHE2\0");
         assert_eq!(bytes[16..20], 2i32.to_le_bytes());
         assert_eq!(bytes[28..32], 2i32.to_le_bytes());
-        assert_eq!(bytes[32 + 12..32 + 16], 3.0f32.to_le_bytes(), "point 1 of sample 0 follows point 0");
+        assert_eq!(
+            bytes[32 + 12..32 + 16],
+            3.0f32.to_le_bytes(),
+            "point 1 of sample 0 follows point 0"
+        );
         assert_eq!(read_pc2(&path).unwrap(), cache());
         std::fs::remove_file(&path).unwrap();
     }
 
     #[test]
     fn damaged_files_are_refused_with_the_reason() {
-        let path = std::env::temp_dir().join(format!("tagsplat-pc2-bad-{}.pc2", std::process::id()));
+        let path =
+            std::env::temp_dir().join(format!("tagsplat-pc2-bad-{}.pc2", std::process::id()));
         write_pc2(&path, &cache()).unwrap();
         let good = std::fs::read(&path).unwrap();
         std::fs::remove_file(&path).unwrap();
@@ -146,7 +180,10 @@ mod tests {
             b
         };
         for (bytes, needle) in [
-            (good[..good.len() - 1].to_vec(), "truncated: 79 bytes, the header promises 2 points x 2 samples x 12 + 32 = 80"),
+            (
+                good[..good.len() - 1].to_vec(),
+                "truncated: 79 bytes, the header promises 2 points x 2 samples x 12 + 32 = 80",
+            ),
             (good[..20].to_vec(), "truncated: 20 bytes"),
             ([good.as_slice(), &[0]].concat(), "1 bytes after"),
             (with(0, *b"PONT"), "no POINTCACHE2 signature"),
@@ -158,6 +195,9 @@ mod tests {
             assert!(e.starts_with("anim.pc2: ") && e.contains(needle), "{e}");
         }
         let ragged = PointCache { samples: vec![vec![[0.0; 3]; 2], vec![[0.0; 3]; 1]], ..cache() };
-        assert!(write_pc2(&path, &ragged).unwrap_err().to_string().contains("sample 1 has 1 points"));
+        assert!(write_pc2(&path, &ragged)
+            .unwrap_err()
+            .to_string()
+            .contains("sample 1 has 1 points"));
     }
 }

@@ -22,7 +22,9 @@ pub fn write_line_plot(path: &Path, curves: &[Vec<DVec2>]) -> std::io::Result<()
 
 /// Writes an RGB image as a PNG, atomically.
 pub fn write_png_rgb(path: &Path, image: &RgbImage) -> std::io::Result<()> {
-    write_atomically(path, |w| image.write_to(w, image::ImageFormat::Png).map_err(std::io::Error::other))
+    write_atomically(path, |w| {
+        image.write_to(w, image::ImageFormat::Png).map_err(std::io::Error::other)
+    })
 }
 
 /// One panel at x offset `left`: frame, grid, one polyline per curve (y grows downwards in
@@ -48,7 +50,10 @@ pub fn draw_panel(image: &mut RgbImage, left: u32, curves: &[Vec<DVec2>], equal_
         scale = DVec2::splat(scale.max_element());
     }
     let centre = (min + max) * 0.5;
-    let to_pixel = |p: DVec2| DVec2::new(left as f64 + PANEL as f64 * 0.5, PANEL as f64 * 0.5) + (p - centre) / scale * (hi - lo);
+    let to_pixel = |p: DVec2| {
+        DVec2::new(left as f64 + PANEL as f64 * 0.5, PANEL as f64 * 0.5)
+            + (p - centre) / scale * (hi - lo)
+    };
     for (i, curve) in curves.iter().enumerate() {
         let colour = palette(i);
         for pair in curve.windows(2) {

@@ -144,16 +144,19 @@ impl PlyElement {
 
     fn find(&self, property: &str) -> Result<&PropertyData, PlyError> {
         let index = self.properties.iter().position(|p| p.name == property);
-        index
-            .map(|i| &self.data[i])
-            .ok_or_else(|| error(&self.path, format!("element '{}' has no property '{property}'", self.name)))
+        index.map(|i| &self.data[i]).ok_or_else(|| {
+            error(&self.path, format!("element '{}' has no property '{property}'", self.name))
+        })
     }
 
     fn scalar(&self, property: &str) -> Result<&Column, PlyError> {
         let data = self.find(property)?;
         match data.starts {
             None => Ok(&data.values),
-            Some(_) => Err(error(&self.path, format!("property '{}.{property}' is a list, a scalar was expected", self.name))),
+            Some(_) => Err(error(
+                &self.path,
+                format!("property '{}.{property}' is a list, a scalar was expected", self.name),
+            )),
         }
     }
 
@@ -169,11 +172,24 @@ impl PlyElement {
     /// An integer scalar property whose values all lie in 0..=255 (e.g. vertex colours).
     pub fn column_u8(&self, property: &str) -> Result<Vec<u8>, PlyError> {
         let Column::Int(values) = self.scalar(property)? else {
-            return Err(error(&self.path, format!("property '{}.{property}' is floating point, an integer was expected", self.name)));
+            return Err(error(
+                &self.path,
+                format!(
+                    "property '{}.{property}' is floating point, an integer was expected",
+                    self.name
+                ),
+            ));
         };
         values
             .iter()
-            .map(|&v| u8::try_from(v).map_err(|_| error(&self.path, format!("'{}.{property}' value {v} is outside 0..=255", self.name))))
+            .map(|&v| {
+                u8::try_from(v).map_err(|_| {
+                    error(
+                        &self.path,
+                        format!("'{}.{property}' value {v} is outside 0..=255", self.name),
+                    )
+                })
+            })
             .collect()
     }
 
@@ -181,14 +197,24 @@ impl PlyElement {
     pub fn lists_u32(&self, property: &str) -> Result<Vec<Vec<u32>>, PlyError> {
         let data = self.find(property)?;
         let (Some(starts), Column::Int(items)) = (&data.starts, &data.values) else {
-            return Err(error(&self.path, format!("property '{}.{property}' is not a list of integers", self.name)));
+            return Err(error(
+                &self.path,
+                format!("property '{}.{property}' is not a list of integers", self.name),
+            ));
         };
         starts
             .windows(2)
             .map(|row| {
                 items[row[0]..row[1]]
                     .iter()
-                    .map(|&v| u32::try_from(v).map_err(|_| error(&self.path, format!("'{}.{property}' item {v} is not a valid index", self.name))))
+                    .map(|&v| {
+                        u32::try_from(v).map_err(|_| {
+                            error(
+                                &self.path,
+                                format!("'{}.{property}' item {v} is not a valid index", self.name),
+                            )
+                        })
+                    })
                     .collect()
             })
             .collect()
@@ -253,7 +279,10 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, PlyError> {
         .position(|w| w == END)
         .ok_or_else(|| error(path, "not a PLY file: no 'end_header' line"))?;
     // The body starts after the end_header line's newline (\n or \r\n).
-    let newline = bytes[end..].iter().position(|&b| b == b'\n').ok_or_else(|| error(path, "header ends without a newline"))?;
+    let newline = bytes[end..]
+        .iter()
+        .position(|&b| b == b'\n')
+        .ok_or_else(|| error(path, "header ends without a newline"))?;
     let text = std::str::from_utf8(&bytes[..end]).map_err(|_| error(path, "header is not text"))?;
     let mut lines = text.lines().map(str::trim).enumerate();
     if lines.next().map(|(_, l)| l) != Some("ply") {
@@ -267,7 +296,9 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, PlyError> {
         let words: Vec<&str> = line.split_whitespace().collect();
         match words.as_slice() {
             [] => {}
-            ["comment", ..] | ["obj_info", ..] => comments.push(line.split_once(' ').map_or("", |(_, rest)| rest).to_string()),
+            ["comment", ..] | ["obj_info", ..] => {
+                comments.push(line.split_once(' ').map_or("", |(_, rest)| rest).to_string())
+            }
             ["format", kind, _version] => {
                 format = Some(match *kind {
                     "ascii" => Format::Ascii,
@@ -277,12 +308,22 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, PlyError> {
                 })
             }
             ["element", name, count] => {
-                let len = count.parse().map_err(|_| at(format!("element '{name}' has a bad count '{count}'")))?;
-                elements.push(PlyElement { name: name.to_string(), properties: Vec::new(), len, data: Vec::new(), path: path.to_path_buf() });
+                let len = count
+                    .parse()
+                    .map_err(|_| at(format!("element '{name}' has a bad count '{count}'")))?;
+                elements.push(PlyElement {
+                    name: name.to_string(),
+                    properties: Vec::new(),
+                    len,
+                    data: Vec::new(),
+                    path: path.to_path_buf(),
+                });
             }
             ["property", ..] => {
-                let element = elements.last_mut().ok_or_else(|| at("property before any element".into()))?;
-                let property = parse_property(&words).ok_or_else(|| at(format!("cannot parse '{line}'")))?;
+                let element =
+                    elements.last_mut().ok_or_else(|| at("property before any element".into()))?;
+                let property =
+                    parse_property(&words).ok_or_else(|| at(format!("cannot parse '{line}'")))?;
                 let starts = matches!(property.kind, PropertyKind::List { .. }).then(|| vec![0]);
                 let item = match property.kind {
                     PropertyKind::Scalar(t) | PropertyKind::List { item: t, .. } => t,
@@ -301,9 +342,15 @@ fn parse_property(words: &[&str]) -> Option<Property> {
     match words {
         ["property", "list", count, item, name] => Some(Property {
             name: name.to_string(),
-            kind: PropertyKind::List { count: ScalarType::parse(count)?, item: ScalarType::parse(item)? },
+            kind: PropertyKind::List {
+                count: ScalarType::parse(count)?,
+                item: ScalarType::parse(item)?,
+            },
         }),
-        ["property", ty, name] => Some(Property { name: name.to_string(), kind: PropertyKind::Scalar(ScalarType::parse(ty)?) }),
+        ["property", ty, name] => Some(Property {
+            name: name.to_string(),
+            kind: PropertyKind::Scalar(ScalarType::parse(ty)?),
+        }),
         _ => None,
     }
 }
@@ -314,8 +361,25 @@ fn read_ascii_body(path: &Path, body: &[u8], elements: &mut [PlyElement]) -> Res
     for element in elements {
         for row in 0..element.len {
             let mut next = |ty: ScalarType| -> Result<Value, PlyError> {
-                let token = tokens.next().ok_or_else(|| error(path, format!("truncated: element '{}' ends at row {row} of {}", element.name, element.len)))?;
-                parse_ascii_value(token, ty).ok_or_else(|| error(path, format!("element '{}' row {row}: '{token}' is not a {}", element.name, ty.name())))
+                let token = tokens.next().ok_or_else(|| {
+                    error(
+                        path,
+                        format!(
+                            "truncated: element '{}' ends at row {row} of {}",
+                            element.name, element.len
+                        ),
+                    )
+                })?;
+                parse_ascii_value(token, ty).ok_or_else(|| {
+                    error(
+                        path,
+                        format!(
+                            "element '{}' row {row}: '{token}' is not a {}",
+                            element.name,
+                            ty.name()
+                        ),
+                    )
+                })
             };
             read_row(&element.properties, &mut element.data, &mut next)?;
         }
@@ -345,18 +409,35 @@ fn in_range(v: i64, ty: ScalarType) -> bool {
     (lo..=hi).contains(&v)
 }
 
-fn read_binary_body(path: &Path, body: &[u8], big_endian: bool, elements: &mut [PlyElement]) -> Result<(), PlyError> {
+fn read_binary_body(
+    path: &Path,
+    body: &[u8],
+    big_endian: bool,
+    elements: &mut [PlyElement],
+) -> Result<(), PlyError> {
     let mut at = 0usize;
     for element in elements {
         // A row needs at least one byte per property: refuse absurd counts before allocating.
         if element.len.saturating_mul(element.properties.len()) > body.len().saturating_sub(at) {
-            return Err(error(path, format!("truncated: element '{}' claims {} rows, the file is too short", element.name, element.len)));
+            return Err(error(
+                path,
+                format!(
+                    "truncated: element '{}' claims {} rows, the file is too short",
+                    element.name, element.len
+                ),
+            ));
         }
         for row in 0..element.len {
             let mut next = |ty: ScalarType| -> Result<Value, PlyError> {
-                let bytes = body
-                    .get(at..at + ty.size())
-                    .ok_or_else(|| error(path, format!("truncated: element '{}' ends at row {row} of {}", element.name, element.len)))?;
+                let bytes = body.get(at..at + ty.size()).ok_or_else(|| {
+                    error(
+                        path,
+                        format!(
+                            "truncated: element '{}' ends at row {row} of {}",
+                            element.name, element.len
+                        ),
+                    )
+                })?;
                 at += ty.size();
                 Ok(decode(bytes, ty, big_endian))
             };
@@ -385,7 +466,11 @@ fn decode(bytes: &[u8], ty: ScalarType, big_endian: bool) -> Value {
 }
 
 /// Reads one row of an element, value by value, from `next` (ascii and binary share this).
-fn read_row(properties: &[Property], data: &mut [PropertyData], next: &mut impl FnMut(ScalarType) -> Result<Value, PlyError>) -> Result<(), PlyError> {
+fn read_row(
+    properties: &[Property],
+    data: &mut [PropertyData],
+    next: &mut impl FnMut(ScalarType) -> Result<Value, PlyError>,
+) -> Result<(), PlyError> {
     for (property, data) in properties.iter().zip(data) {
         match property.kind {
             PropertyKind::Scalar(ty) => data.values.push(next(ty)?),
@@ -480,7 +565,15 @@ pub fn write_ply(path: &Path, comments: &[&str], elements: &[ElementOut]) -> Res
         header += &format!("element {} {}\n", element.name, element.len());
         for (name, column) in &element.properties {
             if column.len() != element.len() {
-                return Err(error(path, format!("cannot write '{}.{name}': {} values for {} rows", element.name, column.len(), element.len())));
+                return Err(error(
+                    path,
+                    format!(
+                        "cannot write '{}.{name}': {} values for {} rows",
+                        element.name,
+                        column.len(),
+                        element.len()
+                    ),
+                ));
             }
             header += &format!("property {} {name}\n", column.header());
         }
@@ -516,7 +609,10 @@ mod tests {
         let vertex = ply.element("vertex").unwrap();
         assert_eq!(vertex.column_f32("x").unwrap(), vec![0.5, -1.0, 2000.0]);
         assert_eq!(vertex.column_u8("red").unwrap(), vec![255, 0, 7]);
-        assert_eq!(ply.element("face").unwrap().lists_u32("vertex_indices").unwrap(), vec![vec![0, 1, 2]]);
+        assert_eq!(
+            ply.element("face").unwrap().lists_u32("vertex_indices").unwrap(),
+            vec![vec![0, 1, 2]]
+        );
         assert_eq!(ply.comments, vec!["made by hand"]);
     }
 
@@ -536,14 +632,20 @@ mod tests {
     #[test]
     fn write_then_read() {
         let path = std::env::temp_dir().join(format!("tagsplat-ply-{}.ply", std::process::id()));
-        let vertex = ElementOut::new("vertex").with("x", ColumnOut::F32(vec![1.0, f32::MIN_POSITIVE, -0.0])).with("id", ColumnOut::U32(vec![0, u32::MAX, 5]));
-        let face = ElementOut::new("face").with("vertex_indices", ColumnOut::Triangles(vec![[0, 1, 2], [2, 1, 0]]));
+        let vertex = ElementOut::new("vertex")
+            .with("x", ColumnOut::F32(vec![1.0, f32::MIN_POSITIVE, -0.0]))
+            .with("id", ColumnOut::U32(vec![0, u32::MAX, 5]));
+        let face = ElementOut::new("face")
+            .with("vertex_indices", ColumnOut::Triangles(vec![[0, 1, 2], [2, 1, 0]]));
         write_ply(&path, &["round trip"], &[vertex, face]).unwrap();
         let ply = Ply::read(&path).unwrap();
         std::fs::remove_file(&path).unwrap();
         let v = ply.element("vertex").unwrap();
         assert_eq!(v.column_f32("x").unwrap(), vec![1.0, f32::MIN_POSITIVE, -0.0]);
-        assert_eq!(ply.element("face").unwrap().lists_u32("vertex_indices").unwrap(), vec![vec![0, 1, 2], vec![2, 1, 0]]);
+        assert_eq!(
+            ply.element("face").unwrap().lists_u32("vertex_indices").unwrap(),
+            vec![vec![0, 1, 2], vec![2, 1, 0]]
+        );
         let Column::Int(ids) = v.scalar("id").unwrap() else { panic!("uint is an integer column") };
         assert_eq!(ids, &vec![0, u32::MAX as i64, 5]);
     }

@@ -20,7 +20,9 @@ pub mod silhouette;
 
 pub use params::{LossParams, LOSS_SHARE_L1, LOSS_SHARE_SSIM};
 
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder};
+use crate::gpu::{
+    ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder,
+};
 use crate::shaders;
 use std::sync::Arc;
 
@@ -54,7 +56,11 @@ impl LossTerms {
 
     /// `Σ_c λ_c (0.8 l1_c + 0.2 dssim_c)`.
     pub fn total(&self, channel_weights: [f32; 4]) -> f32 {
-        (0..4).map(|c| channel_weights[c] * (LOSS_SHARE_L1 * self.l1[c] + LOSS_SHARE_SSIM * self.dssim[c])).sum()
+        (0..4)
+            .map(|c| {
+                channel_weights[c] * (LOSS_SHARE_L1 * self.l1[c] + LOSS_SHARE_SSIM * self.dssim[c])
+            })
+            .sum()
     }
 }
 
@@ -75,8 +81,14 @@ pub struct ImageLoss {
     unit_weight: GpuBuffer<f32>,
 }
 
-fn scratch<const N: usize>(ctx: &Arc<GpuContext>, name: &str, len: usize) -> GpuResult<[GpuBuffer<[f32; 4]>; N]> {
-    let buffers: Vec<_> = (0..N).map(|i| GpuBuffer::new(ctx, &format!("{name} {i}"), len)).collect::<GpuResult<_>>()?;
+fn scratch<const N: usize>(
+    ctx: &Arc<GpuContext>,
+    name: &str,
+    len: usize,
+) -> GpuResult<[GpuBuffer<[f32; 4]>; N]> {
+    let buffers: Vec<_> = (0..N)
+        .map(|i| GpuBuffer::new(ctx, &format!("{name} {i}"), len))
+        .collect::<GpuResult<_>>()?;
     Ok(buffers.try_into().unwrap_or_else(|_| unreachable!("exactly N buffers")))
 }
 
@@ -84,7 +96,16 @@ impl ImageLoss {
     pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
         let bytes = size_of::<LossParams>() as u32;
         let pipeline = |name, spirv, bindings| {
-            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes: bytes, specialization: &[WORKGROUP] })
+            ComputePipeline::new(
+                ctx,
+                &PipelineDesc {
+                    name,
+                    spirv,
+                    bindings,
+                    push_constant_bytes: bytes,
+                    specialization: &[WORKGROUP],
+                },
+            )
         };
         Ok(Self {
             ctx: ctx.clone(),
@@ -126,19 +147,34 @@ impl ImageLoss {
     ) -> GpuResult<()> {
         let pixels = params.pixels();
         let images = [render, target, gradient, &self.moments[0]].map(|b| (b.len(), b.name()));
-        let short = images.into_iter().chain(weight.map(|w| (w.len(), w.name()))).find(|&(len, _)| len < pixels);
+        let short = images
+            .into_iter()
+            .chain(weight.map(|w| (w.len(), w.name())))
+            .find(|&(len, _)| len < pixels);
         if let Some((capacity, name)) = short {
-            return Err(GpuError::LengthMismatch { what: "image loss pixels", name: name.to_string(), len: pixels, capacity });
+            return Err(GpuError::LengthMismatch {
+                what: "image loss pixels",
+                name: name.to_string(),
+                len: pixels,
+                capacity,
+            });
         }
         if terms.len() < 8 {
-            return Err(GpuError::LengthMismatch { what: "image loss terms", name: terms.name().to_string(), len: 8, capacity: terms.len() });
+            return Err(GpuError::LengthMismatch {
+                what: "image loss terms",
+                name: terms.name().to_string(),
+                len: 8,
+                capacity: terms.len(),
+            });
         }
         let weight = weight.unwrap_or(&self.unit_weight);
         let groups = pixels.div_ceil(WORKGROUP as usize) as u64;
         let [mx, my, mxx, myy, mxy] = &self.moments;
         let [dx, dxx, dxy] = &self.derivatives;
         let [fx, fxx, fxy] = &self.filtered;
-        let b = |buffers: &[&'a GpuBuffer<[f32; 4]>]| buffers.iter().map(|b| b.binding()).collect::<Vec<_>>();
+        let b = |buffers: &[&'a GpuBuffer<[f32; 4]>]| {
+            buffers.iter().map(|b| b.binding()).collect::<Vec<_>>()
+        };
         let mut forward = b(&[render, target]);
         forward.extend(b(&[mx, my, mxx, myy, mxy]));
         rec.dispatch_1d(&self.blur_moments, &forward, params, groups)?;

@@ -14,15 +14,32 @@ pub struct ReferenceLoss {
 }
 
 /// The loss of `render` against `target` (vec4 per pixel, row-major) with per-pixel `weight`.
-pub fn image_loss(render: &[[f32; 4]], target: &[[f32; 4]], weight: Option<&[f32]>, width: usize, height: usize, channel_weights: [f64; 4]) -> ReferenceLoss {
+pub fn image_loss(
+    render: &[[f32; 4]],
+    target: &[[f32; 4]],
+    weight: Option<&[f32]>,
+    width: usize,
+    height: usize,
+    channel_weights: [f64; 4],
+) -> ReferenceLoss {
     let pixels = width * height;
     let w = |p: usize| weight.map_or(1.0, |w| w[p] as f64);
-    let mut out = ReferenceLoss { total: 0.0, l1: [0.0; 4], dssim: [0.0; 4], gradient: vec![[0.0; 4]; pixels] };
+    let mut out = ReferenceLoss {
+        total: 0.0,
+        l1: [0.0; 4],
+        dssim: [0.0; 4],
+        gradient: vec![[0.0; 4]; pixels],
+    };
     for p in 0..pixels {
         for c in 0..4 {
             let d = render[p][c] as f64 - target[p][c] as f64;
             out.l1[c] += w(p) * d.abs() / pixels as f64;
-            out.gradient[p][c] += channel_weights[c] * LOSS_SHARE_L1 as f64 * w(p) * d.signum() * (d != 0.0) as u8 as f64 / pixels as f64;
+            out.gradient[p][c] += channel_weights[c]
+                * LOSS_SHARE_L1 as f64
+                * w(p)
+                * d.signum()
+                * (d != 0.0) as u8 as f64
+                / pixels as f64;
         }
     }
     if width >= WINDOW && height >= WINDOW {
@@ -35,12 +52,20 @@ pub fn image_loss(render: &[[f32; 4]], target: &[[f32; 4]], weight: Option<&[f32
                     let window = Window { render, target, width, c, x, y };
                     let moments = window.moments();
                     out.dssim[c] += w(p) * (1.0 - ssim_formula(moments)) / valid;
-                    window.scatter(ssim_partials(moments).map(|d| d * scale * w(p)), &mut out.gradient);
+                    window.scatter(
+                        ssim_partials(moments).map(|d| d * scale * w(p)),
+                        &mut out.gradient,
+                    );
                 }
             }
         }
     }
-    out.total = (0..4).map(|c| channel_weights[c] * (LOSS_SHARE_L1 as f64 * out.l1[c] + LOSS_SHARE_SSIM as f64 * out.dssim[c])).sum();
+    out.total = (0..4)
+        .map(|c| {
+            channel_weights[c]
+                * (LOSS_SHARE_L1 as f64 * out.l1[c] + LOSS_SHARE_SSIM as f64 * out.dssim[c])
+        })
+        .sum();
     out
 }
 
@@ -58,7 +83,11 @@ impl Window<'_> {
     /// (pixel index, 2D weight) over the window.
     fn taps(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
         let g = gaussian_weights();
-        (0..WINDOW).flat_map(move |j| (0..WINDOW).map(move |i| ((self.y + j - RADIUS) * self.width + self.x + i - RADIUS, g[i] * g[j])))
+        (0..WINDOW).flat_map(move |j| {
+            (0..WINDOW).map(move |i| {
+                ((self.y + j - RADIUS) * self.width + self.x + i - RADIUS, g[i] * g[j])
+            })
+        })
     }
 
     /// μx, μy, E[x²], E[y²], E[xy].

@@ -21,7 +21,13 @@ mod tests {
     #[test]
     fn diagonal_of_the_box() {
         assert_eq!(bounding_diagonal(&[]), 0.0);
-        assert!((bounding_diagonal(&[[0.0, 0.0, 0.0], [1.0, 2.0, 2.0], [0.5, 0.5, 0.5]]) - 3.0).abs() < 1e-15);
-        assert_eq!(bounding_box(&[[1.0, -2.0, 3.0]]), Some((DVec3::new(1.0, -2.0, 3.0), DVec3::new(1.0, -2.0, 3.0))));
+        assert!(
+            (bounding_diagonal(&[[0.0, 0.0, 0.0], [1.0, 2.0, 2.0], [0.5, 0.5, 0.5]]) - 3.0).abs()
+                < 1e-15
+        );
+        assert_eq!(
+            bounding_box(&[[1.0, -2.0, 3.0]]),
+            Some((DVec3::new(1.0, -2.0, 3.0), DVec3::new(1.0, -2.0, 3.0)))
+        );
     }
 }

@@ -37,7 +37,9 @@ impl TriMesh {
             return Some(format!("face {f} {:?} indexes past the {n} vertices", self.faces[f]));
         }
         match &self.colors {
-            Some(colors) if colors.len() != n => Some(format!("{} colours for {n} vertices", colors.len())),
+            Some(colors) if colors.len() != n => {
+                Some(format!("{} colours for {n} vertices", colors.len()))
+            }
             _ => None,
         }
     }
@@ -58,14 +60,16 @@ impl TriMesh {
         let (x, y, z) = (vertex.column_f32("x")?, vertex.column_f32("y")?, vertex.column_f32("z")?);
         let positions = (0..vertex.len()).map(|i| [x[i], y[i], z[i]]).collect();
         let colors = if vertex.has("red") {
-            let [r, g, b] = [vertex.column_u8("red")?, vertex.column_u8("green")?, vertex.column_u8("blue")?];
+            let [r, g, b] =
+                [vertex.column_u8("red")?, vertex.column_u8("green")?, vertex.column_u8("blue")?];
             Some((0..vertex.len()).map(|i| [r[i], g[i], b[i]]).collect())
         } else {
             None
         };
         let faces = match ply.element("face") {
             Some(face) => {
-                let property = if face.has("vertex_indices") { "vertex_indices" } else { "vertex_index" };
+                let property =
+                    if face.has("vertex_indices") { "vertex_indices" } else { "vertex_index" };
                 fan_triangles(path, &face.lists_u32(property)?)?
             }
             None => Vec::new(),
@@ -79,13 +83,18 @@ impl TriMesh {
     pub fn write_ply(&self, path: &Path) -> Result<(), MeshError> {
         self.validate(path)?;
         let coordinate = |c: usize| ColumnOut::F32(self.positions.iter().map(|p| p[c]).collect());
-        let mut vertex = ElementOut::new("vertex").with("x", coordinate(0)).with("y", coordinate(1)).with("z", coordinate(2));
+        let mut vertex = ElementOut::new("vertex")
+            .with("x", coordinate(0))
+            .with("y", coordinate(1))
+            .with("z", coordinate(2));
         if let Some(colors) = &self.colors {
             for (c, name) in ["red", "green", "blue"].into_iter().enumerate() {
-                vertex = vertex.with(name, ColumnOut::U8(colors.iter().map(|rgb| rgb[c]).collect()));
+                vertex =
+                    vertex.with(name, ColumnOut::U8(colors.iter().map(|rgb| rgb[c]).collect()));
             }
         }
-        let face = ElementOut::new("face").with("vertex_indices", ColumnOut::Triangles(self.faces.clone()));
+        let face = ElementOut::new("face")
+            .with("vertex_indices", ColumnOut::Triangles(self.faces.clone()));
         Ok(write_ply(path, &["tagsplat triangle mesh"], &[vertex, face])?)
     }
 }
@@ -95,7 +104,10 @@ fn fan_triangles(path: &Path, polygons: &[Vec<u32>]) -> Result<Vec<[u32; 3]>, Me
     let mut faces = Vec::with_capacity(polygons.len());
     for (f, polygon) in polygons.iter().enumerate() {
         if polygon.len() < 3 {
-            return Err(MeshError::Invalid { path: path.to_path_buf(), problem: format!("face {f} has {} vertices", polygon.len()) });
+            return Err(MeshError::Invalid {
+                path: path.to_path_buf(),
+                problem: format!("face {f} has {} vertices", polygon.len()),
+            });
         }
         faces.extend(polygon.windows(2).skip(1).map(|w| [polygon[0], w[0], w[1]]));
     }
@@ -125,7 +137,8 @@ mod tests {
         std::fs::write(&path, quad.replace("4 0 1 2 3", "3 0 1 9")).unwrap();
         let message = TriMesh::read_ply(&path).unwrap_err().to_string();
         assert!(message.contains("face 0") && message.contains("past the 4 vertices"), "{message}");
-        std::fs::write(&path, quad.replace("property float z\n", "").replace("0 0 0\n", "0 0\n")).unwrap();
+        std::fs::write(&path, quad.replace("property float z\n", "").replace("0 0 0\n", "0 0\n"))
+            .unwrap();
         assert!(TriMesh::read_ply(&path).unwrap_err().to_string().contains("no property 'z'"));
         std::fs::remove_file(&path).unwrap();
     }

@@ -14,7 +14,8 @@ use std::path::Path;
 impl TriMesh {
     /// Reads and validates an OBJ file; every error names the file (and the line).
     pub fn read_obj(path: &Path) -> Result<TriMesh, MeshError> {
-        let text = std::fs::read_to_string(path).map_err(|e| invalid(path, format!("cannot read: {e}")))?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| invalid(path, format!("cannot read: {e}")))?;
         let mesh = parse_obj(path, &text)?;
         mesh.validate(path)?;
         Ok(mesh)
@@ -24,7 +25,12 @@ impl TriMesh {
     pub fn write_obj(&self, path: &Path) -> Result<(), MeshError> {
         self.validate(path)?;
         crate::io::write_atomically(path, |w| {
-            writeln!(w, "# tagsplat triangle mesh: {} vertices, {} faces", self.positions.len(), self.faces.len())?;
+            writeln!(
+                w,
+                "# tagsplat triangle mesh: {} vertices, {} faces",
+                self.positions.len(),
+                self.faces.len()
+            )?;
             for (i, [x, y, z]) in self.positions.iter().enumerate() {
                 match &self.colors {
                     Some(colors) => {
@@ -65,17 +71,26 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<TriMesh, MeshError> {
                     3 | 4 => positions.push([values[0], values[1], values[2]]),
                     6 => {
                         positions.push([values[0], values[1], values[2]]);
-                        colors.push([values[3], values[4], values[5]].map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8));
+                        colors.push(
+                            [values[3], values[4], values[5]]
+                                .map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8),
+                        );
                     }
                     k => return Err(at(format!("a vertex needs 3, 4 or 6 numbers, found {k}"))),
                 }
             }
             Some("f") => {
                 let polygon = tokens
-                    .map(|t| vertex_index(t, positions.len()).ok_or_else(|| at(format!("`{t}` is not a valid vertex reference"))))
+                    .map(|t| {
+                        vertex_index(t, positions.len())
+                            .ok_or_else(|| at(format!("`{t}` is not a valid vertex reference")))
+                    })
                     .collect::<Result<Vec<u32>, _>>()?;
                 if polygon.len() < 3 {
-                    return Err(at(format!("a face needs at least 3 vertices, found {}", polygon.len())));
+                    return Err(at(format!(
+                        "a face needs at least 3 vertices, found {}",
+                        polygon.len()
+                    )));
                 }
                 polygons.push(polygon);
             }
@@ -115,9 +130,14 @@ mod tests {
 
     #[test]
     fn colours_need_every_vertex() {
-        let all = parse_obj(Path::new("a.obj"), "v 0 0 0 1 0 0.5\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n").unwrap();
+        let all = parse_obj(
+            Path::new("a.obj"),
+            "v 0 0 0 1 0 0.5\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n",
+        )
+        .unwrap();
         assert_eq!(all.colors, Some(vec![[255, 0, 128], [0, 255, 0], [0, 0, 255]]));
-        let some = parse_obj(Path::new("a.obj"), "v 0 0 0 1 0 0.5\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        let some =
+            parse_obj(Path::new("a.obj"), "v 0 0 0 1 0 0.5\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
         assert_eq!(some.colors, None);
     }
 
@@ -139,7 +159,11 @@ mod tests {
     fn write_then_read_is_exact() {
         let path = std::env::temp_dir().join(format!("tagsplat-obj-{}.obj", std::process::id()));
         let mesh = TriMesh {
-            positions: vec![[0.1, -2.5e-7, 3.0e8], [1.0 / 3.0, f32::MIN_POSITIVE, -0.0], [7.0, 8.0, 9.0]],
+            positions: vec![
+                [0.1, -2.5e-7, 3.0e8],
+                [1.0 / 3.0, f32::MIN_POSITIVE, -0.0],
+                [7.0, 8.0, 9.0],
+            ],
             faces: vec![[0, 1, 2], [2, 1, 0]],
             colors: Some(vec![[0, 1, 2], [127, 128, 129], [253, 254, 255]]),
         };

@@ -2,7 +2,9 @@
 //! learning rates (SH DC and the higher SH bands apart). Moments (m, v) live on the GPU beside
 //! each parameter buffer; [`Adam::remap`] carries them through a change of the Gaussian set.
 
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder};
+use crate::gpu::{
+    ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder,
+};
 use crate::shaders;
 use crate::splat::{sh_coefficients, GaussianBuffers};
 use bytemuck::{Pod, Zeroable};
@@ -78,9 +80,19 @@ fn row_widths(sh_degree: u32) -> [usize; 5] {
     [3, 3, 4, 1, 3 * sh_coefficients(sh_degree)]
 }
 
-fn zero_moments(ctx: &Arc<GpuContext>, gaussians: usize, sh_degree: u32) -> GpuResult<[GpuBuffer<[f32; 2]>; 5]> {
+fn zero_moments(
+    ctx: &Arc<GpuContext>,
+    gaussians: usize,
+    sh_degree: u32,
+) -> GpuResult<[GpuBuffer<[f32; 2]>; 5]> {
     let names = ["positions", "log-scales", "rotations", "opacity logits", "SH"];
-    let make = |k: usize| GpuBuffer::new(ctx, &format!("adam moments of {}", names[k]), gaussians * row_widths(sh_degree)[k]);
+    let make = |k: usize| {
+        GpuBuffer::new(
+            ctx,
+            &format!("adam moments of {}", names[k]),
+            gaussians * row_widths(sh_degree)[k],
+        )
+    };
     Ok([make(0)?, make(1)?, make(2)?, make(3)?, make(4)?])
 }
 
@@ -88,12 +100,26 @@ impl Adam {
     /// An optimizer for parameters shaped like `params`, moments at zero.
     pub fn new(ctx: &Arc<GpuContext>, params: &GaussianBuffers) -> GpuResult<Self> {
         let pipeline = |name, spirv, bindings, bytes: usize| {
-            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes: bytes as u32, specialization: &[WORKGROUP] })
+            ComputePipeline::new(
+                ctx,
+                &PipelineDesc {
+                    name,
+                    spirv,
+                    bindings,
+                    push_constant_bytes: bytes as u32,
+                    specialization: &[WORKGROUP],
+                },
+            )
         };
         let adam = Self {
             ctx: ctx.clone(),
             step: pipeline("adam step", shaders::OPTIM_ADAM_STEP, 15, size_of::<AdamParams>())?,
-            remap_rows: pipeline("adam remap rows", shaders::OPTIM_REMAP_ROWS, 3, size_of::<RemapParams>())?,
+            remap_rows: pipeline(
+                "adam remap rows",
+                shaders::OPTIM_REMAP_ROWS,
+                3,
+                size_of::<RemapParams>(),
+            )?,
             moments: zero_moments(ctx, params.len(), params.sh_degree())?,
             gaussians: params.len(),
             sh_degree: params.sh_degree(),
@@ -113,28 +139,60 @@ impl Adam {
     }
 
     /// Records one Adam step of `params` along `grads` (both shaped like the optimizer).
-    pub fn record_step<'a>(&'a self, rec: &mut Recorder<'a>, params: &'a GaussianBuffers, grads: &'a GaussianBuffers, adam: &AdamParams) -> GpuResult<()> {
+    pub fn record_step<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        params: &'a GaussianBuffers,
+        grads: &'a GaussianBuffers,
+        adam: &AdamParams,
+    ) -> GpuResult<()> {
         for (what, buffers) in [("adam parameters", params), ("adam gradients", grads)] {
             if buffers.len() != self.gaussians || buffers.sh_degree() != self.sh_degree {
-                return Err(GpuError::LengthMismatch { what, name: buffers.positions.name().to_string(), len: buffers.len(), capacity: self.gaussians });
+                return Err(GpuError::LengthMismatch {
+                    what,
+                    name: buffers.positions.name().to_string(),
+                    len: buffers.len(),
+                    capacity: self.gaussians,
+                });
             }
         }
-        let bindings: Vec<_> = params.bindings().into_iter().chain(grads.bindings()).chain(self.moments.iter().map(|m| m.binding())).collect();
+        let bindings: Vec<_> = params
+            .bindings()
+            .into_iter()
+            .chain(grads.bindings())
+            .chain(self.moments.iter().map(|m| m.binding()))
+            .collect();
         // One invocation per four floats of each buffer (see adam_step.comp).
-        let chunks: usize = row_widths(self.sh_degree).iter().map(|w| (w * self.gaussians).div_ceil(4)).sum();
+        let chunks: usize =
+            row_widths(self.sh_degree).iter().map(|w| (w * self.gaussians).div_ceil(4)).sum();
         rec.dispatch_1d(&self.step, &bindings, adam, chunks.div_ceil(WORKGROUP as usize) as u64)
     }
 
     /// Carries the moments to a new Gaussian set: new row `i` takes the moments of old row
     /// `old_of_new[i]`, or zero for [`NEW_ROW`] (any index past the old rows counts as new).
     pub fn remap(&mut self, old_of_new: &[u32]) -> GpuResult<()> {
-        let remap = GpuBuffer::from_slice(&self.ctx, "adam remap", if old_of_new.is_empty() { &[NEW_ROW] } else { old_of_new })?;
+        let remap = GpuBuffer::from_slice(
+            &self.ctx,
+            "adam remap",
+            if old_of_new.is_empty() { &[NEW_ROW] } else { old_of_new },
+        )?;
         let moments = zero_moments(&self.ctx, old_of_new.len(), self.sh_degree)?;
         let mut rec = Recorder::new(&self.ctx)?;
-        for ((old, new), width) in self.moments.iter().zip(&moments).zip(row_widths(self.sh_degree)) {
-            let params = RemapParams { new_rows: old_of_new.len() as u32, old_rows: self.gaussians as u32, row_width: width as u32, unused: 0 };
+        for ((old, new), width) in self.moments.iter().zip(&moments).zip(row_widths(self.sh_degree))
+        {
+            let params = RemapParams {
+                new_rows: old_of_new.len() as u32,
+                old_rows: self.gaussians as u32,
+                row_width: width as u32,
+                unused: 0,
+            };
             let groups = (old_of_new.len() * width).div_ceil(WORKGROUP as usize) as u64;
-            rec.dispatch_1d(&self.remap_rows, &[old.binding(), remap.binding(), new.binding()], &params, groups)?;
+            rec.dispatch_1d(
+                &self.remap_rows,
+                &[old.binding(), remap.binding(), new.binding()],
+                &params,
+                groups,
+            )?;
         }
         rec.submit_and_wait()?;
         self.moments = moments;

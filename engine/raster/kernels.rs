@@ -28,7 +28,10 @@ impl Kernels {
         let linear = [LINEAR_WORKGROUP];
         // The per-pixel kernels fix their 16x16 workgroup in the shader.
         let pipeline = |name, spirv, bindings, specialization: &[u32]| {
-            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes: push, specialization })
+            ComputePipeline::new(
+                ctx,
+                &PipelineDesc { name, spirv, bindings, push_constant_bytes: push, specialization },
+            )
         };
         Ok(Self {
             transform: pipeline("raster transform", shaders::RASTER_TRANSFORM, 2, &linear)?,
@@ -38,8 +41,18 @@ impl Kernels {
             resolve: pipeline("raster resolve", shaders::RASTER_RESOLVE, 9, &[])?,
             aa_pairs: pipeline("raster antialias crossings", shaders::RASTER_AA_PAIRS, 6, &[])?,
             aa_forward: pipeline("raster antialias", shaders::RASTER_AA_FORWARD, 4, &[])?,
-            aa_backward: pipeline("raster antialias backward", shaders::RASTER_AA_BACKWARD, 8, &[])?,
-            interior_backward: pipeline("raster interior backward", shaders::RASTER_INTERIOR_BACKWARD, 7, &[])?,
+            aa_backward: pipeline(
+                "raster antialias backward",
+                shaders::RASTER_AA_BACKWARD,
+                8,
+                &[],
+            )?,
+            interior_backward: pipeline(
+                "raster interior backward",
+                shaders::RASTER_INTERIOR_BACKWARD,
+                7,
+                &[],
+            )?,
         })
     }
 }

@@ -14,7 +14,11 @@ pub struct RasterMesh {
 
 impl RasterMesh {
     /// Checks finiteness, indices and the colour count; the first problem is the error.
-    pub fn new(positions: Vec<[f32; 3]>, faces: Vec<[u32; 3]>, colors: Vec<[f32; 3]>) -> Result<Self, RasterError> {
+    pub fn new(
+        positions: Vec<[f32; 3]>,
+        faces: Vec<[u32; 3]>,
+        colors: Vec<[f32; 3]>,
+    ) -> Result<Self, RasterError> {
         check_positions(&positions)?;
         let vertices = positions.len();
         if let Some(face) = faces.iter().position(|f| f.iter().any(|&i| i as usize >= vertices)) {
@@ -25,13 +29,21 @@ impl RasterMesh {
             return Err(RasterError::TooManyTriangles { triangles: faces.len(), max });
         }
         if colors.len() != vertices {
-            return Err(RasterError::Length { what: "vertex colours", len: colors.len(), expected: vertices });
+            return Err(RasterError::Length {
+                what: "vertex colours",
+                len: colors.len(),
+                expected: vertices,
+            });
         }
         Ok(Self { positions, faces, colors })
     }
 
     /// A mesh of one colour.
-    pub fn uniform(positions: Vec<[f32; 3]>, faces: Vec<[u32; 3]>, color: [f32; 3]) -> Result<Self, RasterError> {
+    pub fn uniform(
+        positions: Vec<[f32; 3]>,
+        faces: Vec<[u32; 3]>,
+        color: [f32; 3],
+    ) -> Result<Self, RasterError> {
         let colors = vec![color; positions.len()];
         Self::new(positions, faces, colors)
     }

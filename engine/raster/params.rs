@@ -34,7 +34,10 @@ impl RasterSettings {
 
     fn check(&self) -> Result<(), RasterError> {
         if !(self.near.is_finite() && self.near > 0.0) {
-            return Err(RasterError::Settings(format!("near must be positive and finite, got {}", self.near)));
+            return Err(RasterError::Settings(format!(
+                "near must be positive and finite, got {}",
+                self.near
+            )));
         }
         Ok(())
     }
@@ -52,16 +55,27 @@ pub struct RasterParams {
 }
 
 impl RasterParams {
-    pub fn new(camera: &Camera, settings: &RasterSettings, vertices: usize, triangles: usize) -> Result<Self, RasterError> {
+    pub fn new(
+        camera: &Camera,
+        settings: &RasterSettings,
+        vertices: usize,
+        triangles: usize,
+    ) -> Result<Self, RasterError> {
         settings.check()?;
         let m = camera.world_to_camera;
-        let row = |r: usize| [m.row(r).x as f32, m.row(r).y as f32, m.row(r).z as f32, m.row(r).w as f32];
+        let row =
+            |r: usize| [m.row(r).x as f32, m.row(r).y as f32, m.row(r).z as f32, m.row(r).w as f32];
         let flags = if settings.count_writes { FLAG_COUNT_WRITES } else { 0 };
         Ok(Self {
             view_rows: [row(0), row(1), row(2)],
             intrinsics: [camera.fx as f32, camera.fy as f32, camera.cx as f32, camera.cy as f32],
             clip: [settings.near, 0.0, 0.0, 0.0],
-            size: [camera.width, camera.height, camera.width.div_ceil(TILE_SIZE), camera.height.div_ceil(TILE_SIZE)],
+            size: [
+                camera.width,
+                camera.height,
+                camera.width.div_ceil(TILE_SIZE),
+                camera.height.div_ceil(TILE_SIZE),
+            ],
             counts: [vertices as u32, triangles as u32, flags, 0],
         })
     }

@@ -125,7 +125,12 @@ impl ImageBuffers {
 
 impl MeshRasterizer {
     /// A rasterizer for `mesh` rendering `width × height` images.
-    pub fn new(ctx: &Arc<GpuContext>, mesh: &RasterMesh, width: u32, height: u32) -> Result<Self, RasterError> {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        mesh: &RasterMesh,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, RasterError> {
         Ok(Self {
             ctx: ctx.clone(),
             kernels: Kernels::new(ctx)?,
@@ -183,7 +188,11 @@ impl MeshRasterizer {
     }
 
     /// The push constants of one render; the camera must match the image size.
-    pub fn params(&self, camera: &Camera, settings: &RasterSettings) -> Result<RasterParams, RasterError> {
+    pub fn params(
+        &self,
+        camera: &Camera,
+        settings: &RasterSettings,
+    ) -> Result<RasterParams, RasterError> {
         let images = (self.image.width, self.image.height);
         if (camera.width, camera.height) != images {
             return Err(RasterError::CameraSize { camera: (camera.width, camera.height), images });

@@ -1,8 +1,8 @@
 //! Recording the forward and backward passes of [`MeshRasterizer`], and reading results back.
 
+use super::kernels::linear_groups;
 use super::params::{RasterParams, RasterSettings};
 use super::rasterizer::{MeshRasterizer, RasterFrame};
-use super::kernels::linear_groups;
 use super::RasterError;
 use crate::camera::Camera;
 use crate::gpu::{GpuBuffer, PassTimes, Recorder};
@@ -17,14 +17,23 @@ pub struct VertexGradients {
 impl MeshRasterizer {
     /// Records the forward pass for `params` (from [`Self::params`]): afterwards the colour,
     /// mask, id, barycentric, depth and normal buffers hold this view.
-    pub fn record_forward<'a>(&'a self, rec: &mut Recorder<'a>, params: &RasterParams) -> Result<(), RasterError> {
+    pub fn record_forward<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        params: &RasterParams,
+    ) -> Result<(), RasterError> {
         self.record_forward_from(rec, params, &self.mesh.positions)
     }
 
     /// [`Self::record_forward`] with vertex positions from the caller's buffer (3 floats per
     /// vertex, e.g. the Gaussian positions an optimizer updates), for the same faces. The
     /// backward needs no positions buffer: it reads what this forward transformed.
-    pub fn record_forward_from<'a>(&'a self, rec: &mut Recorder<'a>, params: &RasterParams, positions: &'a GpuBuffer<f32>) -> Result<(), RasterError> {
+    pub fn record_forward_from<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        params: &RasterParams,
+        positions: &'a GpuBuffer<f32>,
+    ) -> Result<(), RasterError> {
         self.check_params(params)?;
         check_len("vertex positions", positions.len(), 3 * self.vertices)?;
         self.record_visibility(rec, params, positions)?;
@@ -33,7 +42,12 @@ impl MeshRasterizer {
     }
 
     /// Clear, transform, outline flags and both raster paths: the visibility buffer.
-    fn record_visibility<'a>(&'a self, rec: &mut Recorder<'a>, params: &RasterParams, positions: &'a GpuBuffer<f32>) -> Result<(), RasterError> {
+    fn record_visibility<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        params: &RasterParams,
+        positions: &'a GpuBuffer<f32>,
+    ) -> Result<(), RasterError> {
         let (m, im, k) = (&self.mesh, &self.image, &self.kernels);
         rec.begin_pass("raster clear");
         rec.fill_buffer(&im.visibility, u32::MAX);
@@ -44,10 +58,20 @@ impl MeshRasterizer {
         }
         rec.end_pass();
         rec.begin_pass("raster transform");
-        rec.dispatch_1d(&k.transform, &[positions.binding(), m.camera_positions.binding()], params, linear_groups(self.vertices))?;
+        rec.dispatch_1d(
+            &k.transform,
+            &[positions.binding(), m.camera_positions.binding()],
+            params,
+            linear_groups(self.vertices),
+        )?;
         rec.end_pass();
         rec.begin_pass("raster outline");
-        let outline = [m.faces.binding(), m.camera_positions.binding(), m.adjacency.binding(), m.outline_flags.binding()];
+        let outline = [
+            m.faces.binding(),
+            m.camera_positions.binding(),
+            m.adjacency.binding(),
+            m.outline_flags.binding(),
+        ];
         rec.dispatch_1d(&k.outline, &outline, params, linear_groups(self.triangles))?;
         rec.end_pass();
         rec.begin_pass("raster setup + small");
@@ -158,7 +182,11 @@ impl MeshRasterizer {
     }
 
     /// Forward for one camera in its own submission; returns the pass times.
-    pub fn render(&self, camera: &Camera, settings: &RasterSettings) -> Result<PassTimes, RasterError> {
+    pub fn render(
+        &self,
+        camera: &Camera,
+        settings: &RasterSettings,
+    ) -> Result<PassTimes, RasterError> {
         let params = self.params(camera, settings)?;
         let mut rec = Recorder::new(&self.ctx)?;
         self.record_forward(&mut rec, &params)?;
@@ -167,21 +195,36 @@ impl MeshRasterizer {
 
     /// Backward of [`Self::render`] with the same camera and settings, in its own submission:
     /// returns dL/dposition and dL/dcolour per vertex from host-side image gradients.
-    pub fn gradients(&self, camera: &Camera, settings: &RasterSettings, grad_color: &[[f32; 3]], grad_mask: &[f32]) -> Result<VertexGradients, RasterError> {
+    pub fn gradients(
+        &self,
+        camera: &Camera,
+        settings: &RasterSettings,
+        grad_color: &[[f32; 3]],
+        grad_mask: &[f32],
+    ) -> Result<VertexGradients, RasterError> {
         let params = self.params(camera, settings)?;
         let pixels = self.image.pixels();
         check_len("dL/dcolour image", grad_color.len(), pixels)?;
-        let grad_color = GpuBuffer::from_slice(&self.ctx, "dL/dcolour", bytemuck::cast_slice(grad_color))?;
+        let grad_color =
+            GpuBuffer::from_slice(&self.ctx, "dL/dcolour", bytemuck::cast_slice(grad_color))?;
         let grad_mask = GpuBuffer::from_slice(&self.ctx, "dL/dmask", grad_mask)?;
         let grad_positions = GpuBuffer::<f32>::new(&self.ctx, "dL/dposition", 3 * self.vertices)?;
         let grad_colors = GpuBuffer::<f32>::new(&self.ctx, "dL/dvertex colour", 3 * self.vertices)?;
         let mut rec = Recorder::new(&self.ctx)?;
         rec.fill_buffer(&grad_positions, 0);
         rec.fill_buffer(&grad_colors, 0);
-        self.record_backward(&mut rec, &params, (&grad_color, &grad_mask), (&grad_positions, &grad_colors))?;
+        self.record_backward(
+            &mut rec,
+            &params,
+            (&grad_color, &grad_mask),
+            (&grad_positions, &grad_colors),
+        )?;
         rec.submit_and_wait()?;
         let unflat = |v: Vec<f32>| v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        Ok(VertexGradients { positions: unflat(grad_positions.read()?), colors: unflat(grad_colors.read()?) })
+        Ok(VertexGradients {
+            positions: unflat(grad_positions.read()?),
+            colors: unflat(grad_colors.read()?),
+        })
     }
 
     /// Reads every image of the last forward.
@@ -226,7 +269,10 @@ impl MeshRasterizer {
     fn check_params(&self, params: &RasterParams) -> Result<(), RasterError> {
         let images = (self.image.width, self.image.height);
         if (params.width(), params.height()) != images {
-            return Err(RasterError::CameraSize { camera: (params.width(), params.height()), images });
+            return Err(RasterError::CameraSize {
+                camera: (params.width(), params.height()),
+                images,
+            });
         }
         if (params.vertices(), params.triangles()) != (self.vertices, self.triangles) {
             return Err(RasterError::Settings("parameters were made for another mesh".into()));

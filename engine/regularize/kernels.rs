@@ -54,7 +54,16 @@ impl Regularizers {
     /// Pipelines and empty neighbourhoods; [`Self::upload`] before recording.
     pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
         let pipeline = |name, spirv, bindings| {
-            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes: size_of::<Push>() as u32, specialization: &[WORKGROUP] })
+            ComputePipeline::new(
+                ctx,
+                &PipelineDesc {
+                    name,
+                    spirv,
+                    bindings,
+                    push_constant_bytes: size_of::<Push>() as u32,
+                    specialization: &[WORKGROUP],
+                },
+            )
         };
         Ok(Self {
             ctx: ctx.clone(),
@@ -84,14 +93,28 @@ impl Regularizers {
     /// Records both passes: zeroes the loss buffer, then ADDS the weighted gradients of every
     /// term into `grads` (positions, log-scales, rotations) and writes the unweighted losses to
     /// [`Self::losses`]. Temporal terms run only with `previous`. Nothing is read back.
-    pub fn record<'a>(&'a self, rec: &mut Recorder<'a>, params: &'a GaussianBuffers, grads: &'a GaussianBuffers, weights: &Weights, previous: Option<Temporal<'a>>) -> Result<(), RegularizeError> {
+    pub fn record<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        params: &'a GaussianBuffers,
+        grads: &'a GaussianBuffers,
+        weights: &Weights,
+        previous: Option<Temporal<'a>>,
+    ) -> Result<(), RegularizeError> {
         self.check_shapes(params, grads, previous)?;
         let push = Push {
             count: self.count as u32,
             temporal: previous.is_some() as u32,
             inv_count: 1.0 / self.count.max(1) as f32,
             omega_scale: weights.lambda_w / self.mean_edge_length,
-            weights: [weights.scale_2d, weights.laplacian, weights.normal, weights.edge_length, weights.rigidity, weights.rotation],
+            weights: [
+                weights.scale_2d,
+                weights.laplacian,
+                weights.normal,
+                weights.edge_length,
+                weights.rigidity,
+                weights.rotation,
+            ],
         };
         let groups = self.count.div_ceil(WORKGROUP as usize) as u64;
         rec.fill_buffer(&self.losses, 0);
@@ -109,7 +132,8 @@ impl Regularizers {
         ];
         rec.dispatch_1d(&self.vertex, &vertex, &push, groups)?;
         // Without a previous frame the kernel never reads these; bind the current ones.
-        let prev = previous.unwrap_or(Temporal { positions: &params.positions, rotations: &params.rotations });
+        let prev = previous
+            .unwrap_or(Temporal { positions: &params.positions, rotations: &params.rotations });
         let gather = [
             params.positions.binding(),
             params.rotations.binding(),
@@ -127,7 +151,12 @@ impl Regularizers {
         Ok(())
     }
 
-    fn check_shapes(&self, params: &GaussianBuffers, grads: &GaussianBuffers, previous: Option<Temporal<'_>>) -> Result<(), RegularizeError> {
+    fn check_shapes(
+        &self,
+        params: &GaussianBuffers,
+        grads: &GaussianBuffers,
+        previous: Option<Temporal<'_>>,
+    ) -> Result<(), RegularizeError> {
         let n = self.count;
         let mut shapes = vec![("parameters", params.len()), ("gradients", grads.len())];
         if let Some(p) = previous {
@@ -135,7 +164,9 @@ impl Regularizers {
             shapes.push(("previous rotations", p.rotations.len()));
         }
         match shapes.iter().find(|(_, len)| *len != n) {
-            Some((what, len)) => Err(RegularizeError::Shape(format!("{len} {what} for {n} uploaded neighbourhoods"))),
+            Some((what, len)) => {
+                Err(RegularizeError::Shape(format!("{len} {what} for {n} uploaded neighbourhoods")))
+            }
             None => Ok(()),
         }
     }

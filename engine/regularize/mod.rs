@@ -39,7 +39,15 @@ pub struct Weights {
 
 impl Default for Weights {
     fn default() -> Self {
-        Self { scale_2d: 1.0, laplacian: 5.0, normal: 1.0, edge_length: 4.0, rigidity: 4.0, rotation: 20.0, lambda_w: 1.0 }
+        Self {
+            scale_2d: 1.0,
+            laplacian: 5.0,
+            normal: 1.0,
+            edge_length: 4.0,
+            rigidity: 4.0,
+            rotation: 20.0,
+            lambda_w: 1.0,
+        }
     }
 }
 
@@ -59,7 +67,14 @@ pub const LOSS_SLOTS: usize = 6;
 
 impl<T: Copy> Losses<T> {
     pub fn from_slots(s: [T; LOSS_SLOTS]) -> Self {
-        Self { scale_2d: s[0], laplacian: s[1], normal: s[2], edge_length: s[3], rigidity: s[4], rotation: s[5] }
+        Self {
+            scale_2d: s[0],
+            laplacian: s[1],
+            normal: s[2],
+            edge_length: s[3],
+            rigidity: s[4],
+            rotation: s[5],
+        }
     }
 
     pub fn slots(&self) -> [T; LOSS_SLOTS] {

@@ -18,9 +18,18 @@ pub type Gradients = Params;
 
 /// Values (unweighted) and weighted gradients of every term; `previous` enables the temporal
 /// ones.
-pub fn evaluate(nb: &Neighbourhoods, params: &Params, previous: Option<&Params>, weights: &Weights) -> (Losses<f64>, Gradients) {
+pub fn evaluate(
+    nb: &Neighbourhoods,
+    params: &Params,
+    previous: Option<&Params>,
+    weights: &Weights,
+) -> (Losses<f64>, Gradients) {
     let n = params.positions.len();
-    let mut grads = Params { positions: vec![[0.0; 3]; n], log_scales: vec![[0.0; 3]; n], rotations: vec![[0.0; 4]; n] };
+    let mut grads = Params {
+        positions: vec![[0.0; 3]; n],
+        log_scales: vec![[0.0; 3]; n],
+        rotations: vec![[0.0; 4]; n],
+    };
     let mut losses = Losses::<f64>::default();
     let mut gp = vec![DVec3::ZERO; n];
     let mut gq = vec![DVec4::ZERO; n];
@@ -30,7 +39,8 @@ pub fn evaluate(nb: &Neighbourhoods, params: &Params, previous: Option<&Params>,
     if let Some(prev) = previous {
         let scale = weights.lambda_w as f64 / nb.mean_edge_length as f64;
         losses.edge_length = edge_length(nb, params, prev, weights.edge_length as f64, &mut gp);
-        losses.rigidity = rigidity(nb, params, prev, scale, weights.rigidity as f64, &mut gp, &mut gq);
+        losses.rigidity =
+            rigidity(nb, params, prev, scale, weights.rigidity as f64, &mut gp, &mut gq);
         losses.rotation = rotation(nb, params, prev, scale, weights.rotation as f64, &mut gq);
     }
     for i in 0..n {
@@ -89,7 +99,8 @@ fn normal(nb: &Neighbourhoods, params: &Params, w: f64, gp: &mut [DVec3], gq: &m
     let p = |i: u32| p3(params.positions[i as usize]);
     let mut loss = 0.0;
     for (i, g_rot) in gq.iter_mut().enumerate() {
-        let sum: DVec3 = nb.fan(i).map(|(b, c)| (p(b) - p(i as u32)).cross(p(c) - p(i as u32))).sum();
+        let sum: DVec3 =
+            nb.fan(i).map(|(b, c)| (p(b) - p(i as u32)).cross(p(c) - p(i as u32))).sum();
         let len = sum.length();
         if len == 0.0 {
             continue;
@@ -101,7 +112,8 @@ fn normal(nb: &Neighbourhoods, params: &Params, w: f64, gp: &mut [DVec3], gq: &m
         let Some(u) = r.try_normalize() else { continue };
         let u = w * u;
         // Through the rotation's z column.
-        *g_rot += rotation_backward(params.rotations[i], DMat3::from_cols(DVec3::ZERO, DVec3::ZERO, u));
+        *g_rot +=
+            rotation_backward(params.rotations[i], DMat3::from_cols(DVec3::ZERO, DVec3::ZERO, u));
         // Through n_mesh = sum / |sum| to each face's area vector A = a×b + b×c + c×a.
         let g_sum = -(u - n_mesh * n_mesh.dot(u)) / len;
         for (b, c) in nb.fan(i) {
@@ -115,7 +127,13 @@ fn normal(nb: &Neighbourhoods, params: &Params, w: f64, gp: &mut [DVec3], gq: &m
 }
 
 /// L_len = Σ over edges |l_t − l_{t−1}|.
-fn edge_length(nb: &Neighbourhoods, params: &Params, prev: &Params, w: f64, g: &mut [DVec3]) -> f64 {
+fn edge_length(
+    nb: &Neighbourhoods,
+    params: &Params,
+    prev: &Params,
+    w: f64,
+    g: &mut [DVec3],
+) -> f64 {
     let mut loss = 0.0;
     for i in 0..params.positions.len() {
         for &j in nb.neighbours(i).iter().filter(|&&j| j as usize > i) {
@@ -139,10 +157,21 @@ fn omega(prev: &Params, i: usize, j: usize, scale: f64) -> f64 {
 }
 
 /// L_rigid = Σᵢ Σⱼ ωᵢⱼ ‖(μⱼ' − μᵢ') − ΔRᵢ (μⱼ − μᵢ)‖, ΔRᵢ = Rᵢ' Rᵢᵀ (primes: frame t − 1).
-fn rigidity(nb: &Neighbourhoods, params: &Params, prev: &Params, scale: f64, w: f64, gp: &mut [DVec3], gq: &mut [DVec4]) -> f64 {
+fn rigidity(
+    nb: &Neighbourhoods,
+    params: &Params,
+    prev: &Params,
+    scale: f64,
+    w: f64,
+    gp: &mut [DVec3],
+    gq: &mut [DVec4],
+) -> f64 {
     let mut loss = 0.0;
     for i in 0..params.positions.len() {
-        let (r, r_prev) = (DMat3::from_quat(unit(params.rotations[i])), DMat3::from_quat(unit(prev.rotations[i])));
+        let (r, r_prev) = (
+            DMat3::from_quat(unit(params.rotations[i])),
+            DMat3::from_quat(unit(prev.rotations[i])),
+        );
         let delta_r = r_prev * r.transpose();
         let mut g_rot = DMat3::ZERO;
         for &j in nb.neighbours(i) {
@@ -167,7 +196,14 @@ fn rigidity(nb: &Neighbourhoods, params: &Params, prev: &Params, scale: f64, w: 
 }
 
 /// L_rot = Σᵢ Σⱼ ωᵢⱼ ‖qⱼ ⊗ qⱼ'⁻¹ − qᵢ ⊗ qᵢ'⁻¹‖ with unit quaternions.
-fn rotation(nb: &Neighbourhoods, params: &Params, prev: &Params, scale: f64, w: f64, gq: &mut [DVec4]) -> f64 {
+fn rotation(
+    nb: &Neighbourhoods,
+    params: &Params,
+    prev: &Params,
+    scale: f64,
+    w: f64,
+    gq: &mut [DVec4],
+) -> f64 {
     let relative = |i: usize| unit(params.rotations[i]) * unit(prev.rotations[i]).conjugate();
     let mut loss = 0.0;
     for i in 0..params.positions.len() {
@@ -179,7 +215,9 @@ fn rotation(nb: &Neighbourhoods, params: &Params, prev: &Params, scale: f64, w: 
             let Some(u) = diff.try_normalize() else { continue };
             let u = w * weight * u;
             // p = q ⊗ c is linear in q; its transpose is right-multiplication by c̄ = q'.
-            let back = |g: DVec4, k: usize| wxyz(DQuat::from_xyzw(g.y, g.z, g.w, g.x) * unit(prev.rotations[k]));
+            let back = |g: DVec4, k: usize| {
+                wxyz(DQuat::from_xyzw(g.y, g.z, g.w, g.x) * unit(prev.rotations[k]))
+            };
             gq[j] += back(u, j);
             gq[i] -= back(u, i);
         }
@@ -195,9 +233,18 @@ pub fn rotation_backward(q: [f64; 4], g: DMat3) -> DVec4 {
     let e = |r: usize, c: usize| g.col(c)[r];
     DVec4::new(
         2.0 * (-z * e(0, 1) + y * e(0, 2) + z * e(1, 0) - x * e(1, 2) - y * e(2, 0) + x * e(2, 1)),
-        2.0 * (y * e(0, 1) + z * e(0, 2) + y * e(1, 0) - 2.0 * x * e(1, 1) - w * e(1, 2) + z * e(2, 0) + w * e(2, 1) - 2.0 * x * e(2, 2)),
-        2.0 * (-2.0 * y * e(0, 0) + x * e(0, 1) + w * e(0, 2) + x * e(1, 0) + z * e(1, 2) - w * e(2, 0) + z * e(2, 1) - 2.0 * y * e(2, 2)),
-        2.0 * (-2.0 * z * e(0, 0) - w * e(0, 1) + x * e(0, 2) + w * e(1, 0) - 2.0 * z * e(1, 1) + y * e(1, 2) + x * e(2, 0) + y * e(2, 1)),
+        2.0 * (y * e(0, 1) + z * e(0, 2) + y * e(1, 0) - 2.0 * x * e(1, 1) - w * e(1, 2)
+            + z * e(2, 0)
+            + w * e(2, 1)
+            - 2.0 * x * e(2, 2)),
+        2.0 * (-2.0 * y * e(0, 0) + x * e(0, 1) + w * e(0, 2) + x * e(1, 0) + z * e(1, 2)
+            - w * e(2, 0)
+            + z * e(2, 1)
+            - 2.0 * y * e(2, 2)),
+        2.0 * (-2.0 * z * e(0, 0) - w * e(0, 1) + x * e(0, 2) + w * e(1, 0) - 2.0 * z * e(1, 1)
+            + y * e(1, 2)
+            + x * e(2, 0)
+            + y * e(2, 1)),
     )
 }
 

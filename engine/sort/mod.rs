@@ -40,7 +40,12 @@ impl RadixTuning {
         let limits = ctx.limits();
         if ctx.info().kind == ash::vk::PhysicalDeviceType::CPU {
             let workgroup_size = limits.subgroup_size.clamp(4, 16);
-            return Self { variant: RadixVariant::Lanes, workgroup_size, keys_per_thread: 4096, max_bucket_len: u32::MAX };
+            return Self {
+                variant: RadixVariant::Lanes,
+                workgroup_size,
+                keys_per_thread: 4096,
+                max_bucket_len: u32::MAX,
+            };
         }
         Self::subgroups(ctx)
     }
@@ -48,8 +53,14 @@ impl RadixTuning {
     /// The GPU tuning, on any device (tests run it on lavapipe too).
     pub fn subgroups(ctx: &GpuContext) -> Self {
         let limits = ctx.limits();
-        let workgroup_size = (limits.subgroup_size * 16).min(256).min(limits.max_workgroup_invocations);
-        Self { variant: RadixVariant::Subgroups, workgroup_size, keys_per_thread: 16, max_bucket_len: 0 }
+        let workgroup_size =
+            (limits.subgroup_size * 16).min(256).min(limits.max_workgroup_invocations);
+        Self {
+            variant: RadixVariant::Subgroups,
+            workgroup_size,
+            keys_per_thread: 16,
+            max_bucket_len: 0,
+        }
     }
 
     /// This tuning with the CPU variant's buckets capped at `len` pairs; 0 makes every sort take

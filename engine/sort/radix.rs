@@ -12,7 +12,10 @@
 
 use super::scan::PrefixScan;
 use super::{RadixTuning, RadixVariant};
-use crate::gpu::{BufferBinding, ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes, PipelineDesc, Recorder};
+use crate::gpu::{
+    BufferBinding, ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes,
+    PipelineDesc, Recorder,
+};
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -32,7 +35,11 @@ impl RadixKey for u32 {
     const WORDS: u32 = 1;
     #[inline]
     fn low_bits(self, bits: u32) -> Self {
-        if bits >= 32 { self } else { self & ((1 << bits) - 1) }
+        if bits >= 32 {
+            self
+        } else {
+            self & ((1 << bits) - 1)
+        }
     }
 }
 
@@ -40,7 +47,11 @@ impl RadixKey for u64 {
     const WORDS: u32 = 2;
     #[inline]
     fn low_bits(self, bits: u32) -> Self {
-        if bits >= 64 { self } else { self & ((1 << bits) - 1) }
+        if bits >= 64 {
+            self
+        } else {
+            self & ((1 << bits) - 1)
+        }
     }
 }
 
@@ -70,7 +81,16 @@ enum Gate {
 impl RadixParams {
     fn new(len: usize, tile_count: usize, bits: u32) -> Self {
         let (len, tile_count) = (len as u32, tile_count as u32);
-        Self { len, word: 0, shift: 0, digit_bits: 0, tile_count, bits, max_bucket_len: 0, gate: Gate::Always as u32 }
+        Self {
+            len,
+            word: 0,
+            shift: 0,
+            digit_bits: 0,
+            tile_count,
+            bits,
+            max_bucket_len: 0,
+            gate: Gate::Always as u32,
+        }
     }
 
     /// The pass over the `digit_bits` key bits from bit `low`.
@@ -153,14 +173,20 @@ impl<K: RadixKey> RadixSort<K> {
     pub fn tuning_for(ctx: &GpuContext, capacity: usize) -> RadixTuning {
         let tuning = RadixTuning::for_device(ctx);
         let record_bytes = (capacity as u64).saturating_mul(Self::RECORD_WORDS as u64 * 4);
-        if tuning.variant() == RadixVariant::Lanes && record_bytes > ctx.limits().max_storage_buffer_range {
+        if tuning.variant() == RadixVariant::Lanes
+            && record_bytes > ctx.limits().max_storage_buffer_range
+        {
             return RadixTuning::subgroups(ctx);
         }
         tuning
     }
 
     /// A sorter with an explicit tuning, e.g. [`RadixTuning::subgroups`] on a CPU device.
-    pub fn with_tuning(ctx: &Arc<GpuContext>, capacity: usize, tuning: RadixTuning) -> GpuResult<Self> {
+    pub fn with_tuning(
+        ctx: &Arc<GpuContext>,
+        capacity: usize,
+        tuning: RadixTuning,
+    ) -> GpuResult<Self> {
         let limits = ctx.limits();
         let shared_bytes = tuning.shared_bytes(limits.subgroup_size);
         if shared_bytes > limits.max_shared_memory_bytes {
@@ -187,40 +213,121 @@ impl<K: RadixKey> RadixSort<K> {
 
     /// A sort kernel; `records` (does the pass read records, write records) are specialization
     /// constants 4 and 5, which only the CPU variant reads.
-    fn pipeline(ctx: &Arc<GpuContext>, tuning: RadixTuning, name: &'static str, spirv: &[u8], bindings: u32, records: [u32; 2]) -> GpuResult<ComputePipeline> {
-        let specialization = [tuning.workgroup_size(), ctx.limits().subgroup_size, tuning.keys_per_thread(), K::WORDS, records[0], records[1]];
+    fn pipeline(
+        ctx: &Arc<GpuContext>,
+        tuning: RadixTuning,
+        name: &'static str,
+        spirv: &[u8],
+        bindings: u32,
+        records: [u32; 2],
+    ) -> GpuResult<ComputePipeline> {
+        let specialization = [
+            tuning.workgroup_size(),
+            ctx.limits().subgroup_size,
+            tuning.keys_per_thread(),
+            K::WORDS,
+            records[0],
+            records[1],
+        ];
         let push_constant_bytes = size_of::<RadixParams>() as u32;
-        ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes, specialization: &specialization })
+        ComputePipeline::new(
+            ctx,
+            &PipelineDesc {
+                name,
+                spirv,
+                bindings,
+                push_constant_bytes,
+                specialization: &specialization,
+            },
+        )
     }
 
-    fn subgroup_passes(ctx: &Arc<GpuContext>, capacity: usize, tuning: RadixTuning) -> GpuResult<Passes<K>> {
+    fn subgroup_passes(
+        ctx: &Arc<GpuContext>,
+        capacity: usize,
+        tuning: RadixTuning,
+    ) -> GpuResult<Passes<K>> {
         // Scratch first: an impossible capacity fails here, before any pipeline is built.
         let scratch_keys = GpuBuffer::new(ctx, "radix scratch keys", capacity)?;
         let scratch_values = GpuBuffer::new(ctx, "radix scratch values", capacity)?;
         Ok(Passes::Subgroups(SubgroupPasses {
-            histogram: Self::pipeline(ctx, tuning, "radix_histogram", shaders::SORT_RADIX_HISTOGRAM, 2, [0, 0])?,
-            scatter: Self::pipeline(ctx, tuning, "radix_scatter", shaders::SORT_RADIX_SCATTER, 5, [0, 0])?,
+            histogram: Self::pipeline(
+                ctx,
+                tuning,
+                "radix_histogram",
+                shaders::SORT_RADIX_HISTOGRAM,
+                2,
+                [0, 0],
+            )?,
+            scatter: Self::pipeline(
+                ctx,
+                tuning,
+                "radix_scatter",
+                shaders::SORT_RADIX_SCATTER,
+                5,
+                [0, 0],
+            )?,
             scratch_keys,
             scratch_values,
         }))
     }
 
-    fn lanes_passes(ctx: &Arc<GpuContext>, capacity: usize, tuning: RadixTuning) -> GpuResult<Passes<K>> {
-        let record_words = capacity.checked_mul(Self::RECORD_WORDS).ok_or(GpuError::LimitExceeded {
-            what: "radix sort records".into(),
-            count: capacity as u64,
-            limit: usize::MAX as u64 / Self::RECORD_WORDS as u64,
-            limit_name: "address space",
-        })?;
-        let records = [GpuBuffer::new(ctx, "radix records A", record_words)?, GpuBuffer::new(ctx, "radix records B", record_words)?];
+    fn lanes_passes(
+        ctx: &Arc<GpuContext>,
+        capacity: usize,
+        tuning: RadixTuning,
+    ) -> GpuResult<Passes<K>> {
+        let record_words =
+            capacity.checked_mul(Self::RECORD_WORDS).ok_or(GpuError::LimitExceeded {
+                what: "radix sort records".into(),
+                count: capacity as u64,
+                limit: usize::MAX as u64 / Self::RECORD_WORDS as u64,
+                limit_name: "address space",
+            })?;
+        let records = [
+            GpuBuffer::new(ctx, "radix records A", record_words)?,
+            GpuBuffer::new(ctx, "radix records B", record_words)?,
+        ];
         let runs = capacity.div_ceil(tuning.tile_len()) * tuning.workgroup_size() as usize;
-        let histogram = |records_in| Self::pipeline(ctx, tuning, "radix_histogram_lanes", shaders::SORT_RADIX_HISTOGRAM_LANES, 5, [records_in, 0]);
-        let scatter = |records_in, records_out| Self::pipeline(ctx, tuning, "radix_scatter_lanes", shaders::SORT_RADIX_SCATTER_LANES, 7, [records_in, records_out]);
+        let histogram = |records_in| {
+            Self::pipeline(
+                ctx,
+                tuning,
+                "radix_histogram_lanes",
+                shaders::SORT_RADIX_HISTOGRAM_LANES,
+                5,
+                [records_in, 0],
+            )
+        };
+        let scatter = |records_in, records_out| {
+            Self::pipeline(
+                ctx,
+                tuning,
+                "radix_scatter_lanes",
+                shaders::SORT_RADIX_SCATTER_LANES,
+                7,
+                [records_in, records_out],
+            )
+        };
         Ok(Passes::Lanes(LanesPasses {
             histograms: [histogram(0)?, histogram(1)?],
             scatters: [scatter(0, 1)?, scatter(1, 1)?, scatter(1, 0)?],
-            plan: Self::pipeline(ctx, tuning, "radix_plan_lanes", shaders::SORT_RADIX_PLAN_LANES, 2, [0, 0])?,
-            buckets: Self::pipeline(ctx, tuning, "radix_bucket_lanes", shaders::SORT_RADIX_BUCKET_LANES, 6, [0, 0])?,
+            plan: Self::pipeline(
+                ctx,
+                tuning,
+                "radix_plan_lanes",
+                shaders::SORT_RADIX_PLAN_LANES,
+                2,
+                [0, 0],
+            )?,
+            buckets: Self::pipeline(
+                ctx,
+                tuning,
+                "radix_bucket_lanes",
+                shaders::SORT_RADIX_BUCKET_LANES,
+                6,
+                [0, 0],
+            )?,
             run_counts: GpuBuffer::new(ctx, "radix run counts", runs * RADIX)?,
             records,
             plan_flag: GpuBuffer::from_slice(ctx, "radix plan", &[0])?,
@@ -253,13 +360,30 @@ impl<K: RadixKey> RadixSort<K> {
 
     /// Records a stable sort of the first `len` pairs of `keys` and `values` by the low `bits`
     /// of each key (higher bits travel with the key but do not affect the order).
-    pub fn record<'a>(&'a self, recorder: &mut Recorder<'a>, keys: &'a GpuBuffer<K>, values: &'a GpuBuffer<u32>, len: usize, bits: u32) -> GpuResult<()> {
+    pub fn record<'a>(
+        &'a self,
+        recorder: &mut Recorder<'a>,
+        keys: &'a GpuBuffer<K>,
+        values: &'a GpuBuffer<u32>,
+        len: usize,
+        bits: u32,
+    ) -> GpuResult<()> {
         let room = self.capacity.min(keys.len()).min(values.len());
         if len > room {
-            return Err(GpuError::LengthMismatch { what: "radix sort", name: keys.name().into(), len, capacity: room });
+            return Err(GpuError::LengthMismatch {
+                what: "radix sort",
+                name: keys.name().into(),
+                len,
+                capacity: room,
+            });
         }
         if bits > K::BITS {
-            return Err(GpuError::LimitExceeded { what: "radix sort key bits".into(), count: bits as u64, limit: K::BITS as u64, limit_name: "key width" });
+            return Err(GpuError::LimitExceeded {
+                what: "radix sort key bits".into(),
+                count: bits as u64,
+                limit: K::BITS as u64,
+                limit_name: "key width",
+            });
         }
         let passes = Self::passes(bits);
         if len <= 1 || passes == 0 {
@@ -269,23 +393,40 @@ impl<K: RadixKey> RadixSort<K> {
         let base = RadixParams::new(len, tile_count, bits);
         recorder.begin_pass("radix sort");
         match &self.passes {
-            Passes::Subgroups(subgroups) => self.record_subgroups(recorder, subgroups, keys, values, &base)?,
+            Passes::Subgroups(subgroups) => {
+                self.record_subgroups(recorder, subgroups, keys, values, &base)?
+            }
             Passes::Lanes(lanes) => self.record_lanes(recorder, lanes, keys, values, &base)?,
         }
         recorder.end_pass();
         Ok(())
     }
 
-    fn record_subgroups<'a>(&'a self, recorder: &mut Recorder<'a>, kernels: &'a SubgroupPasses<K>, keys: &'a GpuBuffer<K>, values: &'a GpuBuffer<u32>, base: &RadixParams) -> GpuResult<()> {
+    fn record_subgroups<'a>(
+        &'a self,
+        recorder: &mut Recorder<'a>,
+        kernels: &'a SubgroupPasses<K>,
+        keys: &'a GpuBuffer<K>,
+        values: &'a GpuBuffer<u32>,
+        base: &RadixParams,
+    ) -> GpuResult<()> {
         let SubgroupPasses { histogram, scatter, scratch_keys, scratch_values } = kernels;
-        let buffers = [(keys.binding(), values.binding()), (scratch_keys.binding(), scratch_values.binding())];
+        let buffers = [
+            (keys.binding(), values.binding()),
+            (scratch_keys.binding(), scratch_values.binding()),
+        ];
         let passes = Self::passes(base.bits);
         for pass in 0..passes {
-            let (input, output) = (buffers[(pass % 2) as usize], buffers[((pass + 1) % 2) as usize]);
+            let (input, output) =
+                (buffers[(pass % 2) as usize], buffers[((pass + 1) % 2) as usize]);
             let counts = self.tile_counts.binding();
             let histogram_io = [input.0, counts];
             let scatter_io = [input.0, input.1, counts, output.0, output.1];
-            self.record_pass(recorder, [(histogram, &histogram_io), (scatter, &scatter_io)], &base.lsd_pass(pass))?;
+            self.record_pass(
+                recorder,
+                [(histogram, &histogram_io), (scatter, &scatter_io)],
+                &base.lsd_pass(pass),
+            )?;
         }
         if passes % 2 == 1 {
             // An odd pass count leaves the result in scratch: bring it home.
@@ -298,67 +439,140 @@ impl<K: RadixKey> RadixSort<K> {
 
     /// The bucket path where the tuning allows it, then the LSD passes, gated to run only if
     /// the plan turned the bucket path down.
-    fn record_lanes<'a>(&'a self, recorder: &mut Recorder<'a>, kernels: &'a LanesPasses, keys: &'a GpuBuffer<K>, values: &'a GpuBuffer<u32>, base: &RadixParams) -> GpuResult<()> {
+    fn record_lanes<'a>(
+        &'a self,
+        recorder: &mut Recorder<'a>,
+        kernels: &'a LanesPasses,
+        keys: &'a GpuBuffer<K>,
+        values: &'a GpuBuffer<u32>,
+        base: &RadixParams,
+    ) -> GpuResult<()> {
         let LanesPasses { histograms, scatters, run_counts, records, plan_flag, .. } = kernels;
         let bucket_limit = self.bucket_limit(base.bits);
         let lsd_gate = if bucket_limit > 0 {
-            let top = RadixParams { max_bucket_len: bucket_limit as u32, ..base.digit(base.bits - RADIX_BITS, RADIX_BITS) };
+            let top = RadixParams {
+                max_bucket_len: bucket_limit as u32,
+                ..base.digit(base.bits - RADIX_BITS, RADIX_BITS)
+            };
             self.record_bucket_path(recorder, kernels, keys, values, &top)?;
             Gate::LsdPath
         } else {
             recorder.fill_buffer(plan_flag, 0); // for took_bucket_path
             Gate::Always
         };
-        let (counts, runs, plan_io) = (self.tile_counts.binding(), run_counts.binding(), plan_flag.binding());
+        let (counts, runs, plan_io) =
+            (self.tile_counts.binding(), run_counts.binding(), plan_flag.binding());
         // A pass over zero bits moves the records home unchanged when one pass sorts.
         let passes = Self::passes(base.bits).max(2);
         for pass in 0..passes {
             let (first, last) = (pass == 0, pass + 1 == passes);
-            let input = if first { [keys.binding(), values.binding()] } else { [records[(pass as usize + 1) % 2].binding(); 2] };
-            let output = if last { [keys.binding(), values.binding()] } else { [records[pass as usize % 2].binding(); 2] };
+            let input = if first {
+                [keys.binding(), values.binding()]
+            } else {
+                [records[(pass as usize + 1) % 2].binding(); 2]
+            };
+            let output = if last {
+                [keys.binding(), values.binding()]
+            } else {
+                [records[pass as usize % 2].binding(); 2]
+            };
             let histogram_io = [input[0], input[1], counts, runs, plan_io];
             let scatter_io = [input[0], input[1], counts, runs, output[0], output[1], plan_io];
             let (histogram, scatter) = lanes_kernels(first, last);
             let params = base.lsd_pass(pass).gated(lsd_gate);
-            self.record_pass(recorder, [(&histograms[histogram], &histogram_io), (&scatters[scatter], &scatter_io)], &params)?;
+            self.record_pass(
+                recorder,
+                [(&histograms[histogram], &histogram_io), (&scatters[scatter], &scatter_io)],
+                &params,
+            )?;
         }
         Ok(())
     }
 
     /// The top digit's histogram and scan, the plan, then (if every bucket fits) its scatter
     /// into records A and the bucket sort. `top`: the top digit's pass with its bucket limit.
-    fn record_bucket_path<'a>(&'a self, recorder: &mut Recorder<'a>, kernels: &'a LanesPasses, keys: &'a GpuBuffer<K>, values: &'a GpuBuffer<u32>, top: &RadixParams) -> GpuResult<()> {
-        let LanesPasses { histograms, scatters, plan, buckets, run_counts, records, plan_flag } = kernels;
-        let (counts, runs, plan_io) = (self.tile_counts.binding(), run_counts.binding(), plan_flag.binding());
+    fn record_bucket_path<'a>(
+        &'a self,
+        recorder: &mut Recorder<'a>,
+        kernels: &'a LanesPasses,
+        keys: &'a GpuBuffer<K>,
+        values: &'a GpuBuffer<u32>,
+        top: &RadixParams,
+    ) -> GpuResult<()> {
+        let LanesPasses { histograms, scatters, plan, buckets, run_counts, records, plan_flag } =
+            kernels;
+        let (counts, runs, plan_io) =
+            (self.tile_counts.binding(), run_counts.binding(), plan_flag.binding());
         let top_histogram_io = [keys.binding(), values.binding(), counts, runs, plan_io];
-        let top_scatter_io = [keys.binding(), values.binding(), counts, runs, records[0].binding(), records[0].binding(), plan_io];
-        let bucket_io = [records[0].binding(), records[1].binding(), keys.binding(), values.binding(), counts, plan_io];
+        let top_scatter_io = [
+            keys.binding(),
+            values.binding(),
+            counts,
+            runs,
+            records[0].binding(),
+            records[0].binding(),
+            plan_io,
+        ];
+        let bucket_io = [
+            records[0].binding(),
+            records[1].binding(),
+            keys.binding(),
+            values.binding(),
+            counts,
+            plan_io,
+        ];
         self.record_counts(recorder, &histograms[0], &top_histogram_io, top)?;
         recorder.dispatch_1d(plan, &[counts, plan_io], top, 1)?;
         self.record_scatter(recorder, &scatters[0], &top_scatter_io, &top.gated(Gate::BucketPath))?;
         recorder.begin_pass("radix buckets");
         let bucket_groups = RADIX.div_ceil(self.tuning.workgroup_size() as usize);
-        recorder.dispatch_1d(buckets, &bucket_io, &top.gated(Gate::BucketPath), bucket_groups as u64)?;
+        recorder.dispatch_1d(
+            buckets,
+            &bucket_io,
+            &top.gated(Gate::BucketPath),
+            bucket_groups as u64,
+        )?;
         recorder.end_pass();
         Ok(())
     }
 
     /// One pass: the histogram, the scan of its tile counts, the scatter, each kernel with
     /// its bindings.
-    fn record_pass<'a>(&'a self, recorder: &mut Recorder<'a>, [histogram, scatter]: [(&'a ComputePipeline, &[BufferBinding<'a>]); 2], params: &RadixParams) -> GpuResult<()> {
+    fn record_pass<'a>(
+        &'a self,
+        recorder: &mut Recorder<'a>,
+        [histogram, scatter]: [(&'a ComputePipeline, &[BufferBinding<'a>]); 2],
+        params: &RadixParams,
+    ) -> GpuResult<()> {
         self.record_counts(recorder, histogram.0, histogram.1, params)?;
         self.record_scatter(recorder, scatter.0, scatter.1, params)
     }
 
     /// A pass's histogram and the scan that turns its tile counts into output offsets.
-    fn record_counts<'a>(&'a self, recorder: &mut Recorder<'a>, histogram: &'a ComputePipeline, io: &[BufferBinding<'a>], params: &RadixParams) -> GpuResult<()> {
+    fn record_counts<'a>(
+        &'a self,
+        recorder: &mut Recorder<'a>,
+        histogram: &'a ComputePipeline,
+        io: &[BufferBinding<'a>],
+        params: &RadixParams,
+    ) -> GpuResult<()> {
         recorder.begin_pass("radix histogram");
         recorder.dispatch_1d(histogram, io, params, params.tile_count as u64)?;
         recorder.end_pass();
-        self.scan.record(recorder, &self.tile_counts, (params.tile_count as usize) << params.digit_bits)
+        self.scan.record(
+            recorder,
+            &self.tile_counts,
+            (params.tile_count as usize) << params.digit_bits,
+        )
     }
 
-    fn record_scatter<'a>(&'a self, recorder: &mut Recorder<'a>, scatter: &'a ComputePipeline, io: &[BufferBinding<'a>], params: &RadixParams) -> GpuResult<()> {
+    fn record_scatter<'a>(
+        &'a self,
+        recorder: &mut Recorder<'a>,
+        scatter: &'a ComputePipeline,
+        io: &[BufferBinding<'a>],
+        params: &RadixParams,
+    ) -> GpuResult<()> {
         recorder.begin_pass("radix scatter");
         recorder.dispatch_1d(scatter, io, params, params.tile_count as u64)?;
         recorder.end_pass();
@@ -376,7 +590,13 @@ impl<K: RadixKey> RadixSort<K> {
     }
 
     /// Sorts in one submission and returns the GPU pass times.
-    pub fn sort(&self, keys: &GpuBuffer<K>, values: &GpuBuffer<u32>, len: usize, bits: u32) -> GpuResult<PassTimes> {
+    pub fn sort(
+        &self,
+        keys: &GpuBuffer<K>,
+        values: &GpuBuffer<u32>,
+        len: usize,
+        bits: u32,
+    ) -> GpuResult<PassTimes> {
         let mut recorder = Recorder::new(keys.context())?;
         self.record(&mut recorder, keys, values, len, bits)?;
         recorder.submit_and_wait()

@@ -2,7 +2,9 @@
 //! a recursive scan of those, then each block scanned with its offset added. Scratch buffers are
 //! sized once for the capacity given at creation.
 
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder};
+use crate::gpu::{
+    ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder,
+};
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -29,10 +31,17 @@ pub struct PrefixScan {
 impl PrefixScan {
     /// A scan for up to `capacity` elements.
     pub fn new(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<Self> {
-        let workgroup_size = ctx.limits().subgroup_size.max(256).min(ctx.limits().max_workgroup_invocations);
+        let workgroup_size =
+            ctx.limits().subgroup_size.max(256).min(ctx.limits().max_workgroup_invocations);
         let specialization = [workgroup_size, ctx.limits().subgroup_size, ITEMS_PER_THREAD];
         let pipeline = |name, spirv| {
-            let desc = PipelineDesc { name, spirv, bindings: 2, push_constant_bytes: size_of::<ScanParams>() as u32, specialization: &specialization };
+            let desc = PipelineDesc {
+                name,
+                spirv,
+                bindings: 2,
+                push_constant_bytes: size_of::<ScanParams>() as u32,
+                specialization: &specialization,
+            };
             ComputePipeline::new(ctx, &desc)
         };
         let block_len = (workgroup_size * ITEMS_PER_THREAD) as usize;
@@ -55,9 +64,19 @@ impl PrefixScan {
 
     /// Records an in-place exclusive scan of the first `len` elements of `data`:
     /// `data[i] = data[0] + … + data[i - 1]` (wrapping), `data[0] = 0`.
-    pub fn record<'a>(&'a self, recorder: &mut Recorder<'a>, data: &'a GpuBuffer<u32>, len: usize) -> GpuResult<()> {
+    pub fn record<'a>(
+        &'a self,
+        recorder: &mut Recorder<'a>,
+        data: &'a GpuBuffer<u32>,
+        len: usize,
+    ) -> GpuResult<()> {
         if len > self.capacity || len > data.len() {
-            return Err(GpuError::LengthMismatch { what: "prefix scan", name: data.name().into(), len, capacity: self.capacity.min(data.len()) });
+            return Err(GpuError::LengthMismatch {
+                what: "prefix scan",
+                name: data.name().into(),
+                len,
+                capacity: self.capacity.min(data.len()),
+            });
         }
         let lengths = level_lengths(len, self.block_len);
         let buffers: Vec<&GpuBuffer<u32>> = std::iter::once(data).chain(&self.levels).collect();
@@ -69,7 +88,8 @@ impl PrefixScan {
             recorder.dispatch_1d(&self.reduce, &bindings, &params, lengths[level + 1] as u64)?;
         }
         for level in (0..=top).rev() {
-            let params = ScanParams { len: lengths[level] as u32, has_block_offsets: (level < top) as u32 };
+            let params =
+                ScanParams { len: lengths[level] as u32, has_block_offsets: (level < top) as u32 };
             // The top level is one block and reads no offsets; bind any buffer there.
             let offsets = buffers[(level + 1).min(top)];
             let bindings = [buffers[level].binding(), offsets.binding()];

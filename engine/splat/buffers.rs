@@ -21,14 +21,25 @@ pub struct GaussianBuffers {
 
 impl GaussianBuffers {
     /// Uploads a scene (checked for consistent row counts first).
-    pub fn from_scene(ctx: &Arc<GpuContext>, scene: &GaussianScene) -> Result<Self, super::SplatError> {
+    pub fn from_scene(
+        ctx: &Arc<GpuContext>,
+        scene: &GaussianScene,
+    ) -> Result<Self, super::SplatError> {
         scene.check()?;
         let flat = |rows: &[[f32; 3]]| rows.iter().flatten().copied().collect::<Vec<f32>>();
         Ok(Self {
             positions: GpuBuffer::from_slice(ctx, "gaussian positions", &flat(&scene.positions))?,
-            log_scales: GpuBuffer::from_slice(ctx, "gaussian log-scales", &flat(&scene.log_scales))?,
+            log_scales: GpuBuffer::from_slice(
+                ctx,
+                "gaussian log-scales",
+                &flat(&scene.log_scales),
+            )?,
             rotations: GpuBuffer::from_slice(ctx, "gaussian rotations", &scene.rotations)?,
-            opacity_logits: GpuBuffer::from_slice(ctx, "gaussian opacity logits", &scene.opacity_logits)?,
+            opacity_logits: GpuBuffer::from_slice(
+                ctx,
+                "gaussian opacity logits",
+                &scene.opacity_logits,
+            )?,
             sh: GpuBuffer::from_slice(ctx, "gaussian SH", &scene.sh)?,
             len: scene.len(),
             sh_degree: scene.sh_degree,
@@ -41,7 +52,11 @@ impl GaussianBuffers {
             positions: GpuBuffer::new(ctx, "gaussian position gradients", like.positions.len())?,
             log_scales: GpuBuffer::new(ctx, "gaussian log-scale gradients", like.log_scales.len())?,
             rotations: GpuBuffer::new(ctx, "gaussian rotation gradients", like.rotations.len())?,
-            opacity_logits: GpuBuffer::new(ctx, "gaussian opacity-logit gradients", like.opacity_logits.len())?,
+            opacity_logits: GpuBuffer::new(
+                ctx,
+                "gaussian opacity-logit gradients",
+                like.opacity_logits.len(),
+            )?,
             sh: GpuBuffer::new(ctx, "gaussian SH gradients", like.sh.len())?,
             len: like.len,
             sh_degree: like.sh_degree,
@@ -71,7 +86,13 @@ impl GaussianBuffers {
 
     /// Bindings in kernel order: positions, log-scales, rotations, opacity logits, SH.
     pub(crate) fn bindings(&self) -> [BufferBinding<'_>; 5] {
-        [self.positions.binding(), self.log_scales.binding(), self.rotations.binding(), self.opacity_logits.binding(), self.sh.binding()]
+        [
+            self.positions.binding(),
+            self.log_scales.binding(),
+            self.rotations.binding(),
+            self.opacity_logits.binding(),
+            self.sh.binding(),
+        ]
     }
 
     /// Reads everything back as a host scene.

@@ -24,9 +24,15 @@ pub struct FrameParams {
 impl FrameParams {
     /// `sh_stride` is the scene's SH coefficients per channel; the active degree is the
     /// settings' degree, capped at the scene's.
-    pub fn new(camera: &Camera, settings: &RenderSettings, gaussians: usize, scene_sh_degree: u32) -> Self {
+    pub fn new(
+        camera: &Camera,
+        settings: &RenderSettings,
+        gaussians: usize,
+        scene_sh_degree: u32,
+    ) -> Self {
         let m = camera.world_to_camera;
-        let row = |r: usize| [m.row(r).x as f32, m.row(r).y as f32, m.row(r).z as f32, m.row(r).w as f32];
+        let row =
+            |r: usize| [m.row(r).x as f32, m.row(r).y as f32, m.row(r).z as f32, m.row(r).w as f32];
         let center = camera.center();
         let [r, g, b] = settings.background;
         let (tiles_x, tiles_y) = tile_grid(camera.width, camera.height);
@@ -37,7 +43,12 @@ impl FrameParams {
             center_near: [center.x as f32, center.y as f32, center.z as f32, settings.near],
             background_far: [r, g, b, settings.far],
             size: [camera.width, camera.height, tiles_x, tiles_y],
-            options: [gaussians as u32, degree, super::sh_coefficients(scene_sh_degree) as u32, settings.mask_mode as u32],
+            options: [
+                gaussians as u32,
+                degree,
+                super::sh_coefficients(scene_sh_degree) as u32,
+                settings.mask_mode as u32,
+            ],
         }
     }
 

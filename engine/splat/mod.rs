@@ -94,18 +94,29 @@ pub struct RenderSettings {
 impl RenderSettings {
     /// Finite background, `0 < near < far`, degree at most [`MAX_SH_DEGREE`].
     pub fn check(&self) -> Result<(), SplatError> {
-        let fine = self.background.iter().all(|c| c.is_finite()) && self.near > 0.0 && self.far > self.near && self.sh_degree <= MAX_SH_DEGREE;
+        let fine = self.background.iter().all(|c| c.is_finite())
+            && self.near > 0.0
+            && self.far > self.near
+            && self.sh_degree <= MAX_SH_DEGREE;
         if fine {
             Ok(())
         } else {
-            Err(SplatError::Settings(format!("{self:?} (need a finite background, 0 < near < far, SH degree <= {MAX_SH_DEGREE})")))
+            Err(SplatError::Settings(format!(
+                "{self:?} (need a finite background, 0 < near < far, SH degree <= {MAX_SH_DEGREE})"
+            )))
         }
     }
 }
 
 impl Default for RenderSettings {
     fn default() -> Self {
-        Self { background: [0.0; 3], near: 0.01, far: 1e4, sh_degree: MAX_SH_DEGREE, mask_mode: false }
+        Self {
+            background: [0.0; 3],
+            near: 0.01,
+            far: 1e4,
+            sh_degree: MAX_SH_DEGREE,
+            mask_mode: false,
+        }
     }
 }
 

@@ -16,7 +16,10 @@ mod tiles;
 pub use projection::{project, Projected};
 pub use tiles::tiles_touched;
 
-use super::{GaussianScene, RenderSettings, ALPHA_MAX, ALPHA_MIN, DEPTH_ALPHA_MIN, TILE_SIZE, TRANSMITTANCE_MIN};
+use super::{
+    GaussianScene, RenderSettings, ALPHA_MAX, ALPHA_MIN, DEPTH_ALPHA_MIN, TILE_SIZE,
+    TRANSMITTANCE_MIN,
+};
 use crate::camera::Camera;
 use projection::{forward, Forward, View};
 use projection_backward::{project_backward, ProjectedGradient};
@@ -49,7 +52,13 @@ pub struct Gradients {
 impl Gradients {
     fn zeros(scene: &GaussianScene) -> Self {
         let n = scene.len();
-        Self { positions: vec![[0.0; 3]; n], log_scales: vec![[0.0; 3]; n], rotations: vec![[0.0; 4]; n], opacity_logits: vec![0.0; n], sh: vec![0.0; scene.sh.len()] }
+        Self {
+            positions: vec![[0.0; 3]; n],
+            log_scales: vec![[0.0; 3]; n],
+            rotations: vec![[0.0; 4]; n],
+            opacity_logits: vec![0.0; n],
+            sh: vec![0.0; scene.sh.len()],
+        }
     }
 }
 
@@ -74,7 +83,13 @@ pub fn render(scene: &GaussianScene, camera: &Camera, settings: &RenderSettings)
     let frame = Frame::new(scene, camera, settings);
     let background = settings.background.map(f64::from);
     let pixels = frame.pixels();
-    let mut image = Image { width: camera.width, height: camera.height, color: Vec::with_capacity(pixels), alpha: Vec::with_capacity(pixels), depth: Vec::with_capacity(pixels) };
+    let mut image = Image {
+        width: camera.width,
+        height: camera.height,
+        color: Vec::with_capacity(pixels),
+        alpha: Vec::with_capacity(pixels),
+        depth: Vec::with_capacity(pixels),
+    };
     for pixel in 0..pixels {
         let sums = frame.accumulate(&frame.composite(pixel));
         let alpha = 1.0 - sums.transmittance;
@@ -90,7 +105,11 @@ pub fn render(scene: &GaussianScene, camera: &Camera, settings: &RenderSettings)
 ///
 /// # Panics
 /// As [`render`].
-pub fn contributions(scene: &GaussianScene, camera: &Camera, settings: &RenderSettings) -> Vec<Vec<Contribution>> {
+pub fn contributions(
+    scene: &GaussianScene,
+    camera: &Camera,
+    settings: &RenderSettings,
+) -> Vec<Vec<Contribution>> {
     let frame = Frame::new(scene, camera, settings);
     (0..frame.pixels()).map(|pixel| frame.composite(pixel)).collect()
 }
@@ -100,14 +119,29 @@ pub fn contributions(scene: &GaussianScene, camera: &Camera, settings: &RenderSe
 ///
 /// # Panics
 /// As [`render`], and when a gradient slice does not hold one entry per pixel.
-pub fn backward(scene: &GaussianScene, camera: &Camera, settings: &RenderSettings, d_color: &[[f64; 3]], d_alpha: &[f64], d_depth: &[f64]) -> Gradients {
+pub fn backward(
+    scene: &GaussianScene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    d_color: &[[f64; 3]],
+    d_alpha: &[f64],
+    d_depth: &[f64],
+) -> Gradients {
     let frame = Frame::new(scene, camera, settings);
     let pixels = frame.pixels();
-    assert!(d_color.len() == pixels && d_alpha.len() == pixels && d_depth.len() == pixels, "reference::backward: gradients for {pixels} pixels expected");
+    assert!(
+        d_color.len() == pixels && d_alpha.len() == pixels && d_depth.len() == pixels,
+        "reference::backward: gradients for {pixels} pixels expected"
+    );
     let mut d_projected = vec![ProjectedGradient::default(); scene.len()];
     for pixel in 0..pixels {
         let contributions = frame.composite(pixel);
-        frame.pixel_backward(pixel, &contributions, PixelGradient { color: d_color[pixel], alpha: d_alpha[pixel], depth: d_depth[pixel] }, &mut d_projected);
+        frame.pixel_backward(
+            pixel,
+            &contributions,
+            PixelGradient { color: d_color[pixel], alpha: d_alpha[pixel], depth: d_depth[pixel] },
+            &mut d_projected,
+        );
     }
     let mut gradients = Gradients::zeros(scene);
     for (i, f) in frame.forwards.iter().enumerate() {
@@ -148,7 +182,8 @@ impl<'a> Frame<'a> {
             panic!("splat reference: {e}");
         }
         let view = View::new(camera);
-        let forwards: Vec<_> = (0..scene.len()).map(|i| forward(scene, &view, settings, i)).collect();
+        let forwards: Vec<_> =
+            (0..scene.len()).map(|i| forward(scene, &view, settings, i)).collect();
         let (width, height) = (camera.width, camera.height);
         let tiles = (width.div_ceil(TILE_SIZE) * height.div_ceil(TILE_SIZE)) as usize;
         let mut bins = vec![Vec::new(); tiles];
@@ -184,7 +219,8 @@ impl<'a> Frame<'a> {
     fn composite(&self, pixel: usize) -> Vec<Contribution> {
         let width = self.width as usize;
         let (x, y) = (pixel % width, pixel / width);
-        let tile = (y / TILE_SIZE as usize) * self.width.div_ceil(TILE_SIZE) as usize + x / TILE_SIZE as usize;
+        let tile = (y / TILE_SIZE as usize) * self.width.div_ceil(TILE_SIZE) as usize
+            + x / TILE_SIZE as usize;
         let u = self.center(pixel);
         let mut transmittance = 1.0;
         let mut contributions = Vec::new();
@@ -199,7 +235,12 @@ impl<'a> Frame<'a> {
             if next < TRANSMITTANCE_MIN {
                 break;
             }
-            contributions.push(Contribution { gaussian, alpha, transmittance, capped: raw >= ALPHA_MAX });
+            contributions.push(Contribution {
+                gaussian,
+                alpha,
+                transmittance,
+                capped: raw >= ALPHA_MAX,
+            });
             transmittance = next;
         }
         contributions
@@ -221,15 +262,25 @@ impl<'a> Frame<'a> {
     }
 
     /// Adds one pixel's dL/d(projected quantities) of its contributors, back to front.
-    fn pixel_backward(&self, pixel: usize, contributions: &[Contribution], g: PixelGradient, out: &mut [ProjectedGradient]) {
+    fn pixel_backward(
+        &self,
+        pixel: usize,
+        contributions: &[Contribution],
+        g: PixelGradient,
+        out: &mut [ProjectedGradient],
+    ) {
         let sums = self.accumulate(contributions);
         let final_t = sums.transmittance;
         let alpha_out = 1.0 - final_t;
         // Expected depth D / A: its gradient reaches D and A (none below DEPTH_ALPHA_MIN).
-        let (d_depth_sum, d_alpha_out) =
-            if alpha_out < DEPTH_ALPHA_MIN { (0.0, g.alpha) } else { (g.depth / alpha_out, g.alpha - g.depth * sums.depth / (alpha_out * alpha_out)) };
+        let (d_depth_sum, d_alpha_out) = if alpha_out < DEPTH_ALPHA_MIN {
+            (0.0, g.alpha)
+        } else {
+            (g.depth / alpha_out, g.alpha - g.depth * sums.depth / (alpha_out * alpha_out))
+        };
         // Output colour C + T·background and alpha 1 − T.
-        let d_final_t = -d_alpha_out + (0..3).map(|ch| g.color[ch] * f64::from(self.settings.background[ch])).sum::<f64>();
+        let d_final_t = -d_alpha_out
+            + (0..3).map(|ch| g.color[ch] * f64::from(self.settings.background[ch])).sum::<f64>();
         let u = self.center(pixel);
         let (mut behind_color, mut behind_depth) = ([0.0; 3], 0.0);
         for c in contributions.iter().rev() {
@@ -237,7 +288,8 @@ impl<'a> Frame<'a> {
             let weight = c.alpha * c.transmittance;
             let one_minus = 1.0 - c.alpha;
             // T_final and every later contribution carry a factor (1 − α).
-            let mut d_alpha = -d_final_t * final_t / one_minus + d_depth_sum * (p.depth * c.transmittance - behind_depth / one_minus);
+            let mut d_alpha = -d_final_t * final_t / one_minus
+                + d_depth_sum * (p.depth * c.transmittance - behind_depth / one_minus);
             for ((behind, color), d_color) in behind_color.iter_mut().zip(p.color).zip(g.color) {
                 d_alpha += d_color * (color * c.transmittance - *behind / one_minus);
                 *behind += color * weight;

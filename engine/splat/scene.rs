@@ -51,16 +51,28 @@ impl GaussianScene {
     pub fn check(&self) -> Result<(), SceneError> {
         let n = self.len();
         if self.sh_degree > MAX_SH_DEGREE {
-            return Err(SceneError::Invalid(format!("SH degree {} is above {MAX_SH_DEGREE}", self.sh_degree)));
+            return Err(SceneError::Invalid(format!(
+                "SH degree {} is above {MAX_SH_DEGREE}",
+                self.sh_degree
+            )));
         }
-        let rows = [("log_scales", self.log_scales.len()), ("rotations", self.rotations.len()), ("opacity_logits", self.opacity_logits.len())];
+        let rows = [
+            ("log_scales", self.log_scales.len()),
+            ("rotations", self.rotations.len()),
+            ("opacity_logits", self.opacity_logits.len()),
+        ];
         for (name, len) in rows {
             if len != n {
                 return Err(SceneError::Invalid(format!("{len} {name} for {n} positions")));
             }
         }
         if self.sh.len() != n * self.coefficients() * 3 {
-            return Err(SceneError::Invalid(format!("{} SH values for {n} Gaussians of degree {} (expected {})", self.sh.len(), self.sh_degree, n * self.coefficients() * 3)));
+            return Err(SceneError::Invalid(format!(
+                "{} SH values for {n} Gaussians of degree {} (expected {})",
+                self.sh.len(),
+                self.sh_degree,
+                n * self.coefficients() * 3
+            )));
         }
         Ok(())
     }
@@ -76,13 +88,18 @@ impl GaussianScene {
     /// a truncated body.
     pub fn read_ply(path: &Path) -> Result<Self, SceneError> {
         let ply = Ply::read(path)?;
-        let vertex = ply.element("vertex").ok_or_else(|| SceneError::File { path: path.to_path_buf(), problem: "no 'vertex' element: not a Gaussian scene".into() })?;
+        let vertex = ply.element("vertex").ok_or_else(|| SceneError::File {
+            path: path.to_path_buf(),
+            problem: "no 'vertex' element: not a Gaussian scene".into(),
+        })?;
         let rest = vertex.properties.iter().filter(|p| p.name.starts_with("f_rest_")).count();
         let sh_degree = (0..=MAX_SH_DEGREE).find(|&d| 3 * (sh_coefficients(d) - 1) == rest).ok_or_else(|| SceneError::File {
             path: path.to_path_buf(),
             problem: format!("{rest} 'f_rest_*' properties; a 3DGS scene has 0, 9, 24 or 45 (SH degree 0 to 3)"),
         })?;
-        let rows = |names: &[&str]| -> Result<Vec<Vec<f32>>, SceneError> { Ok(names.iter().map(|n| vertex.column_f32(n)).collect::<Result<_, _>>()?) };
+        let rows = |names: &[&str]| -> Result<Vec<Vec<f32>>, SceneError> {
+            Ok(names.iter().map(|n| vertex.column_f32(n)).collect::<Result<_, _>>()?)
+        };
         let positions = rows(&["x", "y", "z"])?;
         let log_scales = rows(&["scale_0", "scale_1", "scale_2"])?;
         let rotations = rows(&["rot_0", "rot_1", "rot_2", "rot_3"])?;
@@ -101,9 +118,13 @@ impl GaussianScene {
 
     /// Writes the scene as a binary 3DGS PLY, atomically (normals written as 0).
     pub fn write_ply(&self, path: &Path) -> Result<(), SceneError> {
-        self.check().map_err(|e| SceneError::File { path: path.to_path_buf(), problem: format!("not written: {e}") })?;
+        self.check().map_err(|e| SceneError::File {
+            path: path.to_path_buf(),
+            problem: format!("not written: {e}"),
+        })?;
         let k = self.coefficients();
-        let column = |value: &dyn Fn(usize) -> f32| ColumnOut::F32((0..self.len()).map(value).collect());
+        let column =
+            |value: &dyn Fn(usize) -> f32| ColumnOut::F32((0..self.len()).map(value).collect());
         let mut vertex = ElementOut::new("vertex");
         for (a, name) in ["x", "y", "z"].into_iter().enumerate() {
             vertex = vertex.with(name, column(&|i| self.positions[i][a]));
@@ -115,7 +136,10 @@ impl GaussianScene {
             vertex = vertex.with(&format!("f_dc_{ch}"), column(&|i| self.sh[i * k * 3 + ch]));
         }
         for (ch, coefficient) in (0..3).flat_map(|ch| (1..k).map(move |c| (ch, c))) {
-            vertex = vertex.with(&format!("f_rest_{}", ch * (k - 1) + coefficient - 1), column(&|i| self.sh[(i * k + coefficient) * 3 + ch]));
+            vertex = vertex.with(
+                &format!("f_rest_{}", ch * (k - 1) + coefficient - 1),
+                column(&|i| self.sh[(i * k + coefficient) * 3 + ch]),
+            );
         }
         vertex = vertex.with("opacity", column(&|i| self.opacity_logits[i]));
         for a in 0..3 {
@@ -134,7 +158,11 @@ fn read_sh(vertex: &PlyElement, degree: u32) -> Result<Vec<f32>, PlyError> {
     let mut sh = vec![0.0; vertex.len() * k * 3];
     for ch in 0..3 {
         for coefficient in 0..k {
-            let name = if coefficient == 0 { format!("f_dc_{ch}") } else { format!("f_rest_{}", ch * (k - 1) + coefficient - 1) };
+            let name = if coefficient == 0 {
+                format!("f_dc_{ch}")
+            } else {
+                format!("f_rest_{}", ch * (k - 1) + coefficient - 1)
+            };
             for (i, value) in vertex.column_f32(&name)?.into_iter().enumerate() {
                 sh[(i * k + coefficient) * 3 + ch] = value;
             }

@@ -121,7 +121,12 @@ impl Splatter {
     /// Renders `scene` from `camera` in one submission (two when the intersections outgrow
     /// the buffers). The outputs stay on the GPU ([`Self::rgba`], [`Self::depth`]) until the
     /// next forward; the returned times name every pass.
-    pub fn forward(&mut self, scene: &GaussianBuffers, camera: &Camera, settings: &RenderSettings) -> Result<PassTimes, SplatError> {
+    pub fn forward(
+        &mut self,
+        scene: &GaussianBuffers,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<PassTimes, SplatError> {
         loop {
             let frame = self.prepare_forward(scene, camera, settings)?;
             let mut rec = Recorder::new(&self.ctx)?;
@@ -136,12 +141,18 @@ impl Splatter {
     /// Sizes every buffer for rendering `scene` from `camera` and returns the frame to record
     /// with [`Self::record_forward`]. The intersection capacity only grows, so views with fewer
     /// intersections reuse it.
-    pub fn prepare_forward(&mut self, scene: &GaussianBuffers, camera: &Camera, settings: &RenderSettings) -> Result<FrameParams, SplatError> {
+    pub fn prepare_forward(
+        &mut self,
+        scene: &GaussianBuffers,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<FrameParams, SplatError> {
         settings.check()?;
         let frame = FrameParams::new(camera, settings, scene.len(), scene.sh_degree());
         self.ensure_scene(scene.len())?;
         self.ensure_image(&frame)?;
-        let wanted = (scene.len() as f64 * self.intersections_per_gaussian * CAPACITY_MARGIN) as usize;
+        let wanted =
+            (scene.len() as f64 * self.intersections_per_gaussian * CAPACITY_MARGIN) as usize;
         if wanted > self.keys.len() {
             self.resize_intersections(wanted)?;
         }
@@ -151,7 +162,12 @@ impl Splatter {
 
     /// Records the whole forward of `frame` (from [`Self::prepare_forward`]): project, count
     /// and scan tiles, emit and sort the intersections, find tile runs, rasterize.
-    pub fn record_forward<'a>(&'a self, rec: &mut Recorder<'a>, scene: &'a GaussianBuffers, frame: &FrameParams) -> Result<(), SplatError> {
+    pub fn record_forward<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        scene: &'a GaussianBuffers,
+        frame: &FrameParams,
+    ) -> Result<(), SplatError> {
         let (tiles_x, tiles_y) = tile_grid(frame.width(), frame.height());
         let tile_bits = u32::BITS - (tiles_x * tiles_y).saturating_sub(1).leading_zeros();
         rec.begin_pass("project");
@@ -162,7 +178,14 @@ impl Splatter {
         self.scan.record(rec, &self.tile_offsets, scene.len() + 1)?;
         // Unfilled slots keep all-ones keys: they sort last and name no tile.
         rec.fill_buffer(&self.keys, u32::MAX);
-        self.kernels.emit_intersections(rec, frame, &self.splats, &self.tile_offsets, &self.keys, &self.ids)?;
+        self.kernels.emit_intersections(
+            rec,
+            frame,
+            &self.splats,
+            &self.tile_offsets,
+            &self.keys,
+            &self.ids,
+        )?;
         rec.end_pass();
         rec.begin_pass("sort");
         self.sort.record(rec, &self.keys, &self.ids, self.keys.len(), 32 + tile_bits)?;
@@ -186,7 +209,8 @@ impl Splatter {
         let count = self.tile_offsets.read_range(n, 1)?[0] as usize;
         self.last_frame = Some(frame);
         self.last_intersections = count;
-        self.intersections_per_gaussian = self.intersections_per_gaussian.max(count as f64 / n.max(1) as f64);
+        self.intersections_per_gaussian =
+            self.intersections_per_gaussian.max(count as f64 / n.max(1) as f64);
         if count <= self.keys.len() {
             return Ok(true);
         }
@@ -247,12 +271,22 @@ impl Splatter {
             ("colour gradients", grad_rgba.len().min(frame.pixels()), frame.pixels()),
             ("depth gradients", grad_depth.len().min(frame.pixels()), frame.pixels()),
         ];
-        if let Some((what, len, expected)) = shapes.into_iter().find(|(_, len, expected)| len != expected) {
-            return Err(SplatError::Shape(format!("{what}: {len} where the forward needs {expected}")));
+        if let Some((what, len, expected)) =
+            shapes.into_iter().find(|(_, len, expected)| len != expected)
+        {
+            return Err(SplatError::Shape(format!(
+                "{what}: {len} where the forward needs {expected}"
+            )));
         }
         rec.begin_pass("rasterize backward");
         rec.fill_buffer(&self.grad2d, 0);
-        self.kernels.rasterize_backward(rec, frame, (&self.raster_inputs(), &self.raster_outputs()), image_grads, &self.grad2d);
+        self.kernels.rasterize_backward(
+            rec,
+            frame,
+            (&self.raster_inputs(), &self.raster_outputs()),
+            image_grads,
+            &self.grad2d,
+        );
         rec.end_pass();
         rec.begin_pass("project backward");
         self.kernels.project_backward(rec, frame, scene, &self.grad2d, grads, densify_stats)?;

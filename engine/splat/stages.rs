@@ -41,21 +41,74 @@ impl Kernels {
         // Constant 0 is the workgroup size, 1 the subgroup size (read by the rasterizers).
         let subgroup = ctx.limits().subgroup_size;
         let pipeline = |name, spirv, bindings, push_constant_bytes, workgroup: u32| {
-            ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes, specialization: &[workgroup, subgroup] })
+            ComputePipeline::new(
+                ctx,
+                &PipelineDesc {
+                    name,
+                    spirv,
+                    bindings,
+                    push_constant_bytes,
+                    specialization: &[workgroup, subgroup],
+                },
+            )
         };
         Ok(Self {
-            project: pipeline("splat project", shaders::SPLAT_PROJECT, 7, frame_bytes, LINEAR_WORKGROUP)?,
-            project_backward: pipeline("splat project backward", shaders::SPLAT_PROJECT_BACKWARD, 12, frame_bytes, LINEAR_WORKGROUP)?,
-            emit_intersections: pipeline("splat emit intersections", shaders::SPLAT_EMIT_INTERSECTIONS, 4, frame_bytes, LINEAR_WORKGROUP)?,
-            tile_ranges: pipeline("splat tile ranges", shaders::SPLAT_TILE_RANGES, 2, size_of::<RangeParams>() as u32, LINEAR_WORKGROUP)?,
-            rasterize: pipeline("splat rasterize", shaders::SPLAT_RASTERIZE, 6, frame_bytes, TILE_WORKGROUP)?,
-            rasterize_backward: pipeline("splat rasterize backward", shaders::SPLAT_RASTERIZE_BACKWARD, 9, frame_bytes, TILE_WORKGROUP)?,
+            project: pipeline(
+                "splat project",
+                shaders::SPLAT_PROJECT,
+                7,
+                frame_bytes,
+                LINEAR_WORKGROUP,
+            )?,
+            project_backward: pipeline(
+                "splat project backward",
+                shaders::SPLAT_PROJECT_BACKWARD,
+                12,
+                frame_bytes,
+                LINEAR_WORKGROUP,
+            )?,
+            emit_intersections: pipeline(
+                "splat emit intersections",
+                shaders::SPLAT_EMIT_INTERSECTIONS,
+                4,
+                frame_bytes,
+                LINEAR_WORKGROUP,
+            )?,
+            tile_ranges: pipeline(
+                "splat tile ranges",
+                shaders::SPLAT_TILE_RANGES,
+                2,
+                size_of::<RangeParams>() as u32,
+                LINEAR_WORKGROUP,
+            )?,
+            rasterize: pipeline(
+                "splat rasterize",
+                shaders::SPLAT_RASTERIZE,
+                6,
+                frame_bytes,
+                TILE_WORKGROUP,
+            )?,
+            rasterize_backward: pipeline(
+                "splat rasterize backward",
+                shaders::SPLAT_RASTERIZE_BACKWARD,
+                9,
+                frame_bytes,
+                TILE_WORKGROUP,
+            )?,
         })
     }
 
     /// Splats and per-Gaussian tile counts.
-    pub(crate) fn project<'a>(&'a self, rec: &mut Recorder<'a>, frame: &FrameParams, scene: &'a GaussianBuffers, splats: &'a GpuBuffer<Splat>, tile_counts: &'a GpuBuffer<u32>) -> GpuResult<()> {
-        let bindings: Vec<_> = scene.bindings().into_iter().chain([splats.binding(), tile_counts.binding()]).collect();
+    pub(crate) fn project<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        frame: &FrameParams,
+        scene: &'a GaussianBuffers,
+        splats: &'a GpuBuffer<Splat>,
+        tile_counts: &'a GpuBuffer<u32>,
+    ) -> GpuResult<()> {
+        let bindings: Vec<_> =
+            scene.bindings().into_iter().chain([splats.binding(), tile_counts.binding()]).collect();
         rec.dispatch_1d(&self.project, &bindings, frame, groups(frame.gaussians()))
     }
 
@@ -70,26 +123,65 @@ impl Kernels {
         grads: &'a GaussianBuffers,
         densify_stats: &'a GpuBuffer<[f32; 2]>,
     ) -> GpuResult<()> {
-        let bindings: Vec<_> = scene.bindings().into_iter().chain([grad2d.binding()]).chain(grads.bindings()).chain([densify_stats.binding()]).collect();
+        let bindings: Vec<_> = scene
+            .bindings()
+            .into_iter()
+            .chain([grad2d.binding()])
+            .chain(grads.bindings())
+            .chain([densify_stats.binding()])
+            .collect();
         rec.dispatch_1d(&self.project_backward, &bindings, frame, groups(frame.gaussians()))
     }
 
     /// (key, Gaussian) pairs from the scanned tile counts.
-    pub(crate) fn emit_intersections<'a>(&'a self, rec: &mut Recorder<'a>, frame: &FrameParams, splats: &'a GpuBuffer<Splat>, offsets: &'a GpuBuffer<u32>, keys: &'a GpuBuffer<u64>, ids: &'a GpuBuffer<u32>) -> GpuResult<()> {
+    pub(crate) fn emit_intersections<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        frame: &FrameParams,
+        splats: &'a GpuBuffer<Splat>,
+        offsets: &'a GpuBuffer<u32>,
+        keys: &'a GpuBuffer<u64>,
+        ids: &'a GpuBuffer<u32>,
+    ) -> GpuResult<()> {
         let bindings = [splats.binding(), offsets.binding(), keys.binding(), ids.binding()];
         rec.dispatch_1d(&self.emit_intersections, &bindings, frame, groups(frame.gaussians()))
     }
 
     /// Each tile's run in the sorted keys (all `keys.len()` slots, unfilled ones included);
     /// `ranges` must be zeroed first.
-    pub(crate) fn tile_ranges<'a>(&'a self, rec: &mut Recorder<'a>, frame: &FrameParams, keys: &'a GpuBuffer<u64>, ranges: &'a GpuBuffer<[u32; 2]>) -> GpuResult<()> {
+    pub(crate) fn tile_ranges<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        frame: &FrameParams,
+        keys: &'a GpuBuffer<u64>,
+        ranges: &'a GpuBuffer<[u32; 2]>,
+    ) -> GpuResult<()> {
         let (tiles_x, tiles_y) = frame.tiles();
-        let params = RangeParams { intersections: keys.len() as u32, tile_count: tiles_x * tiles_y };
-        rec.dispatch_1d(&self.tile_ranges, &[keys.binding(), ranges.binding()], &params, groups(keys.len()))
+        let params =
+            RangeParams { intersections: keys.len() as u32, tile_count: tiles_x * tiles_y };
+        rec.dispatch_1d(
+            &self.tile_ranges,
+            &[keys.binding(), ranges.binding()],
+            &params,
+            groups(keys.len()),
+        )
     }
 
-    pub(crate) fn rasterize<'a>(&'a self, rec: &mut Recorder<'a>, frame: &FrameParams, inputs: &RasterInputs<'a>, outputs: &RasterOutputs<'a>) {
-        let bindings = [inputs.splats.binding(), inputs.ranges.binding(), inputs.ids.binding(), outputs.rgba.binding(), outputs.depth.binding(), outputs.pixel_state.binding()];
+    pub(crate) fn rasterize<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        frame: &FrameParams,
+        inputs: &RasterInputs<'a>,
+        outputs: &RasterOutputs<'a>,
+    ) {
+        let bindings = [
+            inputs.splats.binding(),
+            inputs.ranges.binding(),
+            inputs.ids.binding(),
+            outputs.rgba.binding(),
+            outputs.depth.binding(),
+            outputs.pixel_state.binding(),
+        ];
         let (tiles_x, tiles_y) = frame.tiles();
         rec.dispatch(&self.rasterize, &bindings, frame, [tiles_x, tiles_y, 1]);
     }

@@ -15,8 +15,8 @@
 //! and `dataset.json` is written last, so a folder without it is an incomplete run.
 
 use super::gltf::{load_gltf, GltfError};
-use super::motion_stats::{motion_stats, MotionStats};
 use super::manifold::closed_manifold_problem;
+use super::motion_stats::{motion_stats, MotionStats};
 use super::raster::{render, RenderError};
 use super::texture::Texture;
 use super::Subject;
@@ -92,7 +92,17 @@ pub struct SynthOptions {
 
 impl Default for SynthOptions {
     fn default() -> Self {
-        Self { subject: SubjectSource::Procedural { subdivisions: 4 }, views: 8, frames: 8, resolution: 256, seed: 0, samples: 4, track_vertices: 100, track_surface: 200, motion: MotionPreset::Gentle }
+        Self {
+            subject: SubjectSource::Procedural { subdivisions: 4 },
+            views: 8,
+            frames: 8,
+            resolution: 256,
+            seed: 0,
+            samples: 4,
+            track_vertices: 100,
+            track_surface: 200,
+            motion: MotionPreset::Gentle,
+        }
     }
 }
 
@@ -138,8 +148,12 @@ pub struct SynthReport {
 /// Loads the subject the options name.
 pub fn load_subject(source: &SubjectSource) -> Result<Subject, SynthError> {
     match source {
-        SubjectSource::Procedural { subdivisions } if *subdivisions <= 6 => Ok(Subject::procedural(*subdivisions)),
-        SubjectSource::Procedural { subdivisions } => Err(SynthError::Options(format!("{subdivisions} subdivisions is more than 6"))),
+        SubjectSource::Procedural { subdivisions } if *subdivisions <= 6 => {
+            Ok(Subject::procedural(*subdivisions))
+        }
+        SubjectSource::Procedural { subdivisions } => {
+            Err(SynthError::Options(format!("{subdivisions} subdivisions is more than 6")))
+        }
         SubjectSource::Gltf { path, animation } => Ok(load_gltf(path, animation.as_deref())?),
     }
 }
@@ -149,12 +163,15 @@ pub fn generate(options: &SynthOptions, out: &Path) -> Result<SynthReport, Synth
     check_options(options)?;
     let subject = Subject { pace: options.motion.pace(), ..load_subject(&options.subject)? };
     let manifold_problem = closed_manifold_problem(subject.rest.len(), &subject.faces);
-    if let (Some(problem), SubjectSource::Procedural { .. }) = (&manifold_problem, &options.subject) {
+    if let (Some(problem), SubjectSource::Procedural { .. }) = (&manifold_problem, &options.subject)
+    {
         return Err(SynthError::Subject(problem.clone()));
     }
     let frames: Vec<Vec<[f32; 3]>> = (0..options.frames).map(|t| subject.positions(t)).collect();
     if let Some(t) = frames.iter().position(|f| f.iter().flatten().any(|v| !v.is_finite())) {
-        return Err(SynthError::Subject(format!("frame {t} has non-finite vertex positions after skinning")));
+        return Err(SynthError::Subject(format!(
+            "frame {t} has non-finite vertex positions after skinning"
+        )));
     }
     let (center, radius) = bounding_sphere(&frames);
     let cameras = place_cameras(options, center, radius)?;
@@ -163,14 +180,24 @@ pub fn generate(options: &SynthOptions, out: &Path) -> Result<SynthReport, Synth
     let colors = texture.vertex_colors(&subject.rest);
     let names: Vec<String> = (0..cameras.len()).map(|c| format!("cam{c:03}")).collect();
 
-    for dir in [out.join("cameras"), out.join("meshes")].into_iter().chain(names.iter().flat_map(|n| [out.join("images").join(n), out.join("masks").join(n)])) {
-        std::fs::create_dir_all(&dir).map_err(|source| SynthError::Io { path: dir.clone(), source })?;
+    for dir in [out.join("cameras"), out.join("meshes")]
+        .into_iter()
+        .chain(names.iter().flat_map(|n| [out.join("images").join(n), out.join("masks").join(n)]))
+    {
+        std::fs::create_dir_all(&dir)
+            .map_err(|source| SynthError::Io { path: dir.clone(), source })?;
     }
     for (k, (camera, name)) in cameras.iter().zip(&names).enumerate() {
-        camera.save_json(&own::camera_path(out, name)).map_err(|source| SynthError::Camera { camera: k, source })?;
+        camera
+            .save_json(&own::camera_path(out, name))
+            .map_err(|source| SynthError::Camera { camera: k, source })?;
     }
     for (t, positions) in frames.iter().enumerate() {
-        let mesh = TriMesh { positions: positions.clone(), faces: subject.faces.clone(), colors: Some(colors.clone()) };
+        let mesh = TriMesh {
+            positions: positions.clone(),
+            faces: subject.faces.clone(),
+            colors: Some(colors.clone()),
+        };
         mesh.write_ply(&out.join("meshes").join(format!("{}.ply", own::frame_name(t))))?;
     }
     write_tracks(out, &subject, &frames, &tracks)?;
@@ -187,7 +214,8 @@ pub fn generate(options: &SynthOptions, out: &Path) -> Result<SynthReport, Synth
     };
     let path = out.join(own::META);
     let text = serde_json::to_string_pretty(&meta).expect("plain data serializes");
-    crate::io::write_atomically(&path, |w| std::io::Write::write_all(w, text.as_bytes())).map_err(|source| SynthError::Io { path, source })?;
+    crate::io::write_atomically(&path, |w| std::io::Write::write_all(w, text.as_bytes()))
+        .map_err(|source| SynthError::Io { path, source })?;
     Ok(SynthReport {
         vertices: subject.rest.len(),
         faces: subject.faces.len(),
@@ -217,7 +245,10 @@ fn check_options(o: &SynthOptions) -> Result<(), SynthError> {
 /// it.
 fn bounding_sphere(frames: &[Vec<[f32; 3]>]) -> (DVec3, f64) {
     let points = || frames.iter().flatten().map(|p| DVec3::from(p.map(f64::from)));
-    let (lo, hi) = points().fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    let (lo, hi) = points()
+        .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        });
     let center = 0.5 * (lo + hi);
     (center, points().map(|p| p.distance(center)).fold(0.0, f64::max))
 }
@@ -236,8 +267,23 @@ fn place_cameras(o: &SynthOptions, center: DVec3, radius: f64) -> Result<Vec<Cam
             let azimuth = offset + std::f64::consts::TAU * k as f64 / o.views as f64;
             // Golden-ratio steps spread elevations evenly over [−10°, 35°] for any count.
             let elevation = (-10.0 + 45.0 * (k as f64 * 0.618_033_988_75).fract()).to_radians();
-            let dir = DVec3::new(elevation.cos() * azimuth.sin(), elevation.sin(), elevation.cos() * azimuth.cos());
-            Camera::look_at(o.resolution, o.resolution, focal, focal, 0.5 * size, 0.5 * size, center + distance * dir, center, DVec3::Y).map_err(|source| SynthError::Camera { camera: k, source })
+            let dir = DVec3::new(
+                elevation.cos() * azimuth.sin(),
+                elevation.sin(),
+                elevation.cos() * azimuth.cos(),
+            );
+            Camera::look_at(
+                o.resolution,
+                o.resolution,
+                focal,
+                focal,
+                0.5 * size,
+                0.5 * size,
+                center + distance * dir,
+                center,
+                DVec3::Y,
+            )
+            .map_err(|source| SynthError::Camera { camera: k, source })
         })
         .collect()
 }
@@ -251,7 +297,8 @@ fn track_points(subject: &Subject, o: &SynthOptions) -> Result<Vec<(u32, [f64; 3
             corner_of[v as usize].get_or_insert((f as u32, k));
         }
     }
-    let mut used: Vec<usize> = (0..subject.rest.len()).filter(|&v| corner_of[v].is_some()).collect();
+    let mut used: Vec<usize> =
+        (0..subject.rest.len()).filter(|&v| corner_of[v].is_some()).collect();
     let mut rng = SplitMix64::new(o.seed);
     let n = o.track_vertices.min(used.len());
     for i in 0..n {
@@ -269,12 +316,21 @@ fn track_points(subject: &Subject, o: &SynthOptions) -> Result<Vec<(u32, [f64; 3
         .collect();
     if o.track_surface > 0 {
         let frame0 = subject.positions(0);
-        points.extend(sample_surface(&frame0, &subject.faces, o.track_surface, o.seed ^ 0x74_7261_636b)?.into_iter().map(|s| (s.face, s.bary)));
+        points.extend(
+            sample_surface(&frame0, &subject.faces, o.track_surface, o.seed ^ 0x74_7261_636b)?
+                .into_iter()
+                .map(|s| (s.face, s.bary)),
+        );
     }
     Ok(points)
 }
 
-fn write_tracks(out: &Path, subject: &Subject, frames: &[Vec<[f32; 3]>], tracks: &[(u32, [f64; 3])]) -> Result<(), SynthError> {
+fn write_tracks(
+    out: &Path,
+    subject: &Subject,
+    frames: &[Vec<[f32; 3]>],
+    tracks: &[(u32, [f64; 3])],
+) -> Result<(), SynthError> {
     let io = |path: PathBuf| move |source| SynthError::Io { path, source };
     let path = out.join("bindings.csv");
     crate::io::write_atomically(&path, |w| {
@@ -290,7 +346,9 @@ fn write_tracks(out: &Path, subject: &Subject, frames: &[Vec<[f32; 3]>], tracks:
     for (t, positions) in frames.iter().enumerate() {
         for (id, (f, b)) in tracks.iter().enumerate() {
             let face = subject.faces[*f as usize];
-            let position = std::array::from_fn(|d| (0..3).map(|k| b[k] * positions[face[k] as usize][d] as f64).sum());
+            let position = std::array::from_fn(|d| {
+                (0..3).map(|k| b[k] * positions[face[k] as usize][d] as f64).sum()
+            });
             rows.push(TrackPoint { id: id.to_string(), frame: t as u32, position });
         }
     }
@@ -311,7 +369,15 @@ fn write_tracks(out: &Path, subject: &Subject, frames: &[Vec<[f32; 3]>], tracks:
 }
 
 /// Renders and writes every (frame, camera) image and mask, cameras split across threads.
-fn render_all(o: &SynthOptions, out: &Path, subject: &Subject, frames: &[Vec<[f32; 3]>], cameras: &[Camera], names: &[String], texture: &Texture) -> Result<(), SynthError> {
+fn render_all(
+    o: &SynthOptions,
+    out: &Path,
+    subject: &Subject,
+    frames: &[Vec<[f32; 3]>],
+    cameras: &[Camera],
+    names: &[String],
+    texture: &Texture,
+) -> Result<(), SynthError> {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(cameras.len());
     std::thread::scope(|scope| {
         let workers: Vec<_> = (0..threads)
@@ -319,15 +385,41 @@ fn render_all(o: &SynthOptions, out: &Path, subject: &Subject, frames: &[Vec<[f3
                 scope.spawn(move || -> Result<(), SynthError> {
                     for c in (w..cameras.len()).step_by(threads) {
                         for (t, positions) in frames.iter().enumerate() {
-                            let r = render(&cameras[c], positions, &subject.rest, &subject.faces, texture, o.samples).map_err(|source| SynthError::Render { frame: t, camera: c, source })?;
-                            write_png(&own::image_path(out, &names[c], t), &Image { width: r.width, height: r.height, channels: 3, data: r.rgb })?;
-                            write_png(&own::mask_path(out, &names[c], t), &Image { width: r.width, height: r.height, channels: 1, data: r.alpha })?;
+                            let r = render(
+                                &cameras[c],
+                                positions,
+                                &subject.rest,
+                                &subject.faces,
+                                texture,
+                                o.samples,
+                            )
+                            .map_err(|source| SynthError::Render { frame: t, camera: c, source })?;
+                            write_png(
+                                &own::image_path(out, &names[c], t),
+                                &Image {
+                                    width: r.width,
+                                    height: r.height,
+                                    channels: 3,
+                                    data: r.rgb,
+                                },
+                            )?;
+                            write_png(
+                                &own::mask_path(out, &names[c], t),
+                                &Image {
+                                    width: r.width,
+                                    height: r.height,
+                                    channels: 1,
+                                    data: r.alpha,
+                                },
+                            )?;
                         }
                     }
                     Ok(())
                 })
             })
             .collect();
-        workers.into_iter().try_for_each(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+        workers
+            .into_iter()
+            .try_for_each(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
     })
 }

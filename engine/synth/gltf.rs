@@ -51,15 +51,22 @@ pub struct GltfRig {
 pub fn load_gltf(path: &Path, animation: Option<&str>) -> Result<Subject, GltfError> {
     let fail = |problem: String| GltfError::Invalid { path: path.to_owned(), problem };
     let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read: {e}")))?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("not a valid glTF 2.0 file: {e}")))?;
+    let gltf = gltf::Gltf::from_slice(&bytes)
+        .map_err(|e| fail(format!("not a valid glTF 2.0 file: {e}")))?;
     let buffers = load_buffers(path, &gltf).map_err(fail)?;
     let get = |b: gltf::Buffer| buffers.get(b.index()).map(Vec::as_slice);
     let doc = &gltf.document;
 
-    let node = doc.nodes().find(|n| n.mesh().is_some() && n.skin().is_some()).ok_or_else(|| fail("has no skin: no node carries both a mesh and a skin".into()))?;
+    let node = doc
+        .nodes()
+        .find(|n| n.mesh().is_some() && n.skin().is_some())
+        .ok_or_else(|| fail("has no skin: no node carries both a mesh and a skin".into()))?;
     let (mesh, skin) = (node.mesh().expect("checked"), node.skin().expect("checked"));
     let chosen = match animation {
-        Some(name) => doc.animations().find(|a| a.name() == Some(name)).ok_or_else(|| fail(format!("has no animation named `{name}`")))?,
+        Some(name) => doc
+            .animations()
+            .find(|a| a.name() == Some(name))
+            .ok_or_else(|| fail(format!("has no animation named `{name}`")))?,
         None => doc.animations().next().ok_or_else(|| fail("has no animation".into()))?,
     };
 
@@ -69,7 +76,11 @@ pub fn load_gltf(path: &Path, animation: Option<&str>) -> Result<Subject, GltfEr
         None => vec![DMat4::IDENTITY; joints.len()],
     };
     if inverse_bind.len() != joints.len() {
-        return Err(fail(format!("skin has {} joints but {} inverse bind matrices", joints.len(), inverse_bind.len())));
+        return Err(fail(format!(
+            "skin has {} joints but {} inverse bind matrices",
+            joints.len(),
+            inverse_bind.len()
+        )));
     }
     let (rest, faces, weights) = read_primitives(&mesh, get, joints.len()).map_err(fail)?;
     let (rest, faces, weights) = weld(&rest, &faces, &weights);
@@ -84,14 +95,18 @@ pub fn load_gltf(path: &Path, animation: Option<&str>) -> Result<Subject, GltfEr
         }
     }
     let channels = read_channels(&chosen, get).map_err(fail)?;
-    let duration = channels.iter().flat_map(|c| c.times.last().copied()).fold(0.0f32, f32::max) as f64;
+    let duration =
+        channels.iter().flat_map(|c| c.times.last().copied()).fold(0.0f32, f32::max) as f64;
     let rig = GltfRig {
         parents,
         rest: doc.nodes().map(|n| n.transform().decomposed()).collect(),
         channels,
         joints,
         inverse_bind,
-        animation: chosen.name().map(str::to_owned).unwrap_or_else(|| format!("#{}", chosen.index())),
+        animation: chosen
+            .name()
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("#{}", chosen.index())),
         duration,
     };
     Ok(Subject { rest, faces, skin: weights, motion: super::Motion::Gltf(rig), pace: 1.0 })
@@ -102,8 +117,13 @@ fn load_buffers(path: &Path, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, String> 
     gltf.document
         .buffers()
         .map(|b| match b.source() {
-            gltf::buffer::Source::Bin => gltf.blob.clone().ok_or_else(|| "refers to a binary chunk it does not have".to_string()),
-            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => Err("embedded data: URIs are not supported (use .glb)".into()),
+            gltf::buffer::Source::Bin => gltf
+                .blob
+                .clone()
+                .ok_or_else(|| "refers to a binary chunk it does not have".to_string()),
+            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                Err("embedded data: URIs are not supported (use .glb)".into())
+            }
             gltf::buffer::Source::Uri(uri) => {
                 let file = path.parent().unwrap_or(Path::new(".")).join(uri);
                 std::fs::read(&file).map_err(|e| format!("buffer {}: {e}", file.display()))
@@ -112,7 +132,12 @@ fn load_buffers(path: &Path, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, String> 
         .zip(gltf.document.buffers())
         .map(|(data, b)| match data {
             // Accessors are validated against the declared length; hold the data to it.
-            Ok(data) if data.len() < b.length() => Err(format!("buffer {} holds {} bytes, declares {}", b.index(), data.len(), b.length())),
+            Ok(data) if data.len() < b.length() => Err(format!(
+                "buffer {} holds {} bytes, declares {}",
+                b.index(),
+                data.len(),
+                b.length()
+            )),
             other => other,
         })
         .collect()
@@ -121,7 +146,11 @@ fn load_buffers(path: &Path, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, String> 
 type Primitives = (Vec<[f32; 3]>, Vec<[u32; 3]>, SkinWeights);
 
 /// Triangle primitives merged into one indexed mesh with normalised weights.
-fn read_primitives<'s>(mesh: &gltf::Mesh, get: impl Clone + for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>, joint_count: usize) -> Result<Primitives, String> {
+fn read_primitives<'s>(
+    mesh: &gltf::Mesh,
+    get: impl Clone + for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
+    joint_count: usize,
+) -> Result<Primitives, String> {
     let (mut positions, mut faces) = (Vec::new(), Vec::new());
     let mut skin = SkinWeights { joints: Vec::new(), weights: Vec::new() };
     for (p, primitive) in mesh.primitives().enumerate() {
@@ -130,18 +159,35 @@ fn read_primitives<'s>(mesh: &gltf::Mesh, get: impl Clone + for<'b> Fn(gltf::Buf
         }
         let reader = primitive.reader(get.clone());
         let base = positions.len() as u32;
-        let pos: Vec<[f32; 3]> = reader.read_positions().ok_or(format!("primitive {p} has no POSITION"))?.collect();
-        let joints: Vec<[u16; 4]> = reader.read_joints(0).ok_or(format!("primitive {p} has no JOINTS_0 (not skinned)"))?.into_u16().collect();
-        let weights: Vec<[f32; 4]> = reader.read_weights(0).ok_or(format!("primitive {p} has no WEIGHTS_0 (not skinned)"))?.into_f32().collect();
+        let pos: Vec<[f32; 3]> =
+            reader.read_positions().ok_or(format!("primitive {p} has no POSITION"))?.collect();
+        let joints: Vec<[u16; 4]> = reader
+            .read_joints(0)
+            .ok_or(format!("primitive {p} has no JOINTS_0 (not skinned)"))?
+            .into_u16()
+            .collect();
+        let weights: Vec<[f32; 4]> = reader
+            .read_weights(0)
+            .ok_or(format!("primitive {p} has no WEIGHTS_0 (not skinned)"))?
+            .into_f32()
+            .collect();
         if joints.len() != pos.len() || weights.len() != pos.len() {
-            return Err(format!("primitive {p}: {} positions, {} joint sets, {} weight sets", pos.len(), joints.len(), weights.len()));
+            return Err(format!(
+                "primitive {p}: {} positions, {} joint sets, {} weight sets",
+                pos.len(),
+                joints.len(),
+                weights.len()
+            ));
         }
         if let Some(v) = pos.iter().position(|q| !q.iter().all(|c| c.is_finite())) {
             return Err(format!("primitive {p}: vertex {v} has a non-finite position"));
         }
         for (v, (j, w)) in joints.iter().zip(&weights).enumerate() {
             if let Some(k) = (0..4).find(|&k| w[k] != 0.0 && j[k] as usize >= joint_count) {
-                return Err(format!("primitive {p}: vertex {v} uses joint {} of a {joint_count}-joint skin", j[k]));
+                return Err(format!(
+                    "primitive {p}: vertex {v} uses joint {} of a {joint_count}-joint skin",
+                    j[k]
+                ));
             }
             let sum: f32 = w.iter().sum();
             if !(sum > 0.0 && sum.is_finite()) {
@@ -168,7 +214,8 @@ fn read_primitives<'s>(mesh: &gltf::Mesh, get: impl Clone + for<'b> Fn(gltf::Buf
 fn weld(positions: &[[f32; 3]], faces: &[[u32; 3]], skin: &SkinWeights) -> Primitives {
     let mut index: HashMap<[u32; 3], u32> = HashMap::new();
     let mut remap = Vec::with_capacity(positions.len());
-    let (mut out, mut out_skin) = (Vec::new(), SkinWeights { joints: Vec::new(), weights: Vec::new() });
+    let (mut out, mut out_skin) =
+        (Vec::new(), SkinWeights { joints: Vec::new(), weights: Vec::new() });
     for (v, p) in positions.iter().enumerate() {
         let key = p.map(|c| (c + 0.0).to_bits()); // + 0.0 folds −0 into +0
         let next = out.len() as u32;
@@ -180,31 +227,56 @@ fn weld(positions: &[[f32; 3]], faces: &[[u32; 3]], skin: &SkinWeights) -> Primi
         }
         remap.push(id);
     }
-    let faces = faces.iter().map(|f| f.map(|i| remap[i as usize])).filter(|f| f[0] != f[1] && f[1] != f[2] && f[2] != f[0]).collect();
+    let faces = faces
+        .iter()
+        .map(|f| f.map(|i| remap[i as usize]))
+        .filter(|f| f[0] != f[1] && f[1] != f[2] && f[2] != f[0])
+        .collect();
     (out, faces, out_skin)
 }
 
-fn read_channels<'s>(animation: &gltf::Animation, get: impl Clone + for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>) -> Result<Vec<Channel>, String> {
+fn read_channels<'s>(
+    animation: &gltf::Animation,
+    get: impl Clone + for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
+) -> Result<Vec<Channel>, String> {
     use gltf::animation::util::ReadOutputs;
     let mut channels = Vec::new();
     for (c, channel) in animation.channels().enumerate() {
         let reader = channel.reader(get.clone());
-        let times: Vec<f32> = reader.read_inputs().ok_or(format!("animation channel {c} has no input times"))?.collect();
-        let values: Vec<[f32; 4]> = match reader.read_outputs().ok_or(format!("animation channel {c} has no outputs"))? {
-            ReadOutputs::Translations(t) => t.map(|v| [v[0], v[1], v[2], 0.0]).collect(),
-            ReadOutputs::Scales(s) => s.map(|v| [v[0], v[1], v[2], 0.0]).collect(),
-            ReadOutputs::Rotations(r) => r.into_f32().collect(),
-            ReadOutputs::MorphTargetWeights(_) => continue, // morph targets do not move joints
-        };
+        let times: Vec<f32> = reader
+            .read_inputs()
+            .ok_or(format!("animation channel {c} has no input times"))?
+            .collect();
+        let values: Vec<[f32; 4]> =
+            match reader.read_outputs().ok_or(format!("animation channel {c} has no outputs"))? {
+                ReadOutputs::Translations(t) => t.map(|v| [v[0], v[1], v[2], 0.0]).collect(),
+                ReadOutputs::Scales(s) => s.map(|v| [v[0], v[1], v[2], 0.0]).collect(),
+                ReadOutputs::Rotations(r) => r.into_f32().collect(),
+                ReadOutputs::MorphTargetWeights(_) => continue, // morph targets do not move joints
+            };
         let interpolation = channel.sampler().interpolation();
         let per_key = if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
         if times.is_empty() || values.len() != times.len() * per_key {
-            return Err(format!("animation channel {c}: {} times but {} values", times.len(), values.len()));
+            return Err(format!(
+                "animation channel {c}: {} times but {} values",
+                times.len(),
+                values.len()
+            ));
         }
-        if times.windows(2).any(|w| !(w[1] > w[0])) || values.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(format!("animation channel {c}: times not increasing or values not finite"));
+        if times.windows(2).any(|w| !(w[1] > w[0]))
+            || values.iter().flatten().any(|v| !v.is_finite())
+        {
+            return Err(format!(
+                "animation channel {c}: times not increasing or values not finite"
+            ));
         }
-        channels.push(Channel { node: channel.target().node().index(), property: channel.target().property(), interpolation, times, values });
+        channels.push(Channel {
+            node: channel.target().node().index(),
+            property: channel.target().property(),
+            interpolation,
+            times,
+            values,
+        });
     }
     if channels.is_empty() {
         return Err("the animation moves no node".into());
@@ -231,16 +303,24 @@ impl Channel {
         match self.interpolation {
             Interpolation::Step => value(k),
             Interpolation::Linear if rotation => {
-                let (a, b) = (DQuat::from_array(value(k).map(f64::from)), DQuat::from_array(value(k + 1).map(f64::from)));
+                let (a, b) = (
+                    DQuat::from_array(value(k).map(f64::from)),
+                    DQuat::from_array(value(k + 1).map(f64::from)),
+                );
                 a.normalize().slerp(b.normalize(), s as f64).to_array().map(|v| v as f32)
             }
-            Interpolation::Linear => std::array::from_fn(|i| value(k)[i] + s * (value(k + 1)[i] - value(k)[i])),
+            Interpolation::Linear => {
+                std::array::from_fn(|i| value(k)[i] + s * (value(k + 1)[i] - value(k)[i]))
+            }
             Interpolation::CubicSpline => {
                 let (s2, s3) = (s * s, s * s * s);
                 let (v0, out0) = (self.values[3 * k + 1], self.values[3 * k + 2]);
                 let (in1, v1) = (self.values[3 * (k + 1)], self.values[3 * (k + 1) + 1]);
                 let mut r: [f32; 4] = std::array::from_fn(|i| {
-                    (2.0 * s3 - 3.0 * s2 + 1.0) * v0[i] + (s3 - 2.0 * s2 + s) * dt * out0[i] + (-2.0 * s3 + 3.0 * s2) * v1[i] + (s3 - s2) * dt * in1[i]
+                    (2.0 * s3 - 3.0 * s2 + 1.0) * v0[i]
+                        + (s3 - 2.0 * s2 + s) * dt * out0[i]
+                        + (-2.0 * s3 + 3.0 * s2) * v1[i]
+                        + (s3 - s2) * dt * in1[i]
                 });
                 if rotation {
                     let len = r.iter().map(|x| x * x).sum::<f32>().sqrt();
@@ -269,10 +349,18 @@ impl GltfRig {
         let local: Vec<DMat4> = trs
             .iter()
             .map(|(t, r, s)| {
-                DMat4::from_scale_rotation_translation(DVec3::from(s.map(f64::from)), DQuat::from_array(r.map(f64::from)).normalize(), DVec3::from(t.map(f64::from)))
+                DMat4::from_scale_rotation_translation(
+                    DVec3::from(s.map(f64::from)),
+                    DQuat::from_array(r.map(f64::from)).normalize(),
+                    DVec3::from(t.map(f64::from)),
+                )
             })
             .collect();
-        self.joints.iter().zip(&self.inverse_bind).map(|(&j, ib)| self.global(j, &local) * *ib).collect()
+        self.joints
+            .iter()
+            .zip(&self.inverse_bind)
+            .map(|(&j, ib)| self.global(j, &local) * *ib)
+            .collect()
     }
 
     /// Product of local transforms from the root down to `node` (the hierarchy is a forest; a

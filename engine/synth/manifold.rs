@@ -16,7 +16,11 @@ pub fn closed_manifold_problem(vertex_count: usize, faces: &[[u32; 3]]) -> Optio
         }
         for k in 0..3 {
             if directed.insert((face[k], face[(k + 1) % 3]), f).is_some() {
-                return Some(format!("edge {}→{} is used twice in the same direction (face {f})", face[k], face[(k + 1) % 3]));
+                return Some(format!(
+                    "edge {}→{} is used twice in the same direction (face {f})",
+                    face[k],
+                    face[(k + 1) % 3]
+                ));
             }
         }
     }
@@ -62,7 +66,16 @@ mod tests {
         assert!(closed_manifold_problem(4, &flipped).unwrap().contains("same direction"));
         assert!(closed_manifold_problem(5, &tetra).unwrap().contains("vertex 4"));
         // Two tetrahedra sharing vertex 0 only: closed, but 0 is pinched.
-        let two = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2], [0, 5, 4], [0, 4, 6], [4, 5, 6], [0, 6, 5]];
+        let two = [
+            [0, 2, 1],
+            [0, 1, 3],
+            [1, 2, 3],
+            [0, 3, 2],
+            [0, 5, 4],
+            [0, 4, 6],
+            [4, 5, 6],
+            [0, 6, 5],
+        ];
         assert!(closed_manifold_problem(7, &two).unwrap().contains("pinched"));
     }
 }

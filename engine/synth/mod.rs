@@ -17,7 +17,7 @@ pub mod raster;
 pub mod skinning;
 pub mod texture;
 
-pub use generate::{generate, MotionPreset, SynthOptions, SynthReport, SubjectSource};
+pub use generate::{generate, MotionPreset, SubjectSource, SynthOptions, SynthReport};
 pub use raster::{render, Render, RenderError};
 pub use skinning::{skin, SkinWeights};
 pub use texture::Texture;

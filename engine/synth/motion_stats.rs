@@ -15,10 +15,17 @@ pub struct MotionStats {
 /// The statistics of `frames` (same vertex count each); all zero for fewer than two frames or
 /// a subject of zero size.
 pub fn motion_stats(frames: &[Vec<[f32; 3]>]) -> MotionStats {
-    let size = frames.first().and_then(|f| crate::mesh::bounding_box(f)).map_or(0.0, |(lo, hi)| (hi - lo).max_element());
+    let size = frames
+        .first()
+        .and_then(|f| crate::mesh::bounding_box(f))
+        .map_or(0.0, |(lo, hi)| (hi - lo).max_element());
     let mut steps: Vec<f64> = frames
         .windows(2)
-        .flat_map(|pair| pair[0].iter().zip(&pair[1]).map(|(a, b)| (0..3).map(|k| (b[k] as f64 - a[k] as f64).powi(2)).sum::<f64>().sqrt()))
+        .flat_map(|pair| {
+            pair[0].iter().zip(&pair[1]).map(|(a, b)| {
+                (0..3).map(|k| (b[k] as f64 - a[k] as f64).powi(2)).sum::<f64>().sqrt()
+            })
+        })
         .collect();
     if steps.is_empty() || !(size > 0.0) {
         return MotionStats::default();
@@ -38,7 +45,9 @@ mod tests {
         let a = vec![[0.0, 0.0, 0.0], [2.0, 1.0, 0.0]];
         let b: Vec<[f32; 3]> = a.iter().map(|p| [p[0] + 0.2, p[1], p[2]]).collect();
         let s = motion_stats(&[a.clone(), b]);
-        assert!((s.mean - 0.1).abs() < 1e-6 && (s.max - 0.1).abs() < 1e-6 && (s.p90 - 0.1).abs() < 1e-6);
+        assert!(
+            (s.mean - 0.1).abs() < 1e-6 && (s.max - 0.1).abs() < 1e-6 && (s.p90 - 0.1).abs() < 1e-6
+        );
         assert_eq!(motion_stats(&[a]), MotionStats::default());
     }
 }

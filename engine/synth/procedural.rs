@@ -64,12 +64,17 @@ fn profile(limb: &Limb) -> (Vec<(f64, f64)>, Vec<f64>) {
     for i in 1..=n {
         let s = i as f64 / n as f64;
         let smooth = s * s * (3.0 - 2.0 * s);
-        points.push((shoulder_end - (shoulder_end - base_a) * s, limb.radius + (base_r - limb.radius) * smooth));
+        points.push((
+            shoulder_end - (shoulder_end - base_a) * s,
+            limb.radius + (base_r - limb.radius) * smooth,
+        ));
     }
     let mut area = vec![0.0];
     for w in points.windows(2) {
         let ds = ((w[1].0 - w[0].0).powi(2) + (w[1].1 - w[0].1).powi(2)).sqrt();
-        area.push(area.last().copied().unwrap_or(0.0) + std::f64::consts::PI * (w[0].1 + w[1].1) * ds);
+        area.push(
+            area.last().copied().unwrap_or(0.0) + std::f64::consts::PI * (w[0].1 + w[1].1) * ds,
+        );
     }
     (points, area)
 }
@@ -81,7 +86,8 @@ fn map_to_limb(u: DVec3, limb: &Limb, points: &[(f64, f64)], area: &[f64]) -> DV
     let fraction = (1.0 - theta.cos()) / (1.0 - limb.cap.cos());
     let target = fraction.clamp(0.0, 1.0) * area[area.len() - 1];
     let i = area.partition_point(|&a| a < target).clamp(1, area.len() - 1);
-    let t = if area[i] > area[i - 1] { (target - area[i - 1]) / (area[i] - area[i - 1]) } else { 0.0 };
+    let t =
+        if area[i] > area[i - 1] { (target - area[i - 1]) / (area[i] - area[i - 1]) } else { 0.0 };
     let a = points[i - 1].0 + t * (points[i].0 - points[i - 1].0);
     let r = points[i - 1].1 + t * (points[i].1 - points[i - 1].1);
     let radial = u - u.dot(limb.axis) * limb.axis;
@@ -113,7 +119,10 @@ pub fn procedural_subject(subdivisions: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>, S
                 let q = map_to_limb(u, limb, &profiles[k].0, &profiles[k].1);
                 let a = q.dot(limb.axis);
                 let (shoulder, elbow) = pivots(limb);
-                let (s, e) = (smoothstep(shoulder - 0.12, shoulder + 0.12, a), smoothstep(elbow - 0.15, elbow + 0.15, a));
+                let (s, e) = (
+                    smoothstep(shoulder - 0.12, shoulder + 0.12, a),
+                    smoothstep(elbow - 0.15, elbow + 0.15, a),
+                );
                 let j = 1 + 2 * k as u32;
                 (q, [0, j, j + 1, 0], [(1.0 - s) as f32, (s - e) as f32, e as f32, 0.0])
             }
@@ -131,10 +140,13 @@ pub fn procedural_subject(subdivisions: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>, S
 /// its elbow, about an axis across the limb. Time 0 is the rest pose.
 pub fn procedural_pose(time: f64) -> Vec<DMat4> {
     let phi = std::f64::consts::TAU * time / CYCLE_FRAMES;
-    let root = DMat4::from_translation(DVec3::new(0.0, 0.06 * (2.0 * phi).sin(), 0.0)) * DMat4::from_rotation_y(0.3 * phi.sin());
+    let root = DMat4::from_translation(DVec3::new(0.0, 0.06 * (2.0 * phi).sin(), 0.0))
+        * DMat4::from_rotation_y(0.3 * phi.sin());
     let mut joints = vec![root];
     let about = |pivot: DVec3, axis: DVec3, angle: f64| {
-        DMat4::from_translation(pivot) * DMat4::from_quat(DQuat::from_axis_angle(axis, angle)) * DMat4::from_translation(-pivot)
+        DMat4::from_translation(pivot)
+            * DMat4::from_quat(DQuat::from_axis_angle(axis, angle))
+            * DMat4::from_translation(-pivot)
     };
     for limb in limbs() {
         let (shoulder, elbow) = pivots(&limb);
@@ -167,7 +179,10 @@ mod tests {
             assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-6));
         }
         // Limbs reach out: the subject spans more than the body's diameter in x and y.
-        let span = |k: usize| p.iter().map(|q| q[k]).fold(f32::MIN, f32::max) - p.iter().map(|q| q[k]).fold(f32::MAX, f32::min);
+        let span = |k: usize| {
+            p.iter().map(|q| q[k]).fold(f32::MIN, f32::max)
+                - p.iter().map(|q| q[k]).fold(f32::MAX, f32::min)
+        };
         assert!(span(0) > 3.5 && span(1) > 3.0, "{} {}", span(0), span(1));
     }
 
@@ -175,11 +190,17 @@ mod tests {
     fn limbs_move_and_rigid_parts_stay_rigid() {
         let (p, _, w) = procedural_subject(3);
         let posed = skin(&p, &w, &procedural_pose(12.0));
-        let moved = p.iter().zip(&posed).filter(|(a, b)| (0..3).any(|k| (a[k] - b[k]).abs() > 0.05)).count();
+        let moved = p
+            .iter()
+            .zip(&posed)
+            .filter(|(a, b)| (0..3).any(|k| (a[k] - b[k]).abs() > 0.05))
+            .count();
         assert!(moved > p.len() / 4);
         // Two body vertices (root weight 1) keep their distance.
         let body: Vec<usize> = (0..p.len()).filter(|&i| w.weights[i][0] == 1.0).take(2).collect();
-        let d = |q: &[[f32; 3]]| (0..3).map(|k| (q[body[0]][k] - q[body[1]][k]).powi(2)).sum::<f32>().sqrt();
+        let d = |q: &[[f32; 3]]| {
+            (0..3).map(|k| (q[body[0]][k] - q[body[1]][k]).powi(2)).sum::<f32>().sqrt()
+        };
         assert!((d(&p) - d(&posed)).abs() < 1e-5);
     }
 }

@@ -29,7 +29,14 @@ pub enum RenderError {
 /// Renders `positions`/`faces` (closed surface, counter-clockwise from outside) from `camera`
 /// with `samples`² samples per pixel, colouring by `texture` at the interpolated `rest`
 /// positions. Every vertex must be in front of the camera.
-pub fn render(camera: &Camera, positions: &[[f32; 3]], rest: &[[f32; 3]], faces: &[[u32; 3]], texture: &Texture, samples: u32) -> Result<Render, RenderError> {
+pub fn render(
+    camera: &Camera,
+    positions: &[[f32; 3]],
+    rest: &[[f32; 3]],
+    faces: &[[u32; 3]],
+    texture: &Texture,
+    samples: u32,
+) -> Result<Render, RenderError> {
     let (w, h, s) = (camera.width as usize, camera.height as usize, samples.max(1) as usize);
     let (sw, sh) = (w * s, h * s);
     let mut view = Vec::with_capacity(positions.len());
@@ -39,7 +46,13 @@ pub fn render(camera: &Camera, positions: &[[f32; 3]], rest: &[[f32; 3]], faces:
             return Err(RenderError::BehindCamera { vertex, depth: c.z });
         }
         // Position in sample units: pixel coordinate × S.
-        view.push((c, [(camera.fx * c.x / c.z + camera.cx) * s as f64, (camera.fy * c.y / c.z + camera.cy) * s as f64]));
+        view.push((
+            c,
+            [
+                (camera.fx * c.x / c.z + camera.cx) * s as f64,
+                (camera.fy * c.y / c.z + camera.cy) * s as f64,
+            ],
+        ));
     }
     let mut depth = vec![f64::INFINITY; sw * sh];
     let mut color = vec![[0.0f32; 3]; sw * sh];
@@ -56,7 +69,8 @@ pub fn render(camera: &Camera, positions: &[[f32; 3]], rest: &[[f32; 3]], faces:
                 depth[sample] = z;
                 let mut p = DVec3::ZERO;
                 for (k, &i) in f.iter().enumerate() {
-                    p += (l[k] / [a.0.z, b.0.z, c.0.z][k] * z) * DVec3::from(rest[i as usize].map(f64::from));
+                    p += (l[k] / [a.0.z, b.0.z, c.0.z][k] * z)
+                        * DVec3::from(rest[i as usize].map(f64::from));
                 }
                 color[sample] = texture.color(p);
             }
@@ -67,8 +81,14 @@ pub fn render(camera: &Camera, positions: &[[f32; 3]], rest: &[[f32; 3]], faces:
 
 /// Calls `shade(sample index, screen barycentrics)` for every sample centre inside the
 /// triangle (sample-unit coordinates; edges inclusive; degenerate triangles cover nothing).
-fn rasterize_triangle(p: [[f64; 2]; 3], (sw, sh): (usize, usize), mut shade: impl FnMut(usize, [f64; 3])) {
-    let edge = |a: [f64; 2], b: [f64; 2], q: [f64; 2]| (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0]);
+fn rasterize_triangle(
+    p: [[f64; 2]; 3],
+    (sw, sh): (usize, usize),
+    mut shade: impl FnMut(usize, [f64; 3]),
+) {
+    let edge = |a: [f64; 2], b: [f64; 2], q: [f64; 2]| {
+        (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0])
+    };
     let area = edge(p[0], p[1], p[2]);
     if area == 0.0 || !area.is_finite() {
         return;
@@ -83,7 +103,11 @@ fn rasterize_triangle(p: [[f64; 2]; 3], (sw, sh): (usize, usize), mut shade: imp
     for y in y0..y1 {
         for x in x0..x1 {
             let q = [x as f64 + 0.5, y as f64 + 0.5];
-            let l = [edge(p[1], p[2], q) / area, edge(p[2], p[0], q) / area, edge(p[0], p[1], q) / area];
+            let l = [
+                edge(p[1], p[2], q) / area,
+                edge(p[2], p[0], q) / area,
+                edge(p[0], p[1], q) / area,
+            ];
             if l.iter().all(|&v| v >= 0.0) {
                 shade(y * sw + x, l);
             }
@@ -128,7 +152,16 @@ mod tests {
 
     fn camera(size: u32) -> Camera {
         // At the origin looking along +z.
-        Camera::new(size, size, size as f64, size as f64, size as f64 / 2.0, size as f64 / 2.0, DMat4::IDENTITY).unwrap()
+        Camera::new(
+            size,
+            size,
+            size as f64,
+            size as f64,
+            size as f64 / 2.0,
+            size as f64 / 2.0,
+            DMat4::IDENTITY,
+        )
+        .unwrap()
     }
 
     /// A square of side 2 at depth 4 facing the camera (CCW seen from the camera side).
@@ -150,7 +183,11 @@ mod tests {
         assert!(r.alpha.iter().all(|&a| a == 0.0 || a == 1.0), "pixel-aligned edges are hard");
         // Flipped winding faces away: nothing drawn.
         let back: Vec<[u32; 3]> = f.iter().map(|t| [t[0], t[2], t[1]]).collect();
-        assert!(render(&camera(64), &p, &p, &back, &tex, 2).unwrap().alpha.iter().all(|&a| a == 0.0));
+        assert!(render(&camera(64), &p, &p, &back, &tex, 2)
+            .unwrap()
+            .alpha
+            .iter()
+            .all(|&a| a == 0.0));
     }
 
     #[test]
@@ -184,6 +221,9 @@ mod tests {
         let (mut p, f) = square();
         p[1][2] = -1.0;
         let tex = Texture { center: DVec3::ZERO, radius: 1.0 };
-        assert_eq!(render(&camera(8), &p, &p, &f, &tex, 1).unwrap_err(), RenderError::BehindCamera { vertex: 1, depth: -1.0 });
+        assert_eq!(
+            render(&camera(8), &p, &p, &f, &tex, 1).unwrap_err(),
+            RenderError::BehindCamera { vertex: 1, depth: -1.0 }
+        );
     }
 }

@@ -35,7 +35,10 @@ mod tests {
     #[test]
     fn blends_two_transforms_linearly() {
         let rest = [[1.0, 0.0, 0.0], [0.0, 2.0, 0.0]];
-        let w = SkinWeights { joints: vec![[0, 1, 0, 0], [1, 0, 0, 0]], weights: vec![[0.25, 0.75, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]] };
+        let w = SkinWeights {
+            joints: vec![[0, 1, 0, 0], [1, 0, 0, 0]],
+            weights: vec![[0.25, 0.75, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]],
+        };
         let m = [DMat4::IDENTITY, DMat4::from_translation(DVec3::new(0.0, 0.0, 4.0))];
         let out = skin(&rest, &w, &m);
         assert_eq!(out, vec![[1.0, 0.0, 3.0], [0.0, 2.0, 4.0]]);

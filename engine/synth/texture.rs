@@ -22,7 +22,8 @@ impl Texture {
             hi = hi.max(p);
         }
         let center = 0.5 * (lo + hi);
-        let radius = rest.iter().map(|p| DVec3::from(p.map(f64::from)).distance(center)).fold(0.0, f64::max);
+        let radius =
+            rest.iter().map(|p| DVec3::from(p.map(f64::from)).distance(center)).fold(0.0, f64::max);
         Self { center, radius: if radius > 0.0 { radius } else { 1.0 } }
     }
 
@@ -30,14 +31,19 @@ impl Texture {
     #[inline]
     pub fn color(&self, p: DVec3) -> [f32; 3] {
         let q = 2.5 * (p - self.center) / self.radius;
-        let band = |a: f64, b: f64, shift: f64| 0.5 + 0.3 * (2.0 * a + shift + 0.8 * (1.3 * b).sin()).sin();
+        let band = |a: f64, b: f64, shift: f64| {
+            0.5 + 0.3 * (2.0 * a + shift + 0.8 * (1.3 * b).sin()).sin()
+        };
         let checker = ((9.0 * q.x).sin() * (9.0 * q.y).sin() * (9.0 * q.z).sin() * 6.0).tanh();
         let m = 0.78 + 0.17 * checker;
-        [band(q.x, q.y, 0.0) * m, band(q.y, q.z, 2.1) * m, band(q.z, q.x, 4.2) * m].map(|c| c as f32)
+        [band(q.x, q.y, 0.0) * m, band(q.y, q.z, 2.1) * m, band(q.z, q.x, 4.2) * m]
+            .map(|c| c as f32)
     }
 
     /// 8-bit vertex colours for rest positions.
     pub fn vertex_colors(&self, rest: &[[f32; 3]]) -> Vec<[u8; 3]> {
-        rest.iter().map(|p| self.color(DVec3::from(p.map(f64::from))).map(|c| (c * 255.0).round() as u8)).collect()
+        rest.iter()
+            .map(|p| self.color(DVec3::from(p.map(f64::from))).map(|c| (c * 255.0).round() as u8))
+            .collect()
     }
 }

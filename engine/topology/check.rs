@@ -40,7 +40,8 @@ impl ManifoldMesh {
                 return Some(problem);
             }
         }
-        (vertices != self.live_vertices).then(|| format!("{vertices} live vertices counted, {} recorded", self.live_vertices))
+        (vertices != self.live_vertices)
+            .then(|| format!("{vertices} live vertices counted, {} recorded", self.live_vertices))
     }
 
     fn twin_problem(&self, f: u32) -> Option<String> {
@@ -49,8 +50,16 @@ impl ManifoldMesh {
             if t == NONE {
                 continue;
             }
-            if !self.is_face_live(face_of(t)) || self.twin(t) != h || self.origin(t) != self.dest(h) || self.dest(t) != self.origin(h) {
-                return Some(format!("half-edge {h} ({}→{}) and its twin {t} do not match", self.origin(h), self.dest(h)));
+            if !self.is_face_live(face_of(t))
+                || self.twin(t) != h
+                || self.origin(t) != self.dest(h)
+                || self.dest(t) != self.origin(h)
+            {
+                return Some(format!(
+                    "half-edge {h} ({}→{}) and its twin {t} do not match",
+                    self.origin(h),
+                    self.dest(h)
+                ));
             }
         }
         None
@@ -64,7 +73,9 @@ impl ManifoldMesh {
         let boundary_edges = self.outgoing(v).filter(|&h| self.twin(h) == NONE).count();
         let fan = self.outgoing(v).count();
         if fan != incident {
-            return Some(format!("vertex {v}: its fan has {fan} of its {incident} faces (pinched)"));
+            return Some(format!(
+                "vertex {v}: its fan has {fan} of its {incident} faces (pinched)"
+            ));
         }
         let starts_on_boundary = self.twin(anchor) == NONE;
         if boundary_edges > 1 || (boundary_edges == 1 && !starts_on_boundary) {

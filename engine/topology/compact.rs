@@ -25,9 +25,11 @@ impl ManifoldMesh {
                 kept += 1;
             }
         }
-        let half_edge = |h: u32| if h == NONE { NONE } else { 3 * new_face[(h / 3) as usize] + h % 3 };
+        let half_edge =
+            |h: u32| if h == NONE { NONE } else { 3 * new_face[(h / 3) as usize] + h % 3 };
         let faces = self.faces().map(|f| self.face(f).map(|v| new_vertex[v as usize])).collect();
-        let twins = self.faces().flat_map(|f| 3 * f..3 * f + 3).map(|h| half_edge(self.twin(h))).collect();
+        let twins =
+            self.faces().flat_map(|f| 3 * f..3 * f + 3).map(|h| half_edge(self.twin(h))).collect();
         let mut anchors = Vec::with_capacity(old_of_new.len());
         let mut positions = Vec::with_capacity(old_of_new.len());
         for v in self.vertices() {

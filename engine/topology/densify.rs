@@ -43,7 +43,13 @@ pub struct DensifyReport {
 /// that saw the Gaussian), one entry per face row (0 for removed faces).
 pub fn face_scores(mesh: &ManifoldMesh, vertex_scores: &[f32]) -> Vec<f32> {
     (0..mesh.face_rows() as u32)
-        .map(|f| if mesh.is_face_live(f) { mesh.face(f).iter().map(|&v| vertex_scores[v as usize]).sum::<f32>() / 3.0 } else { 0.0 })
+        .map(|f| {
+            if mesh.is_face_live(f) {
+                mesh.face(f).iter().map(|&v| vertex_scores[v as usize]).sum::<f32>() / 3.0
+            } else {
+                0.0
+            }
+        })
         .collect()
 }
 
@@ -52,12 +58,22 @@ pub fn face_scores(mesh: &ManifoldMesh, vertex_scores: &[f32]) -> Vec<f32> {
 /// decreasing score order (ties by face index), and the new rows come in that order after the
 /// kept ones. The caller applies the returned `old_of_new` to its other per-vertex arrays.
 /// `mesh` must be compact.
-pub fn densify(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, scores: &[f32], config: &DensifyConfig) -> Result<DensifyReport, TopologyError> {
+pub fn densify(
+    mesh: &mut ManifoldMesh,
+    scene: &mut GaussianScene,
+    scores: &[f32],
+    config: &DensifyConfig,
+) -> Result<DensifyReport, TopologyError> {
     check_rows(mesh, scene)?;
     if scores.len() != mesh.face_rows() {
-        return Err(TopologyError::Mismatch(format!("{} face scores for {} faces", scores.len(), mesh.face_rows())));
+        return Err(TopologyError::Mismatch(format!(
+            "{} face scores for {} faces",
+            scores.len(),
+            mesh.face_rows()
+        )));
     }
-    let mut chosen: Vec<u32> = mesh.faces().filter(|&f| scores[f as usize] > config.threshold).collect();
+    let mut chosen: Vec<u32> =
+        mesh.faces().filter(|&f| scores[f as usize] > config.threshold).collect();
     chosen.sort_by(|&a, &b| scores[b as usize].total_cmp(&scores[a as usize]));
     chosen.truncate(config.max_splits);
     let mut parents = Vec::with_capacity(chosen.len());
@@ -80,7 +96,12 @@ pub fn densify(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, scores: &[f32
     report.flips = improve_angles(mesh, &touched);
     report.old_of_new = mesh.compact();
     let mut remapped = remap_scene(scene, &report.old_of_new, &parents);
-    report.halved = halve_large(&mut remapped, &report.old_of_new, &parents, config.large_scale * crate::mesh::bounding_diagonal(&mesh.positions) as f32);
+    report.halved = halve_large(
+        &mut remapped,
+        &report.old_of_new,
+        &parents,
+        config.large_scale * crate::mesh::bounding_diagonal(&mesh.positions) as f32,
+    );
     *scene = remapped;
     Ok(report)
 }
@@ -88,10 +109,16 @@ pub fn densify(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, scores: &[f32
 /// The mesh is compact and the scene has one row per vertex.
 pub(super) fn check_rows(mesh: &ManifoldMesh, scene: &GaussianScene) -> Result<(), TopologyError> {
     if mesh.vertex_rows() != mesh.vertex_count() || mesh.face_rows() != mesh.face_count() {
-        return Err(TopologyError::Mismatch("the mesh has removed rows: compact() it first".into()));
+        return Err(TopologyError::Mismatch(
+            "the mesh has removed rows: compact() it first".into(),
+        ));
     }
     if scene.len() != mesh.vertex_count() {
-        return Err(TopologyError::Mismatch(format!("{} Gaussians for {} mesh vertices", scene.len(), mesh.vertex_count())));
+        return Err(TopologyError::Mismatch(format!(
+            "{} Gaussians for {} mesh vertices",
+            scene.len(),
+            mesh.vertex_count()
+        )));
     }
     scene.check().map_err(|e| TopologyError::Mismatch(e.to_string()))
 }
@@ -99,9 +126,26 @@ pub(super) fn check_rows(mesh: &ManifoldMesh, scene: &GaussianScene) -> Result<(
 /// The scale rule on the remapped scene: each new Gaussian whose mean scale exceeds `large`
 /// gets its log-scales lowered by ln 2, and so does each of its corners (once). Returns how
 /// many Gaussians were halved.
-fn halve_large(scene: &mut GaussianScene, old_of_new: &[u32], parents: &[[u32; 3]], large: f32) -> usize {
-    let mut new_of_old = vec![NEW_ROW; old_of_new.iter().filter(|&&r| r != NEW_ROW).map(|&r| r as usize + 1).max().unwrap_or(0)];
-    old_of_new.iter().enumerate().filter(|(_, &r)| r != NEW_ROW).for_each(|(row, &r)| new_of_old[r as usize] = row as u32);
+fn halve_large(
+    scene: &mut GaussianScene,
+    old_of_new: &[u32],
+    parents: &[[u32; 3]],
+    large: f32,
+) -> usize {
+    let mut new_of_old = vec![
+        NEW_ROW;
+        old_of_new
+            .iter()
+            .filter(|&&r| r != NEW_ROW)
+            .map(|&r| r as usize + 1)
+            .max()
+            .unwrap_or(0)
+    ];
+    old_of_new
+        .iter()
+        .enumerate()
+        .filter(|(_, &r)| r != NEW_ROW)
+        .for_each(|(row, &r)| new_of_old[r as usize] = row as u32);
     let mut halve = vec![false; scene.len()];
     let new_rows = old_of_new.iter().enumerate().filter(|(_, &r)| r == NEW_ROW).map(|(row, _)| row);
     for (row, corners) in new_rows.zip(parents) {

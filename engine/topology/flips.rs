@@ -14,7 +14,8 @@ const FLIP_GAIN: f64 = 1.0 + 1e-3;
 /// Terminates: each flip strictly raises the minimum angle of its pair, and work is capped at
 /// 32 × the seeds.
 pub fn improve_angles(mesh: &mut ManifoldMesh, seeds: &[u32]) -> usize {
-    let mut queue: Vec<u32> = seeds.iter().filter(|&&f| mesh.is_face_live(f)).flat_map(|&f| 3 * f..3 * f + 3).collect();
+    let mut queue: Vec<u32> =
+        seeds.iter().filter(|&&f| mesh.is_face_live(f)).flat_map(|&f| 3 * f..3 * f + 3).collect();
     let budget = 32 * queue.len();
     let mut flips = 0;
     let mut visits = 0;
@@ -43,8 +44,10 @@ fn flip_helps(mesh: &ManifoldMesh, h: u32) -> bool {
     if t == NONE {
         return false;
     }
-    let [a, b, c, d] = [mesh.origin(h), mesh.dest(h), mesh.origin(prev(h)), mesh.origin(prev(t))].map(|v| mesh.point(v));
-    let (n0, n1) = (area_vector(a, b, c).normalize_or_zero(), area_vector(b, a, d).normalize_or_zero());
+    let [a, b, c, d] = [mesh.origin(h), mesh.dest(h), mesh.origin(prev(h)), mesh.origin(prev(t))]
+        .map(|v| mesh.point(v));
+    let (n0, n1) =
+        (area_vector(a, b, c).normalize_or_zero(), area_vector(b, a, d).normalize_or_zero());
     if n0.dot(n1) < FLIP_MIN_COS_BEND {
         return false;
     }

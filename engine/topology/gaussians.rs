@@ -44,21 +44,33 @@ pub fn vertex_normals(mesh: &ManifoldMesh) -> Vec<[f32; 3]> {
 /// axis on the vertex normal and x towards the first 1-ring neighbour; s_x = s_y from the mean
 /// neighbour distance, s_z small; opacity high; SH DC from `colors` (linear RGB in [0, 1], one
 /// per vertex; vertices past its end get grey 0.5), higher SH coefficients zero.
-pub fn gaussians_from_mesh(mesh: &ManifoldMesh, colors: &[[f32; 3]], config: &InitConfig) -> GaussianScene {
+pub fn gaussians_from_mesh(
+    mesh: &ManifoldMesh,
+    colors: &[[f32; 3]],
+    config: &InitConfig,
+) -> GaussianScene {
     let normals = vertex_normals(mesh);
     let n = mesh.vertex_rows();
     let coefficients = sh_coefficients(config.sh_degree);
-    let mut scene = GaussianScene { sh_degree: config.sh_degree, sh: vec![0.0; n * coefficients * 3], ..Default::default() };
+    let mut scene = GaussianScene {
+        sh_degree: config.sh_degree,
+        sh: vec![0.0; n * coefficients * 3],
+        ..Default::default()
+    };
     let logit = (config.opacity / (1.0 - config.opacity)).ln();
     for v in 0..n as u32 {
         let ring = if mesh.is_vertex_live(v) { mesh.ring(v) } else { Vec::new() };
         let p = mesh.point(v);
-        let mean = ring.iter().map(|&r| (mesh.point(r) - p).length()).sum::<f64>() / ring.len().max(1) as f64;
+        let mean = ring.iter().map(|&r| (mesh.point(r) - p).length()).sum::<f64>()
+            / ring.len().max(1) as f64;
         let tangent = (config.tangent_scale as f64 * mean).max(f64::MIN_POSITIVE).ln() as f32;
         let normal = (config.flatness as f64).ln() as f32 + tangent;
         scene.positions.push(mesh.positions[v as usize]);
         scene.log_scales.push([tangent, tangent, normal]);
-        scene.rotations.push(frame_quaternion(vec(normals[v as usize]), ring.first().map(|&r| mesh.point(r) - p)));
+        scene.rotations.push(frame_quaternion(
+            vec(normals[v as usize]),
+            ring.first().map(|&r| mesh.point(r) - p),
+        ));
         scene.opacity_logits.push(logit);
         let color = colors.get(v as usize).copied().unwrap_or([0.5; 3]);
         for (ch, c) in color.iter().enumerate() {
@@ -83,7 +95,9 @@ fn frame_quaternion(normal: DVec3, towards: Option<DVec3>) -> [f32; 4] {
 /// Linear RGB of every Gaussian's SH DC term.
 pub fn dc_colors(scene: &GaussianScene) -> Vec<[f32; 3]> {
     let stride = scene.coefficients() * 3;
-    (0..scene.len()).map(|i| [0, 1, 2].map(|ch| (0.5 + SH_C0 * scene.sh[i * stride + ch] as f64) as f32)).collect()
+    (0..scene.len())
+        .map(|i| [0, 1, 2].map(|ch| (0.5 + SH_C0 * scene.sh[i * stride + ch] as f64) as f32))
+        .collect()
 }
 
 /// The z axis (column 2 of the rotation) of a stored quaternion (w, x, y, z), normalised.

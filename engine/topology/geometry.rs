@@ -21,7 +21,8 @@ pub const DEGENERATE_RATIO: f64 = 1e-5;
 /// Whether a triangle is degenerate relative to its own size (see [`DEGENERATE_RATIO`]).
 #[inline]
 pub fn is_degenerate(a: DVec3, b: DVec3, c: DVec3) -> bool {
-    let longest = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
+    let longest =
+        (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
     // NaN areas count as degenerate.
     let area = area_vector(a, b, c).length();
     area.is_nan() || area <= DEGENERATE_RATIO * longest
@@ -53,7 +54,11 @@ pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let angle = |p: DVec3, q: DVec3, r: DVec3| {
         let (u, v) = (q - p, r - p);
         let denom = u.length() * v.length();
-        if denom > 0.0 { (u.dot(v) / denom).clamp(-1.0, 1.0).acos() } else { 0.0 }
+        if denom > 0.0 {
+            (u.dot(v) / denom).clamp(-1.0, 1.0).acos()
+        } else {
+            0.0
+        }
     };
     angle(a, b, c).min(angle(b, c, a)).min(angle(c, a, b))
 }

@@ -30,8 +30,13 @@ pub struct Imported {
 /// Imports `mesh` read from `path` (named in every error). Errors: non-finite positions, bad
 /// indices, non-manifold edges or vertices, a non-orientable surface, fewer than 4 faces, and
 /// an open surface when `require_closed`.
-pub fn import(mesh: &TriMesh, path: &Path, require_closed: bool) -> Result<Imported, TopologyError> {
-    import_arrays(mesh, require_closed).map_err(|e| TopologyError::InFile { path: path.to_path_buf(), source: Box::new(e) })
+pub fn import(
+    mesh: &TriMesh,
+    path: &Path,
+    require_closed: bool,
+) -> Result<Imported, TopologyError> {
+    import_arrays(mesh, require_closed)
+        .map_err(|e| TopologyError::InFile { path: path.to_path_buf(), source: Box::new(e) })
 }
 
 fn import_arrays(mesh: &TriMesh, require_closed: bool) -> Result<Imported, TopologyError> {
@@ -40,16 +45,26 @@ fn import_arrays(mesh: &TriMesh, require_closed: bool) -> Result<Imported, Topol
     }
     let n = mesh.positions.len();
     if let Some(f) = mesh.faces.iter().position(|face| face.iter().any(|&v| v as usize >= n)) {
-        return Err(TopologyError::IndexOutOfRange { face: f as u32, corners: mesh.faces[f], vertices: n });
+        return Err(TopologyError::IndexOutOfRange {
+            face: f as u32,
+            corners: mesh.faces[f],
+            vertices: n,
+        });
     }
-    let welded = weld(&mesh.positions, &mesh.faces, WELD_TOLERANCE * crate::mesh::bounding_diagonal(&mesh.positions) as f32);
+    let welded = weld(
+        &mesh.positions,
+        &mesh.faces,
+        WELD_TOLERANCE * crate::mesh::bounding_diagonal(&mesh.positions) as f32,
+    );
     let mut used = vec![false; welded.positions.len()];
     welded.faces.iter().flatten().for_each(|&v| used[v as usize] = true);
     let kept: Vec<u32> = (0..used.len() as u32).filter(|&v| used[v as usize]).collect();
     let mut new_of_welded = vec![0u32; used.len()];
     kept.iter().enumerate().for_each(|(new, &old)| new_of_welded[old as usize] = new as u32);
-    let mut faces: Vec<[u32; 3]> = welded.faces.iter().map(|f| f.map(|v| new_of_welded[v as usize])).collect();
-    let positions = remap_rows(&welded.positions, &kept, |_| unreachable!("compaction adds no rows"));
+    let mut faces: Vec<[u32; 3]> =
+        welded.faces.iter().map(|f| f.map(|v| new_of_welded[v as usize])).collect();
+    let positions =
+        remap_rows(&welded.positions, &kept, |_| unreachable!("compaction adds no rows"));
     if faces.len() < 4 {
         return Err(TopologyError::TooSmall { faces: faces.len() });
     }

@@ -28,12 +28,20 @@ pub struct ManifoldMesh {
 
 #[inline]
 pub fn next(h: u32) -> u32 {
-    if h % 3 == 2 { h - 2 } else { h + 1 }
+    if h % 3 == 2 {
+        h - 2
+    } else {
+        h + 1
+    }
 }
 
 #[inline]
 pub fn prev(h: u32) -> u32 {
-    if h % 3 == 0 { h + 2 } else { h - 1 }
+    if h % 3 == 0 {
+        h + 2
+    } else {
+        h - 1
+    }
 }
 
 #[inline]
@@ -54,7 +62,15 @@ impl ManifoldMesh {
         let n = positions.len();
         check_indices(n, &faces)?;
         let twins = twins_of(&faces)?;
-        let mut mesh = Self { positions, anchors: vec![NONE; n], twins, live_faces: faces.len(), live_vertices: n, synced_vertices: n, faces };
+        let mut mesh = Self {
+            positions,
+            anchors: vec![NONE; n],
+            twins,
+            live_faces: faces.len(),
+            live_vertices: n,
+            synced_vertices: n,
+            faces,
+        };
         for h in 0..mesh.twins.len() as u32 {
             let v = mesh.origin(h) as usize;
             if mesh.anchors[v] == NONE || mesh.twins[h as usize] == NONE {
@@ -305,7 +321,11 @@ impl Iterator for Outgoing<'_> {
 fn check_indices(n: usize, faces: &[[u32; 3]]) -> Result<(), TopologyError> {
     for (f, face) in faces.iter().enumerate() {
         if face.iter().any(|&v| v as usize >= n) {
-            return Err(TopologyError::IndexOutOfRange { face: f as u32, corners: *face, vertices: n });
+            return Err(TopologyError::IndexOutOfRange {
+                face: f as u32,
+                corners: *face,
+                vertices: n,
+            });
         }
         if face[0] == face[1] || face[1] == face[2] || face[2] == face[0] {
             return Err(TopologyError::DegenerateFace { face: f as u32, corners: *face });
@@ -321,7 +341,11 @@ fn twins_of(faces: &[[u32; 3]]) -> Result<Vec<u32>, TopologyError> {
         for k in 0..3 {
             let key = (face[k], face[(k + 1) % 3]);
             if let Some(&other) = directed.get(&key) {
-                return Err(TopologyError::NonManifoldEdge { a: key.0, b: key.1, faces: vec![other / 3, f as u32] });
+                return Err(TopologyError::NonManifoldEdge {
+                    a: key.0,
+                    b: key.1,
+                    faces: vec![other / 3, f as u32],
+                });
             }
             directed.insert(key, (3 * f + k) as u32);
         }

@@ -45,13 +45,13 @@
 //!   (`regularize::Neighbourhoods::from_mesh`).
 
 mod check;
-mod gaussians;
 mod compact;
 mod densify;
 mod flips;
+mod gaussians;
 mod geometry;
-mod mesh;
 mod import;
+mod mesh;
 mod ops;
 mod orient;
 mod prune;
@@ -60,16 +60,18 @@ mod scene_remap;
 pub mod shapes;
 mod weld;
 
-pub use gaussians::{dc_colors, gaussian_normal, gaussians_from_mesh, vertex_normals, InitConfig, SH_C0};
 pub use densify::{densify, face_scores, DensifyConfig, DensifyReport};
 pub use flips::improve_angles;
-pub use scene_remap::{average_quaternion, remap_scene};
-pub use prune::{mean_edge_length, prune, should_prune, PruneConfig, PruneReport};
+pub use gaussians::{
+    dc_colors, gaussian_normal, gaussians_from_mesh, vertex_normals, InitConfig, SH_C0,
+};
 pub use import::{import, ImportReport, Imported};
 pub use mesh::{face_of, next, prev, ManifoldMesh, Outgoing, NONE};
 pub use ops::{CollapseRefusal, FlipRefusal, SplitRefusal};
 pub use orient::orient_faces;
+pub use prune::{mean_edge_length, prune, should_prune, PruneConfig, PruneReport};
 pub use remap::{compose, remap_rows, remap_strided, NEW_ROW};
+pub use scene_remap::{average_quaternion, remap_scene};
 pub use weld::{weld, Welded};
 
 use crate::mesh::TriMesh;

@@ -55,7 +55,9 @@ pub enum CollapseRefusal {
     TooFewVertices,
     #[error("the link condition fails (the collapse would pinch two sheets)")]
     LinkCondition,
-    #[error("an interior edge joins two boundary vertices (the collapse would pinch the boundary)")]
+    #[error(
+        "an interior edge joins two boundary vertices (the collapse would pinch the boundary)"
+    )]
     BoundaryPinch,
     #[error("a vertex would keep no face")]
     DanglingVertex,
@@ -72,7 +74,8 @@ impl ManifoldMesh {
         let q = vec(point);
         for e in [h, self.twin(h)] {
             if e != NONE {
-                let [a, b, c] = [self.origin(e), self.dest(e), self.origin(prev(e))].map(|v| self.point(v));
+                let [a, b, c] =
+                    [self.origin(e), self.dest(e), self.origin(prev(e))].map(|v| self.point(v));
                 faces_agree(&[[a, q, c], [q, b, c]], area_vector(a, b, c))?;
             }
         }
@@ -129,7 +132,8 @@ impl ManifoldMesh {
         if t == NONE {
             return Err(FlipRefusal::Boundary);
         }
-        let (a, b, c, d) = (self.origin(h), self.dest(h), self.origin(prev(h)), self.origin(prev(t)));
+        let (a, b, c, d) =
+            (self.origin(h), self.dest(h), self.origin(prev(h)), self.origin(prev(t)));
         if self.are_neighbours(c, d) {
             return Err(FlipRefusal::EdgeExists);
         }
@@ -143,7 +147,8 @@ impl ManifoldMesh {
     pub fn flip_edge(&mut self, h: u32) -> Result<(), FlipRefusal> {
         self.can_flip(h)?;
         let t = self.twin(h);
-        let (a, b, c, d) = (self.origin(h), self.dest(h), self.origin(prev(h)), self.origin(prev(t)));
+        let (a, b, c, d) =
+            (self.origin(h), self.dest(h), self.origin(prev(h)), self.origin(prev(t)));
         let (f0, f1) = (face_of(h), face_of(t));
         self.faces[f0 as usize] = [a, d, c];
         self.faces[f1 as usize] = [d, b, c];
@@ -192,11 +197,20 @@ impl ManifoldMesh {
     fn ends(&self, h: u32, removed: u32) -> (u32, u32) {
         let (o, d) = (self.origin(h), self.dest(h));
         debug_assert!(removed == o || removed == d, "vertex {removed} is not on edge {o}–{d}");
-        if removed == o { (o, d) } else { (d, o) }
+        if removed == o {
+            (o, d)
+        } else {
+            (d, o)
+        }
     }
 
     /// Faces around `v` that do not contain `other`, with `v` moved to `point`.
-    fn check_moved_faces(&self, v: u32, other: u32, point: [f32; 3]) -> Result<(), CollapseRefusal> {
+    fn check_moved_faces(
+        &self,
+        v: u32,
+        other: u32,
+        point: [f32; 3],
+    ) -> Result<(), CollapseRefusal> {
         let q = vec(point);
         for e in self.outgoing(v) {
             let f = face_of(e);
@@ -229,7 +243,12 @@ impl ManifoldMesh {
         let (a, b) = self.ends(h, removed);
         let t = self.twin(h);
         let removed: Vec<u32> = [h, t].into_iter().filter(|&e| e != NONE).map(face_of).collect();
-        let mut touched: Vec<u32> = self.outgoing(a).chain(self.outgoing(b)).map(face_of).filter(|f| !removed.contains(f)).collect();
+        let mut touched: Vec<u32> = self
+            .outgoing(a)
+            .chain(self.outgoing(b))
+            .map(face_of)
+            .filter(|f| !removed.contains(f))
+            .collect();
         touched.sort_unstable();
         touched.dedup();
         for &f in &touched {
@@ -254,7 +273,9 @@ impl ManifoldMesh {
     pub(super) fn relink(&mut self, touched: &[u32]) {
         let inside: Vec<u32> = touched.iter().flat_map(|&f| 3 * f..3 * f + 3).collect();
         let mut outside: Vec<u32> = inside.iter().map(|&e| self.twin(e)).collect();
-        outside.retain(|&e| e != NONE && !touched.contains(&face_of(e)) && self.is_face_live(face_of(e)));
+        outside.retain(|&e| {
+            e != NONE && !touched.contains(&face_of(e)) && self.is_face_live(face_of(e))
+        });
         for &e in &outside {
             self.twins[e as usize] = NONE;
         }
@@ -264,7 +285,11 @@ impl ManifoldMesh {
         for (i, &e) in inside.iter().enumerate() {
             let (from, to) = (self.origin(e), self.dest(e));
             let matches = |g: &u32| self.origin(*g) == to && self.dest(*g) == from;
-            let partner = inside[i + 1..].iter().chain(outside.iter()).copied().find(|g| matches(g) && self.twin(*g) == NONE);
+            let partner = inside[i + 1..]
+                .iter()
+                .chain(outside.iter())
+                .copied()
+                .find(|g| matches(g) && self.twin(*g) == NONE);
             if let Some(g) = partner {
                 self.link(e, g);
             }

@@ -8,7 +8,10 @@ use std::collections::HashMap;
 /// follow the first face of the component; then a closed component is turned outward (positive
 /// signed volume) and an open one keeps the orientation of most of its input faces. Errors: an
 /// edge with more than two faces, a non-orientable component (a Möbius strip).
-pub fn orient_faces(positions: &[[f32; 3]], faces: &mut [[u32; 3]]) -> Result<usize, TopologyError> {
+pub fn orient_faces(
+    positions: &[[f32; 3]],
+    faces: &mut [[u32; 3]],
+) -> Result<usize, TopologyError> {
     let edges = edge_faces(faces)?;
     let mut flip: Vec<Option<bool>> = vec![None; faces.len()];
     let mut flipped = 0;
@@ -43,7 +46,11 @@ fn key(face: [u32; 3], k: usize) -> (u32, u32) {
 
 #[inline]
 fn oriented(face: [u32; 3], flip: bool) -> [u32; 3] {
-    if flip { [face[0], face[2], face[1]] } else { face }
+    if flip {
+        [face[0], face[2], face[1]]
+    } else {
+        face
+    }
 }
 
 /// Whether `face` runs its edge from `a` to `b`.
@@ -69,7 +76,12 @@ fn edge_faces(faces: &[[u32; 3]]) -> Result<HashMap<(u32, u32), Vec<u32>>, Topol
 
 /// Breadth-first over edge neighbours from `seed`, recording in `flip` whether each face must
 /// be reversed to agree with the seed; returns the component.
-fn orient_component(faces: &[[u32; 3]], edges: &HashMap<(u32, u32), Vec<u32>>, seed: usize, flip: &mut [Option<bool>]) -> Result<Vec<usize>, TopologyError> {
+fn orient_component(
+    faces: &[[u32; 3]],
+    edges: &HashMap<(u32, u32), Vec<u32>>,
+    seed: usize,
+    flip: &mut [Option<bool>],
+) -> Result<Vec<usize>, TopologyError> {
     flip[seed] = Some(false);
     let mut component = vec![seed];
     let mut at = 0;
@@ -90,7 +102,9 @@ fn orient_component(faces: &[[u32; 3]], edges: &HashMap<(u32, u32), Vec<u32>>, s
                         flip[g] = Some(needs_flip);
                         component.push(g);
                     }
-                    Some(have) if have != needs_flip => return Err(TopologyError::NonOrientable { face: g as u32 }),
+                    Some(have) if have != needs_flip => {
+                        return Err(TopologyError::NonOrientable { face: g as u32 })
+                    }
                     Some(_) => {}
                 }
             }
@@ -109,8 +123,24 @@ mod tests {
     use super::*;
 
     fn octahedron() -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-        let positions = vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
-        let faces = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        let positions = vec![
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+        ];
+        let faces = vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
         (positions, faces)
     }
 
@@ -130,7 +160,8 @@ mod tests {
     fn moebius_strip_is_refused() {
         // Six quads (12 triangles) around a loop, glued with a half twist.
         let n = 6u32;
-        let positions: Vec<[f32; 3]> = (0..2 * n).map(|i| [i as f32, (i % 2) as f32, 0.0]).collect();
+        let positions: Vec<[f32; 3]> =
+            (0..2 * n).map(|i| [i as f32, (i % 2) as f32, 0.0]).collect();
         let mut faces = Vec::new();
         for i in 0..n {
             let (a, b) = (2 * i, 2 * i + 1);
@@ -138,6 +169,9 @@ mod tests {
             faces.push([a, b, d]);
             faces.push([a, d, c]);
         }
-        assert!(matches!(orient_faces(&positions, &mut faces), Err(TopologyError::NonOrientable { .. })));
+        assert!(matches!(
+            orient_faces(&positions, &mut faces),
+            Err(TopologyError::NonOrientable { .. })
+        ));
     }
 }

@@ -2,10 +2,10 @@
 //! cheapest legal collapse, C = w_g·‖pᵢ − pⱼ‖ / mean edge + w_a·‖cᵢ − cⱼ‖ (seed eq. after 8).
 
 use super::densify::check_rows;
-use super::TopologyError;
 use super::gaussians::dc_colors;
 use super::mesh::{ManifoldMesh, NONE};
 use super::scene_remap::remap_scene;
+use super::TopologyError;
 use crate::splat::GaussianScene;
 
 /// Pruning settings (scale-free: lengths relative to the extent or the mean edge).
@@ -49,7 +49,11 @@ pub fn should_prune(scene: &GaussianScene, i: usize, config: &PruneConfig, exten
 /// keeps its own position and parameters), compacts, and remaps `scene` (rows = the mesh's
 /// vertex rows) in place. The caller applies the returned `old_of_new` to its other per-vertex
 /// arrays. `mesh` must be compact.
-pub fn prune(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, config: &PruneConfig) -> Result<PruneReport, TopologyError> {
+pub fn prune(
+    mesh: &mut ManifoldMesh,
+    scene: &mut GaussianScene,
+    config: &PruneConfig,
+) -> Result<PruneReport, TopologyError> {
     check_rows(mesh, scene)?;
     let extent = crate::mesh::bounding_diagonal(&mesh.positions) as f32;
     let mean_edge = mean_edge_length(mesh);
@@ -65,7 +69,10 @@ pub fn prune(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, config: &PruneC
         }
         let cost = |j: u32| {
             let dp = (mesh.point(i) - mesh.point(j)).length() as f32;
-            let dc = (0..3).map(|k| (colors[i as usize][k] - colors[j as usize][k]).powi(2)).sum::<f32>().sqrt();
+            let dc = (0..3)
+                .map(|k| (colors[i as usize][k] - colors[j as usize][k]).powi(2))
+                .sum::<f32>()
+                .sqrt();
             config.w_g * dp / mean_edge + config.w_a * dc
         };
         let mut ring: Vec<(f32, u32)> = mesh.ring(i).into_iter().map(|j| (cost(j), j)).collect();
@@ -87,6 +94,12 @@ pub fn prune(mesh: &mut ManifoldMesh, scene: &mut GaussianScene, config: &PruneC
 
 /// Mean length of the live edges (1 for a mesh without edges, so costs stay finite).
 pub fn mean_edge_length(mesh: &ManifoldMesh) -> f32 {
-    let (sum, count) = mesh.edges().fold((0.0f64, 0usize), |(s, c), h| (s + (mesh.point(mesh.origin(h)) - mesh.point(mesh.dest(h))).length(), c + 1));
-    if count > 0 && sum > 0.0 { (sum / count as f64) as f32 } else { 1.0 }
+    let (sum, count) = mesh.edges().fold((0.0f64, 0usize), |(s, c), h| {
+        (s + (mesh.point(mesh.origin(h)) - mesh.point(mesh.dest(h))).length(), c + 1)
+    });
+    if count > 0 && sum > 0.0 {
+        (sum / count as f64) as f32
+    } else {
+        1.0
+    }
 }

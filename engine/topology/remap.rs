@@ -12,9 +12,16 @@ pub const NEW_ROW: u32 = u32::MAX;
 /// written by `fill(new_row, row_values)` (which receives the row zeroed to `T::default()`).
 /// Panics if an index in `old_of_new` is past the old rows (it comes from this module, not from
 /// user data).
-pub fn remap_strided<T: Copy + Default>(old: &[T], stride: usize, old_of_new: &[u32], mut fill: impl FnMut(usize, &mut [T])) -> Vec<T> {
+pub fn remap_strided<T: Copy + Default>(
+    old: &[T],
+    stride: usize,
+    old_of_new: &[u32],
+    mut fill: impl FnMut(usize, &mut [T]),
+) -> Vec<T> {
     let mut out = vec![T::default(); old_of_new.len() * stride];
-    for (row, (&from, dst)) in old_of_new.iter().zip(out.chunks_exact_mut(stride.max(1))).enumerate() {
+    for (row, (&from, dst)) in
+        old_of_new.iter().zip(out.chunks_exact_mut(stride.max(1))).enumerate()
+    {
         if from == NEW_ROW {
             fill(row, dst);
         } else {
@@ -26,7 +33,11 @@ pub fn remap_strided<T: Copy + Default>(old: &[T], stride: usize, old_of_new: &[
 }
 
 /// [`remap_strided`] with one `T` per row; new rows get `fill(new_row)`.
-pub fn remap_rows<T: Copy + Default>(old: &[T], old_of_new: &[u32], mut fill: impl FnMut(usize) -> T) -> Vec<T> {
+pub fn remap_rows<T: Copy + Default>(
+    old: &[T],
+    old_of_new: &[u32],
+    mut fill: impl FnMut(usize) -> T,
+) -> Vec<T> {
     remap_strided(old, 1, old_of_new, |row, dst| dst[0] = fill(row))
 }
 

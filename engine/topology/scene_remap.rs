@@ -9,7 +9,11 @@ use crate::splat::GaussianScene;
 /// arithmetically, rotations as the normalised sum of the parents' unit quaternions, each
 /// turned to the hemisphere of the first (q and −q are one rotation).
 /// Panics when `parents` has fewer entries than there are new rows (a bug of the caller).
-pub fn remap_scene(scene: &GaussianScene, old_of_new: &[u32], parents: &[[u32; 3]]) -> GaussianScene {
+pub fn remap_scene(
+    scene: &GaussianScene,
+    old_of_new: &[u32],
+    parents: &[[u32; 3]],
+) -> GaussianScene {
     let mut parent_of_row = vec![usize::MAX; old_of_new.len()];
     let mut k = 0;
     for (row, &from) in old_of_new.iter().enumerate() {
@@ -28,11 +32,17 @@ pub fn remap_scene(scene: &GaussianScene, old_of_new: &[u32], parents: &[[u32; 3
     GaussianScene {
         positions: remap_rows(&scene.positions, old_of_new, |row| mean3(&scene.positions, row)),
         log_scales: remap_rows(&scene.log_scales, old_of_new, |row| mean3(&scene.log_scales, row)),
-        rotations: remap_rows(&scene.rotations, old_of_new, |row| average_quaternion(corners(row).map(|p| scene.rotations[p]))),
-        opacity_logits: remap_rows(&scene.opacity_logits, old_of_new, |row| corners(row).iter().map(|&p| scene.opacity_logits[p]).sum::<f32>() / 3.0),
+        rotations: remap_rows(&scene.rotations, old_of_new, |row| {
+            average_quaternion(corners(row).map(|p| scene.rotations[p]))
+        }),
+        opacity_logits: remap_rows(&scene.opacity_logits, old_of_new, |row| {
+            corners(row).iter().map(|&p| scene.opacity_logits[p]).sum::<f32>() / 3.0
+        }),
         sh: remap_strided(&scene.sh, stride, old_of_new, |row, dst| {
             for p in corners(row) {
-                dst.iter_mut().zip(&scene.sh[p * stride..(p + 1) * stride]).for_each(|(d, s)| *d += s / 3.0);
+                dst.iter_mut()
+                    .zip(&scene.sh[p * stride..(p + 1) * stride])
+                    .for_each(|(d, s)| *d += s / 3.0);
             }
         }),
         sh_degree: scene.sh_degree,
@@ -44,16 +54,25 @@ pub fn remap_scene(scene: &GaussianScene, old_of_new: &[u32], parents: &[[u32; 3
 pub fn average_quaternion(qs: [[f32; 4]; 3]) -> [f32; 4] {
     let unit = |q: [f32; 4]| {
         let n = q.iter().map(|c| c * c).sum::<f32>().sqrt();
-        if n > 0.0 { q.map(|c| c / n) } else { [1.0, 0.0, 0.0, 0.0] }
+        if n > 0.0 {
+            q.map(|c| c / n)
+        } else {
+            [1.0, 0.0, 0.0, 0.0]
+        }
     };
     let first = unit(qs[0]);
     let mut sum = [0.0f32; 4];
     for q in qs.map(unit) {
-        let sign = if q.iter().zip(&first).map(|(a, b)| a * b).sum::<f32>() < 0.0 { -1.0 } else { 1.0 };
+        let sign =
+            if q.iter().zip(&first).map(|(a, b)| a * b).sum::<f32>() < 0.0 { -1.0 } else { 1.0 };
         sum.iter_mut().zip(q).for_each(|(s, c)| *s += sign * c);
     }
     let n = sum.iter().map(|c| c * c).sum::<f32>().sqrt();
-    if n > 1e-6 { sum.map(|c| c / n) } else { first }
+    if n > 1e-6 {
+        sum.map(|c| c / n)
+    } else {
+        first
+    }
 }
 
 #[cfg(test)]

@@ -22,7 +22,8 @@ pub fn torus(major: u32, minor: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
 /// A flat `columns × rows` grid of unit cells in the z = 0 plane (both ≥ 1), counter-clockwise
 /// seen from +z: an open disk with Euler characteristic 1.
 pub fn grid(columns: u32, rows: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-    let positions = (0..=columns).flat_map(|i| (0..=rows).map(move |j| [i as f32, j as f32, 0.0])).collect();
+    let positions =
+        (0..=columns).flat_map(|i| (0..=rows).map(move |j| [i as f32, j as f32, 0.0])).collect();
     let id = |i: u32, j: u32| i * (rows + 1) + j;
     (positions, quads(columns, rows, id))
 }

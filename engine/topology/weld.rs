@@ -19,14 +19,21 @@ pub struct Welded {
 pub fn weld(positions: &[[f32; 3]], faces: &[[u32; 3]], tolerance: f32) -> Welded {
     // Exact mode keys on the bits (+0.0 folds -0.0 into 0.0) and looks in one cell only.
     let exact = tolerance.is_nan() || tolerance <= 0.0;
-    let cell_of = |p: [f32; 3]| p.map(|c| if exact { (c + 0.0).to_bits() as i64 } else { (c / tolerance).floor() as i64 });
+    let cell_of = |p: [f32; 3]| {
+        p.map(|c| if exact { (c + 0.0).to_bits() as i64 } else { (c / tolerance).floor() as i64 })
+    };
     let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
     let mut new_of_old = vec![NEW_ROW; positions.len()];
     let mut old_of_new = Vec::new();
     let mut kept = Vec::new();
     for (v, &p) in positions.iter().enumerate() {
         let c = cell_of(p);
-        let near = neighbour_cells(c, exact).find_map(|n| grid.get(&n)?.iter().copied().find(|&k| distance(kept[k as usize], p) <= tolerance.max(0.0)));
+        let near = neighbour_cells(c, exact).find_map(|n| {
+            grid.get(&n)?
+                .iter()
+                .copied()
+                .find(|&k| distance(kept[k as usize], p) <= tolerance.max(0.0))
+        });
         new_of_old[v] = match near {
             Some(k) => k,
             None => {
@@ -38,7 +45,8 @@ pub fn weld(positions: &[[f32; 3]], faces: &[[u32; 3]], tolerance: f32) -> Welde
         };
     }
     let remapped = faces.iter().map(|f| f.map(|v| new_of_old[v as usize]));
-    let welded: Vec<[u32; 3]> = remapped.filter(|f| f[0] != f[1] && f[1] != f[2] && f[2] != f[0]).collect();
+    let welded: Vec<[u32; 3]> =
+        remapped.filter(|f| f[0] != f[1] && f[1] != f[2] && f[2] != f[0]).collect();
     Welded { positions: kept, dropped_faces: faces.len() - welded.len(), faces: welded, old_of_new }
 }
 
@@ -59,7 +67,14 @@ mod tests {
     #[test]
     fn seam_duplicates_merge_and_collapsed_faces_drop() {
         // Two triangles of a quad exported with a seam: vertices 1/3 and 2/4 coincide.
-        let positions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 1e-7], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+        let positions = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 0.0, 1e-7],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 0.0],
+        ];
         let faces = [[0, 1, 2], [3, 5, 4], [1, 3, 2]];
         let w = weld(&positions, &faces, 1e-5);
         assert_eq!(w.old_of_new, vec![0, 1, 2, 5]);

@@ -40,7 +40,11 @@ pub struct TrackBenchReport {
 
 /// Runs the benchmark on the unit sphere subdivided `level` times (level 7: 131 072
 /// triangles) with `queries` random queries near the surface, `repetitions` builds.
-pub fn bench_track(level: u32, queries: usize, repetitions: usize) -> Result<TrackBenchReport, TrackError> {
+pub fn bench_track(
+    level: u32,
+    queries: usize,
+    repetitions: usize,
+) -> Result<TrackBenchReport, TrackError> {
     let (positions, faces) = unit_sphere(level);
     let mut build_ms = f64::INFINITY;
     let mut bvh = None;
@@ -60,21 +64,35 @@ pub fn bench_track(level: u32, queries: usize, repetitions: usize) -> Result<Tra
     };
     // Points up to QUERY_OFFSET of the radius off the surface (tracked points sit near it);
     // rays from outside towards a random point inside.
-    let points: Vec<DVec3> = (0..queries).map(|i| random_unit() * (1.0 + QUERY_OFFSET * (2.0 * i as f64 / queries.max(1) as f64 - 1.0))).collect();
-    let rays: Vec<(DVec3, DVec3)> = (0..queries).map(|_| (random_unit() * 3.0, random_unit() * 0.5)).map(|(o, t)| (o, (t - o).normalize())).collect();
-    let (bvh_points, point_s) = timed(|| points.iter().map(|&p| bvh.closest_point(p)).collect::<Vec<_>>());
-    let (bvh_rays, ray_s) = timed(|| rays.iter().map(|&(o, d)| bvh.ray_cast(o, d)).collect::<Vec<_>>());
+    let points: Vec<DVec3> = (0..queries)
+        .map(|i| {
+            random_unit() * (1.0 + QUERY_OFFSET * (2.0 * i as f64 / queries.max(1) as f64 - 1.0))
+        })
+        .collect();
+    let rays: Vec<(DVec3, DVec3)> = (0..queries)
+        .map(|_| (random_unit() * 3.0, random_unit() * 0.5))
+        .map(|(o, t)| (o, (t - o).normalize()))
+        .collect();
+    let (bvh_points, point_s) =
+        timed(|| points.iter().map(|&p| bvh.closest_point(p)).collect::<Vec<_>>());
+    let (bvh_rays, ray_s) =
+        timed(|| rays.iter().map(|&(o, d)| bvh.ray_cast(o, d)).collect::<Vec<_>>());
     let corners = brute::corners_f64(&triangles(&positions, &faces)?);
     let checked = (queries / 100).clamp(1, 200).min(queries);
-    let (brute_points, brute_point_s) = timed(|| points[..checked].iter().map(|&p| brute::closest_point(&corners, p)).collect::<Vec<_>>());
-    let (brute_rays, brute_ray_s) = timed(|| rays[..checked].iter().map(|&(o, d)| brute::ray_cast(&corners, o, d)).collect::<Vec<_>>());
+    let (brute_points, brute_point_s) = timed(|| {
+        points[..checked].iter().map(|&p| brute::closest_point(&corners, p)).collect::<Vec<_>>()
+    });
+    let (brute_rays, brute_ray_s) = timed(|| {
+        rays[..checked].iter().map(|&(o, d)| brute::ray_cast(&corners, o, d)).collect::<Vec<_>>()
+    });
     let same = |a: Option<f64>, b: Option<f64>| match (a, b) {
         (Some(a), Some(b)) => (a - b).abs() <= 1e-12 * a.abs().max(1.0),
         (None, None) => true,
         _ => false,
     };
     let verified = (0..checked).all(|i| {
-        same(bvh_points[i].map(|h| h.distance), brute_points[i].map(|h| h.distance)) && same(bvh_rays[i].map(|h| h.distance), brute_rays[i].map(|h| h.distance))
+        same(bvh_points[i].map(|h| h.distance), brute_points[i].map(|h| h.distance))
+            && same(bvh_rays[i].map(|h| h.distance), brute_rays[i].map(|h| h.distance))
     });
     Ok(TrackBenchReport {
         triangles: faces.len(),

@@ -79,7 +79,9 @@ mod tests {
         let hit = bind_ray(&bvh, DVec3::new(0.25, 0.75, -1.0), DVec3::Z).unwrap();
         assert_eq!(hit.face, 1);
         assert_eq!(bind_ray(&bvh, DVec3::new(2.0, 0.5, -1.0), DVec3::Z), Err(Unbound::Missed));
-        assert_eq!(bind_ray(&bvh, DVec3::new(0.5, 0.5, -1.0), DVec3::new(0.0, 0.0, f64::NAN)), Err(Unbound::NonFinite));
+        assert_eq!(
+            bind_ray(&bvh, DVec3::new(0.5, 0.5, -1.0), DVec3::new(0.0, 0.0, f64::NAN)),
+            Err(Unbound::NonFinite)
+        );
     }
-
 }

@@ -45,7 +45,11 @@ impl SurfaceBvh {
         let params = BvhBuildParams { pre_split: false, ..BvhBuildParams::medium_build() };
         let obvhs_tris: Vec<Triangle> = triangles
             .iter()
-            .map(|t| Triangle { v0: Vec3A::from(t[0]), v1: Vec3A::from(t[1]), v2: Vec3A::from(t[2]) })
+            .map(|t| Triangle {
+                v0: Vec3A::from(t[0]),
+                v1: Vec3A::from(t[1]),
+                v2: Vec3A::from(t[2]),
+            })
             .collect();
         let bvh = build_bvh2(&obvhs_tris, params, &mut Duration::default());
         let corners = bvh
@@ -170,7 +174,10 @@ impl SurfaceBvh {
 }
 
 /// The corners of every face, checked: at least one face, indices in range, finite positions.
-pub fn triangles(positions: &[[f32; 3]], faces: &[[u32; 3]]) -> Result<Vec<[[f32; 3]; 3]>, TrackError> {
+pub fn triangles(
+    positions: &[[f32; 3]],
+    faces: &[[u32; 3]],
+) -> Result<Vec<[[f32; 3]; 3]>, TrackError> {
     if faces.is_empty() {
         return Err(TrackError::EmptyMesh);
     }

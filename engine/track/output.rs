@@ -45,9 +45,16 @@ pub struct UnboundPoint {
 pub fn write_tracks_csv(path: &Path, points: &[TrackedPoint]) -> Result<(), TrackError> {
     let rows: Vec<TrackPoint> = points
         .iter()
-        .flat_map(|p| p.trajectory.iter().enumerate().map(|(frame, &position)| TrackPoint { id: p.id.clone(), frame: frame as u32, position }))
+        .flat_map(|p| {
+            p.trajectory.iter().enumerate().map(|(frame, &position)| TrackPoint {
+                id: p.id.clone(),
+                frame: frame as u32,
+                position,
+            })
+        })
         .collect();
-    write_atomically(path, |w| write_trajectories_csv(w, &rows)).map_err(|error| TrackError::Io { path: path.to_owned(), error })
+    write_atomically(path, |w| write_trajectories_csv(w, &rows))
+        .map_err(|error| TrackError::Io { path: path.to_owned(), error })
 }
 
 /// Writes the report as pretty JSON, atomically.

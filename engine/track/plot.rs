@@ -15,10 +15,13 @@ use std::path::Path;
 pub fn draw_trajectories(trajectories: &[Vec<DVec3>]) -> RgbImage {
     let mut image = RgbImage::from_pixel(2 * PANEL, PANEL, BACKGROUND);
     let (a, b) = spread_axes(trajectories);
-    let projected: Vec<Vec<DVec2>> = trajectories.iter().map(|t| t.iter().map(|p| DVec2::new(p[a], -p[b])).collect()).collect();
+    let projected: Vec<Vec<DVec2>> =
+        trajectories.iter().map(|t| t.iter().map(|p| DVec2::new(p[a], -p[b])).collect()).collect();
     let displacement: Vec<Vec<DVec2>> = trajectories
         .iter()
-        .map(|t| t.iter().enumerate().map(|(f, p)| DVec2::new(f as f64, -p.distance(t[0]))).collect())
+        .map(|t| {
+            t.iter().enumerate().map(|(f, p)| DVec2::new(f as f64, -p.distance(t[0]))).collect()
+        })
         .collect();
     draw_panel(&mut image, 0, &projected, true);
     draw_panel(&mut image, PANEL, &displacement, false);
@@ -27,7 +30,8 @@ pub fn draw_trajectories(trajectories: &[Vec<DVec3>]) -> RgbImage {
 
 /// Draws the plot and writes it as a PNG, atomically.
 pub fn write_plot(path: &Path, trajectories: &[Vec<DVec3>]) -> Result<(), TrackError> {
-    write_png_rgb(path, &draw_trajectories(trajectories)).map_err(|error| TrackError::Io { path: path.to_owned(), error })
+    write_png_rgb(path, &draw_trajectories(trajectories))
+        .map_err(|error| TrackError::Io { path: path.to_owned(), error })
 }
 
 /// The two axes with the largest coordinate range over all points, in axis order.

@@ -26,16 +26,32 @@ fn read_text(path: &Path) -> Result<String, TrackError> {
 /// Parses a table with an `id` column and the numeric `columns`; `path` names the source in
 /// errors. Errors: no header, a missing column, a short row, a bad or non-finite number, a
 /// duplicate or invalid id, no rows.
-pub fn parse_id_table<const N: usize>(text: &str, path: &Path, columns: [&str; N]) -> Result<Vec<(String, [f64; N])>, TrackError> {
-    let err = |line: usize, message: String| TrackError::Csv { path: path.to_owned(), line, message };
-    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim())).filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let (header_line, header) = lines.next().ok_or_else(|| err(1, format!("empty file; expected a header `id,{}`", columns.join(","))))?;
+pub fn parse_id_table<const N: usize>(
+    text: &str,
+    path: &Path,
+    columns: [&str; N],
+) -> Result<Vec<(String, [f64; N])>, TrackError> {
+    let err =
+        |line: usize, message: String| TrackError::Csv { path: path.to_owned(), line, message };
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+    let (header_line, header) = lines.next().ok_or_else(|| {
+        err(1, format!("empty file; expected a header `id,{}`", columns.join(",")))
+    })?;
     let names: Vec<&str> = header.split(',').map(str::trim).collect();
     let find = |name: &str| {
-        names
-            .iter()
-            .position(|n| n.eq_ignore_ascii_case(name))
-            .ok_or_else(|| err(header_line, format!("header `{header}` has no column `{name}`; expected `id,{}`", columns.join(","))))
+        names.iter().position(|n| n.eq_ignore_ascii_case(name)).ok_or_else(|| {
+            err(
+                header_line,
+                format!(
+                    "header `{header}` has no column `{name}`; expected `id,{}`",
+                    columns.join(",")
+                ),
+            )
+        })
     };
     let id_col = find("id")?;
     let mut cols = [0usize; N];
@@ -47,7 +63,10 @@ pub fn parse_id_table<const N: usize>(text: &str, path: &Path, columns: [&str; N
     for (line, row) in lines {
         let fields: Vec<&str> = row.split(',').map(str::trim).collect();
         if fields.len() < names.len() {
-            return Err(err(line, format!("{} fields, the header has {}", fields.len(), names.len())));
+            return Err(err(
+                line,
+                format!("{} fields, the header has {}", fields.len(), names.len()),
+            ));
         }
         let id = fields[id_col];
         if id.is_empty() || id.contains('"') {
@@ -58,11 +77,9 @@ pub fn parse_id_table<const N: usize>(text: &str, path: &Path, columns: [&str; N
         }
         let mut values = [0.0; N];
         for ((value, &c), name) in values.iter_mut().zip(&cols).zip(columns) {
-            *value = fields[c]
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| err(line, format!("`{}` is not a finite number for column `{name}`", fields[c])))?;
+            *value = fields[c].parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+                err(line, format!("`{}` is not a finite number for column `{name}`", fields[c]))
+            })?;
         }
         rows.push((id.to_owned(), values));
     }
@@ -82,8 +99,12 @@ mod tests {
 
     #[test]
     fn reads_rows_in_any_column_order_with_comments_and_blank_lines() {
-        let rows = parse3("# frame 0\nz, id ,x,y,extra\n\n3,nose,1,2.5,ignored\n-1e-3,chin,0,0,\n").unwrap();
-        assert_eq!(rows, vec![("nose".to_string(), [1.0, 2.5, 3.0]), ("chin".to_string(), [0.0, 0.0, -1e-3])]);
+        let rows = parse3("# frame 0\nz, id ,x,y,extra\n\n3,nose,1,2.5,ignored\n-1e-3,chin,0,0,\n")
+            .unwrap();
+        assert_eq!(
+            rows,
+            vec![("nose".to_string(), [1.0, 2.5, 3.0]), ("chin".to_string(), [0.0, 0.0, -1e-3])]
+        );
     }
 
     #[test]
@@ -99,7 +120,10 @@ mod tests {
             ("id,x,y,z\n,1,2,3\n", 2, "invalid id"),
         ] {
             let e = parse3(text).unwrap_err().to_string();
-            assert!(e.starts_with(&format!("points.csv: line {line}: ")) && e.contains(needle), "{text:?} -> {e}");
+            assert!(
+                e.starts_with(&format!("points.csv: line {line}: ")) && e.contains(needle),
+                "{text:?} -> {e}"
+            );
         }
     }
 }

@@ -1,12 +1,12 @@
 //! One tracking run: bind the queries on frame 0, follow them through every frame.
 
 use super::bind::{bind_point, bind_ray, Binding, Unbound};
-use crate::mesh::bounding_diagonal;
 use super::bvh::SurfaceBvh;
 use super::output::{TrackReport, TrackedPoint, UnboundPoint};
 use super::trajectory::trajectories;
 use super::TrackError;
 use crate::camera::Camera;
+use crate::mesh::bounding_diagonal;
 use glam::DVec3;
 
 /// What to track: frame-0 points, or pixels of a camera (ray-cast onto the frame-0 surface).
@@ -21,7 +21,12 @@ pub enum Queries {
 /// non-finite query is listed in `unbound`, never snapped.
 ///
 /// Errors: no frames, an unusable frame-0 mesh, frames of different vertex counts.
-pub fn track(faces: &[[u32; 3]], frames: &[Vec<[f32; 3]>], queries: &Queries, max_distance_relative: f64) -> Result<TrackReport, TrackError> {
+pub fn track(
+    faces: &[[u32; 3]],
+    frames: &[Vec<[f32; 3]>],
+    queries: &Queries,
+    max_distance_relative: f64,
+) -> Result<TrackReport, TrackError> {
     let frame0 = frames.first().ok_or(TrackError::EmptyMesh)?;
     let bvh = SurfaceBvh::build(frame0, faces)?;
     let max_distance = max_distance_relative * bounding_diagonal(frame0);
@@ -58,7 +63,18 @@ pub fn track(faces: &[[u32; 3]], frames: &[Vec<[f32; 3]>], queries: &Queries, ma
     let points = bound
         .into_iter()
         .zip(paths)
-        .map(|((id, binding), path)| TrackedPoint { id: id.to_owned(), binding, trajectory: path.iter().map(|p| p.to_array()).collect() })
+        .map(|((id, binding), path)| TrackedPoint {
+            id: id.to_owned(),
+            binding,
+            trajectory: path.iter().map(|p| p.to_array()).collect(),
+        })
         .collect();
-    Ok(TrackReport { frames: frames.len(), vertices: frame0.len(), faces: faces.len(), max_distance, points, unbound })
+    Ok(TrackReport {
+        frames: frames.len(),
+        vertices: frame0.len(),
+        faces: faces.len(),
+        max_distance,
+        points,
+        unbound,
+    })
 }

@@ -6,8 +6,24 @@ use std::collections::HashMap;
 /// The octahedron subdivided `level` times (each triangle into four), vertices pushed onto the
 /// unit sphere: 8·4^level faces, 4^level·4 + 2 vertices.
 pub fn unit_sphere(level: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-    let mut positions: Vec<[f64; 3]> = vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
-    let mut faces: Vec<[u32; 3]> = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+    let mut positions: Vec<[f64; 3]> = vec![
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+    ];
+    let mut faces: Vec<[u32; 3]> = vec![
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
     for _ in 0..level {
         let mut midpoints: HashMap<(u32, u32), u32> = HashMap::new();
         let mut midpoint = |a: u32, b: u32, positions: &mut Vec<[f64; 3]>| {
@@ -22,7 +38,11 @@ pub fn unit_sphere(level: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
         faces = faces
             .iter()
             .flat_map(|&[a, b, c]| {
-                let (ab, bc, ca) = (midpoint(a, b, &mut positions), midpoint(b, c, &mut positions), midpoint(c, a, &mut positions));
+                let (ab, bc, ca) = (
+                    midpoint(a, b, &mut positions),
+                    midpoint(b, c, &mut positions),
+                    midpoint(c, a, &mut positions),
+                );
                 [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
             })
             .collect();

@@ -22,7 +22,11 @@ pub fn position(binding: &Binding, faces: &[[u32; 3]], positions: &[[f32; 3]]) -
 ///
 /// Errors: a frame with a vertex count unlike frame 0's; a binding whose face, or a vertex of
 /// it, is out of range.
-pub fn trajectories(bindings: &[Binding], faces: &[[u32; 3]], frames: &[Vec<[f32; 3]>]) -> Result<Vec<Vec<DVec3>>, TrackError> {
+pub fn trajectories(
+    bindings: &[Binding],
+    faces: &[[u32; 3]],
+    frames: &[Vec<[f32; 3]>],
+) -> Result<Vec<Vec<DVec3>>, TrackError> {
     let expected = frames.first().map_or(0, Vec::len);
     if let Some((frame, f)) = frames.iter().enumerate().find(|(_, f)| f.len() != expected) {
         return Err(TrackError::FrameVertexCount { frame, found: f.len(), expected });
@@ -33,7 +37,13 @@ pub fn trajectories(bindings: &[Binding], faces: &[[u32; 3]], frames: &[Vec<[f32
         .map(|(i, b)| {
             frames
                 .iter()
-                .map(|f| position(b, faces, f).ok_or(TrackError::FaceOutOfRange { binding: i, face: b.face, faces: faces.len() }))
+                .map(|f| {
+                    position(b, faces, f).ok_or(TrackError::FaceOutOfRange {
+                        binding: i,
+                        face: b.face,
+                        faces: faces.len(),
+                    })
+                })
                 .collect()
         })
         .collect()

@@ -73,7 +73,8 @@ fn is_degenerate(ab: DVec3, ac: DVec3) -> bool {
 
 /// The closest point on the three edges of (a, b, c), as barycentrics.
 fn closest_on_edges(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
-    let (tab, tbc, tca) = (segment_parameter(p, a, b), segment_parameter(p, b, c), segment_parameter(p, c, a));
+    let (tab, tbc, tca) =
+        (segment_parameter(p, a, b), segment_parameter(p, b, c), segment_parameter(p, c, a));
     let candidates = [[1.0 - tab, tab, 0.0], [0.0, 1.0 - tbc, tbc], [tca, 0.0, 1.0 - tca]];
     let mut best = candidates[0];
     let mut best_d = f64::INFINITY;
@@ -112,7 +113,14 @@ pub fn interpolate(bary: [f64; 3], a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
 /// Möller–Trumbore (1997). Points on an edge count as hits, so a ray through a shared edge hits
 /// one of the two faces instead of slipping between them.
 #[inline]
-pub fn ray_triangle(origin: DVec3, dir: DVec3, t_max: f64, a: DVec3, b: DVec3, c: DVec3) -> Option<(f64, [f64; 3])> {
+pub fn ray_triangle(
+    origin: DVec3,
+    dir: DVec3,
+    t_max: f64,
+    a: DVec3,
+    b: DVec3,
+    c: DVec3,
+) -> Option<(f64, [f64; 3])> {
     let e1 = b - a;
     let e2 = c - a;
     if is_degenerate(e1, e2) {
@@ -144,7 +152,11 @@ mod tests {
     use crate::rng::SplitMix64;
 
     fn random_point(rng: &mut SplitMix64) -> DVec3 {
-        DVec3::new(rng.next_f64() * 2.0 - 1.0, rng.next_f64() * 2.0 - 1.0, rng.next_f64() * 2.0 - 1.0)
+        DVec3::new(
+            rng.next_f64() * 2.0 - 1.0,
+            rng.next_f64() * 2.0 - 1.0,
+            rng.next_f64() * 2.0 - 1.0,
+        )
     }
 
     /// q is the closest point of a convex set to p iff (p − q)·(x − q) ≤ 0 for every x in the
@@ -155,7 +167,10 @@ mod tests {
         let q = interpolate(bary, tri[0], tri[1], tri[2]);
         let scale = (p - q).length() * tri.iter().map(|v| (*v - q).length()).fold(0.0, f64::max);
         for v in tri {
-            assert!((p - q).dot(v - q) <= 1e-9 * scale.max(1e-300), "not optimal: p {p} tri {tri:?} bary {bary:?}");
+            assert!(
+                (p - q).dot(v - q) <= 1e-9 * scale.max(1e-300),
+                "not optimal: p {p} tri {tri:?} bary {bary:?}"
+            );
         }
     }
 
@@ -190,23 +205,37 @@ mod tests {
     fn point_in_the_plane_inside_the_triangle_is_its_own_closest_point() {
         let (a, b, c) = (DVec3::ZERO, DVec3::X, DVec3::Y);
         let bary = closest_on_triangle(DVec3::new(0.25, 0.5, 3.0), a, b, c);
-        assert!((bary[0] - 0.25).abs() < 1e-15 && (bary[1] - 0.25).abs() < 1e-15 && (bary[2] - 0.5).abs() < 1e-15);
+        assert!(
+            (bary[0] - 0.25).abs() < 1e-15
+                && (bary[1] - 0.25).abs() < 1e-15
+                && (bary[2] - 0.5).abs() < 1e-15
+        );
     }
 
     #[test]
     fn ray_hits_at_the_analytic_distance_and_misses_outside() {
-        let (a, b, c) = (DVec3::new(0.0, 0.0, 2.0), DVec3::new(1.0, 0.0, 2.0), DVec3::new(0.0, 1.0, 2.0));
-        let (t, bary) = ray_triangle(DVec3::new(0.2, 0.3, 0.0), DVec3::Z, f64::INFINITY, a, b, c).unwrap();
+        let (a, b, c) =
+            (DVec3::new(0.0, 0.0, 2.0), DVec3::new(1.0, 0.0, 2.0), DVec3::new(0.0, 1.0, 2.0));
+        let (t, bary) =
+            ray_triangle(DVec3::new(0.2, 0.3, 0.0), DVec3::Z, f64::INFINITY, a, b, c).unwrap();
         assert!((t - 2.0).abs() < 1e-15);
         assert!((bary[1] - 0.2).abs() < 1e-15 && (bary[2] - 0.3).abs() < 1e-15);
         // Both sides, behind the origin, beyond t_max, outside, parallel, degenerate.
-        assert!(ray_triangle(DVec3::new(0.2, 0.3, 4.0), -DVec3::Z, f64::INFINITY, a, b, c).is_some());
+        assert!(
+            ray_triangle(DVec3::new(0.2, 0.3, 4.0), -DVec3::Z, f64::INFINITY, a, b, c).is_some()
+        );
         assert!(ray_triangle(DVec3::new(0.2, 0.3, 4.0), DVec3::Z, f64::INFINITY, a, b, c).is_none());
         assert!(ray_triangle(DVec3::new(0.2, 0.3, 0.0), DVec3::Z, 1.5, a, b, c).is_none());
         assert!(ray_triangle(DVec3::new(0.8, 0.8, 0.0), DVec3::Z, f64::INFINITY, a, b, c).is_none());
         assert!(ray_triangle(DVec3::new(0.2, 0.3, 2.0), DVec3::X, f64::INFINITY, a, b, c).is_none());
         assert!(ray_triangle(DVec3::new(0.2, 0.0, 0.0), DVec3::Z, f64::INFINITY, a, b, b).is_none());
-        let (p, q) = (DVec3::new(-0.7198970913887024, 0.8706438541412354, 0.3532657325267792), DVec3::new(-0.6692429184913635, 0.6974490880966187, 0.39339834451675415));
-        assert!(ray_triangle(DVec3::new(-3.0, 0.75, 0.38), DVec3::X, f64::INFINITY, p, q, q).is_none(), "coincident corners never hit");
+        let (p, q) = (
+            DVec3::new(-0.7198970913887024, 0.8706438541412354, 0.3532657325267792),
+            DVec3::new(-0.6692429184913635, 0.6974490880966187, 0.39339834451675415),
+        );
+        assert!(
+            ray_triangle(DVec3::new(-3.0, 0.75, 0.38), DVec3::X, f64::INFINITY, p, q, q).is_none(),
+            "coincident corners never hit"
+        );
     }
 }

@@ -111,7 +111,15 @@ impl Default for LossWeights {
 
 impl Default for LearningRateConfig {
     fn default() -> Self {
-        Self { positions: 1.6e-4, positions_final: 1.6e-6, log_scales: 5e-3, rotations: 1e-3, opacity_logits: 0.05, sh_dc: 2.5e-3, sh_rest: 2.5e-3 / 20.0 }
+        Self {
+            positions: 1.6e-4,
+            positions_final: 1.6e-6,
+            log_scales: 5e-3,
+            rotations: 1e-3,
+            opacity_logits: 0.05,
+            sh_dc: 2.5e-3,
+            sh_rest: 2.5e-3 / 20.0,
+        }
     }
 }
 
@@ -194,10 +202,19 @@ impl FitConfig {
         check_ranges(&positive, &non_negative)?;
         check_appearance(self.sh_degree, self.background)?;
         if !(self.densify.prune_opacity < 1.0) {
-            return value_error("densify.prune_opacity", format!("must be below 1 (got {})", self.densify.prune_opacity));
+            return value_error(
+                "densify.prune_opacity",
+                format!("must be below 1 (got {})", self.densify.prune_opacity),
+            );
         }
         if self.densify.from > self.densify.until {
-            return value_error("densify.from", format!("({}) must not be after densify.until ({})", self.densify.from, self.densify.until));
+            return value_error(
+                "densify.from",
+                format!(
+                    "({}) must not be after densify.until ({})",
+                    self.densify.from, self.densify.until
+                ),
+            );
         }
         Ok(())
     }
@@ -210,7 +227,10 @@ pub(crate) fn value_error<T>(key: &'static str, problem: String) -> Result<T, Co
 
 /// The first key of `positive` whose value is not positive and finite, or of `non_negative`
 /// not zero or positive and finite, as an error naming it.
-pub(crate) fn check_ranges(positive: &[(&'static str, f32)], non_negative: &[(&'static str, f32)]) -> Result<(), ConfigError> {
+pub(crate) fn check_ranges(
+    positive: &[(&'static str, f32)],
+    non_negative: &[(&'static str, f32)],
+) -> Result<(), ConfigError> {
     // Phrased as positive so NaN fails too.
     if let Some(&(key, v)) = positive.iter().find(|(_, v)| !(*v > 0.0 && v.is_finite())) {
         return value_error(key, format!("must be positive and finite (got {v})"));
@@ -224,20 +244,33 @@ pub(crate) fn check_ranges(positive: &[(&'static str, f32)], non_negative: &[(&'
 /// `sh_degree` at most the renderer's, `background` three values in [0, 1].
 pub(crate) fn check_appearance(sh_degree: u32, background: [f32; 3]) -> Result<(), ConfigError> {
     if sh_degree > crate::splat::MAX_SH_DEGREE {
-        return value_error("sh_degree", format!("must be at most {} (got {sh_degree})", crate::splat::MAX_SH_DEGREE));
+        return value_error(
+            "sh_degree",
+            format!("must be at most {} (got {sh_degree})", crate::splat::MAX_SH_DEGREE),
+        );
     }
     if !background.iter().all(|c| (0.0..=1.0).contains(c)) {
-        return value_error("background", format!("must be three values in [0, 1] (got {background:?})"));
+        return value_error(
+            "background",
+            format!("must be three values in [0, 1] (got {background:?})"),
+        );
     }
     Ok(())
 }
 
 /// Reads a TOML config of type `T` and runs `check`, naming the file in every error.
-pub(crate) fn load_toml<T: serde::de::DeserializeOwned>(path: &Path, check: impl FnOnce(&T) -> Result<(), ConfigError>) -> Result<T, ConfigError> {
-    let text = std::fs::read_to_string(path).map_err(|error| ConfigError::Read { path: path.to_owned(), error })?;
-    let config: T = toml::from_str(&text).map_err(|error| ConfigError::Parse { path: path.to_owned(), error: Box::new(error) })?;
+pub(crate) fn load_toml<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    check: impl FnOnce(&T) -> Result<(), ConfigError>,
+) -> Result<T, ConfigError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|error| ConfigError::Read { path: path.to_owned(), error })?;
+    let config: T = toml::from_str(&text)
+        .map_err(|error| ConfigError::Parse { path: path.to_owned(), error: Box::new(error) })?;
     check(&config).map_err(|e| match e {
-        ConfigError::Value { key, problem, .. } => ConfigError::Value { path: Some(path.to_owned()), key, problem },
+        ConfigError::Value { key, problem, .. } => {
+            ConfigError::Value { path: Some(path.to_owned()), key, problem }
+        }
         other => other,
     })?;
     Ok(config)
@@ -252,13 +285,18 @@ mod tests {
         let config = FitConfig::default();
         config.check().unwrap();
         assert_eq!(toml::from_str::<FitConfig>(&config.to_toml()).unwrap(), config);
-        let partial: FitConfig = toml::from_str("iterations = 10\n[densify]\nenabled = false\n").unwrap();
-        assert_eq!((partial.iterations, partial.densify.enabled, partial.densify.every), (10, false, 100));
+        let partial: FitConfig =
+            toml::from_str("iterations = 10\n[densify]\nenabled = false\n").unwrap();
+        assert_eq!(
+            (partial.iterations, partial.densify.enabled, partial.densify.every),
+            (10, false, 100)
+        );
     }
 
     #[test]
     fn errors_name_the_key() {
-        let unknown = toml::from_str::<FitConfig>("[densify]\ngrad_treshold = 1\n").unwrap_err().to_string();
+        let unknown =
+            toml::from_str::<FitConfig>("[densify]\ngrad_treshold = 1\n").unwrap_err().to_string();
         assert!(unknown.contains("grad_treshold"), "{unknown}");
         let config: FitConfig = toml::from_str("[learning_rates]\nrotations = -1\n").unwrap();
         assert!(config.check().unwrap_err().to_string().contains("learning_rates.rotations"));

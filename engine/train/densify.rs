@@ -35,11 +35,18 @@ const SPLIT_SHRINK: f32 = 1.6;
 /// Applies one step. `mean_grads[i]` is Gaussian i's mean 2D gradient norm in NDC units (NaN
 /// or 0 when never seen). Returns the new scene and, per new row, its old row or
 /// [`NEW_ROW`] (clones and split halves start with fresh optimizer state, as in 3DGS).
-pub fn densify_and_prune(scene: &GaussianScene, mean_grads: &[f32], rules: &DensifyRules, rng: &mut SplitMix64) -> (GaussianScene, Vec<u32>, DensifyCounts) {
+pub fn densify_and_prune(
+    scene: &GaussianScene,
+    mean_grads: &[f32],
+    rules: &DensifyRules,
+    rng: &mut SplitMix64,
+) -> (GaussianScene, Vec<u32>, DensifyCounts) {
     let n = scene.len();
-    let max_scale = |i: usize| scene.log_scales[i].iter().fold(f32::NEG_INFINITY, |m, &s| m.max(s)).exp();
+    let max_scale =
+        |i: usize| scene.log_scales[i].iter().fold(f32::NEG_INFINITY, |m, &s| m.max(s)).exp();
     // Phrased as positive so NaN statistics select nothing.
-    let mut selected: Vec<usize> = (0..n).filter(|&i| mean_grads[i] >= rules.grad_threshold).collect();
+    let mut selected: Vec<usize> =
+        (0..n).filter(|&i| mean_grads[i] >= rules.grad_threshold).collect();
     selected.sort_by(|&a, &b| mean_grads[b].total_cmp(&mean_grads[a]));
     // A clone adds one Gaussian and a split replaces one by two: each selection adds one.
     selected.truncate(rules.budget.saturating_sub(n));
@@ -58,7 +65,10 @@ pub fn densify_and_prune(scene: &GaussianScene, mean_grads: &[f32], rules: &Dens
             counts.split += 1;
         }
     }
-    let pruned = |i: usize| !(sigmoid(scene.opacity_logits[i]) >= rules.prune_opacity) || max_scale(i) > rules.prune_max_scale;
+    let pruned = |i: usize| {
+        !(sigmoid(scene.opacity_logits[i]) >= rules.prune_opacity)
+            || max_scale(i) > rules.prune_max_scale
+    };
     let mut kept = GaussianScene { sh_degree: scene.sh_degree, ..Default::default() };
     let mut kept_rows = Vec::with_capacity(n);
     for i in 0..n {
@@ -125,7 +135,11 @@ mod tests {
     use crate::train::init::{gaussians_at_points, logit};
 
     fn scene() -> GaussianScene {
-        let mut s = gaussians_at_points(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], None, 1);
+        let mut s = gaussians_at_points(
+            &[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            None,
+            1,
+        );
         s.log_scales[1] = [0.5f32.ln(); 3]; // large: split
         s.log_scales[2] = [0.01f32.ln(); 3]; // small: clone
         s.opacity_logits[3] = logit(0.001); // transparent: pruned
@@ -135,11 +149,22 @@ mod tests {
         s
     }
 
-    const RULES: DensifyRules = DensifyRules { grad_threshold: 1.0, clone_max_scale: 0.1, prune_opacity: 0.005, prune_max_scale: 10.0, budget: 100 };
+    const RULES: DensifyRules = DensifyRules {
+        grad_threshold: 1.0,
+        clone_max_scale: 0.1,
+        prune_opacity: 0.005,
+        prune_max_scale: 10.0,
+        budget: 100,
+    };
 
     #[test]
     fn clones_splits_prunes_and_remaps() {
-        let (out, old_of_new, counts) = densify_and_prune(&scene(), &[0.0, 2.0, 2.0, f32::NAN], &RULES, &mut SplitMix64::new(1));
+        let (out, old_of_new, counts) = densify_and_prune(
+            &scene(),
+            &[0.0, 2.0, 2.0, f32::NAN],
+            &RULES,
+            &mut SplitMix64::new(1),
+        );
         out.check().unwrap();
         assert_eq!(counts, DensifyCounts { cloned: 1, split: 1, pruned: 1 });
         // Kept: 0 and 2; new: the two halves of 1 (largest gradient first: a tie, stable order), the clone of 2.
@@ -153,8 +178,13 @@ mod tests {
     #[test]
     fn the_budget_binds_on_the_largest_gradients() {
         let rules = DensifyRules { budget: 5, ..RULES };
-        let (out, _, counts) = densify_and_prune(&scene(), &[0.0, 2.0, 3.0, 0.0], &rules, &mut SplitMix64::new(1));
-        assert_eq!((counts.cloned, counts.split), (1, 0), "room for one: the larger gradient (Gaussian 2)");
+        let (out, _, counts) =
+            densify_and_prune(&scene(), &[0.0, 2.0, 3.0, 0.0], &rules, &mut SplitMix64::new(1));
+        assert_eq!(
+            (counts.cloned, counts.split),
+            (1, 0),
+            "room for one: the larger gradient (Gaussian 2)"
+        );
         assert_eq!(out.len(), 4);
     }
 }

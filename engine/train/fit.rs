@@ -53,9 +53,20 @@ pub fn fit(
     }
     let started = Instant::now();
     let extent = scene_extent(&train.iter().map(|v| &v.camera).collect::<Vec<_>>());
-    let mut settings = RenderSettings { background: config.background, near: (extent * 1e-3) as f32, far: (extent * 1e3) as f32, sh_degree: 0, mask_mode: false };
+    let mut settings = RenderSettings {
+        background: config.background,
+        near: (extent * 1e-3) as f32,
+        far: (extent * 1e3) as f32,
+        sh_degree: 0,
+        mask_mode: false,
+    };
     let mut trainer = Trainer::new(ctx, &initial, train)?;
-    let (initial_psnr, _, _) = evaluate(&mut trainer, eval, &RenderSettings { sh_degree: config.sh_degree, ..settings }, false)?;
+    let (initial_psnr, _, _) = evaluate(
+        &mut trainer,
+        eval,
+        &RenderSettings { sh_degree: config.sh_degree, ..settings },
+        false,
+    )?;
     let lambda = {
         let c = config.loss.color / 3.0;
         [c, c, c, config.loss.mask]
@@ -63,8 +74,10 @@ pub fn fit(
     let mut rng = SplitMix64::new(config.seed);
     let mut order: Vec<usize> = Vec::new();
     let mut passes: BTreeMap<String, f64> = BTreeMap::new();
-    let (mut train_s, mut loss_log, mut curve, mut densify_log) = (0.0, Vec::new(), Vec::new(), Vec::new());
-    let (mut last_loss, mut stopped, mut interval_start, mut done, mut truncated_steps) = (None, None, 1, 0, 0);
+    let (mut train_s, mut loss_log, mut curve, mut densify_log) =
+        (0.0, Vec::new(), Vec::new(), Vec::new());
+    let (mut last_loss, mut stopped, mut interval_start, mut done, mut truncated_steps) =
+        (None, None, 1, 0, 0);
     for it in 1..=config.iterations {
         let step_start = Instant::now();
         if order.is_empty() {
@@ -72,7 +85,12 @@ pub fn fit(
         }
         let view = order.pop().unwrap_or(0);
         settings.sh_degree = config.sh_degree.min((it - 1) / config.sh_increase_every);
-        let adam = AdamParams::new(&learning_rates(&config.learning_rates, extent, it, config.iterations), it, trainer.gaussians(), trainer.sh_degree());
+        let adam = AdamParams::new(
+            &learning_rates(&config.learning_rates, extent, it, config.iterations),
+            it,
+            trainer.gaussians(),
+            trainer.sh_degree(),
+        );
         let (times, complete) = trainer.step(view, &settings, lambda, &adam)?;
         add_times(&mut passes, &times);
         truncated_steps += (!complete) as u32;
@@ -92,16 +110,38 @@ pub fn fit(
         }
         let d = &config.densify;
         // The last interval is left to settle what the last densification made.
-        if d.enabled && it > d.from && it <= d.until.min(config.iterations.saturating_sub(d.every)) && it % d.every == 0 {
+        if d.enabled
+            && it > d.from
+            && it <= d.until.min(config.iterations.saturating_sub(d.every))
+            && it % d.every == 0
+        {
             let t = Instant::now();
-            densify_log.push(densify(&mut trainer, config, extent, &train[0].camera, it, &mut rng)?);
+            densify_log.push(densify(
+                &mut trainer,
+                config,
+                extent,
+                &train[0].camera,
+                it,
+                &mut rng,
+            )?);
             train_s += t.elapsed().as_secs_f64();
         }
         if it % config.report.eval_every == 0 || it == config.iterations {
             let (psnr, ssim, _) = evaluate(&mut trainer, eval, &settings, false)?;
-            curve.push(CurvePoint { iteration: it, wall_s: train_s, psnr, ssim, gaussians: trainer.gaussians() });
+            curve.push(CurvePoint {
+                iteration: it,
+                wall_s: train_s,
+                psnr,
+                ssim,
+                gaussians: trainer.gaussians(),
+            });
         }
-        progress(Progress { iteration: it, iterations: config.iterations, loss: last_loss, gaussians: trainer.gaussians() });
+        progress(Progress {
+            iteration: it,
+            iterations: config.iterations,
+            loss: last_loss,
+            gaussians: trainer.gaussians(),
+        });
     }
 
     let (psnr, ssim, renders) = evaluate(&mut trainer, eval, &settings, stopped.is_some())?;
@@ -133,7 +173,14 @@ pub fn fit(
 }
 
 /// One 3DGS densification step on the trainer's Gaussians.
-fn densify(trainer: &mut Trainer, config: &FitConfig, extent: f64, camera: &Camera, it: u32, rng: &mut SplitMix64) -> Result<DensifyEvent, TrainError> {
+fn densify(
+    trainer: &mut Trainer,
+    config: &FitConfig,
+    extent: f64,
+    camera: &Camera,
+    it: u32,
+    rng: &mut SplitMix64,
+) -> Result<DensifyEvent, TrainError> {
     let d = &config.densify;
     // The statistic is in pixels; 3DGS's threshold is in NDC units (a pixel is 2 / size).
     let ndc_scale = 0.5 * camera.width.max(camera.height) as f32;
@@ -144,36 +191,66 @@ fn densify(trainer: &mut Trainer, config: &FitConfig, extent: f64, camera: &Came
         prune_max_scale: d.prune_scale * extent as f32,
         budget: d.budget as usize,
     };
-    let mean_grads: Vec<f32> = trainer.densify_stats()?.iter().map(|&[sum, seen]| ndc_scale * sum / seen).collect();
-    let (scene, old_of_new, counts) = densify_and_prune(&trainer.scene()?, &mean_grads, &rules, rng);
+    let mean_grads: Vec<f32> =
+        trainer.densify_stats()?.iter().map(|&[sum, seen]| ndc_scale * sum / seen).collect();
+    let (scene, old_of_new, counts) =
+        densify_and_prune(&trainer.scene()?, &mean_grads, &rules, rng);
     trainer.replace(&scene, &old_of_new)?;
     Ok(DensifyEvent { iteration: it, counts, gaussians: scene.len() })
 }
 
 /// The learning rates of iteration `it` of `iterations`: positions scaled by the extent and
 /// decaying.
-pub(crate) fn learning_rates(r: &LearningRateConfig, extent: f64, it: u32, iterations: u32) -> LearningRates {
-    let positions = exponential_decay(r.positions as f64 * extent, r.positions_final as f64 * extent, it as u64, iterations as u64);
-    LearningRates { positions: positions as f32, log_scales: r.log_scales, rotations: r.rotations, opacity_logits: r.opacity_logits, sh_dc: r.sh_dc, sh_rest: r.sh_rest }
+pub(crate) fn learning_rates(
+    r: &LearningRateConfig,
+    extent: f64,
+    it: u32,
+    iterations: u32,
+) -> LearningRates {
+    let positions = exponential_decay(
+        r.positions as f64 * extent,
+        r.positions_final as f64 * extent,
+        it as u64,
+        iterations as u64,
+    );
+    LearningRates {
+        positions: positions as f32,
+        log_scales: r.log_scales,
+        rotations: r.rotations,
+        opacity_logits: r.opacity_logits,
+        sh_dc: r.sh_dc,
+        sh_rest: r.sh_rest,
+    }
 }
 
 /// 3DGS's scene extent: 1.1 × the largest distance of a camera from the cameras' mean.
 pub(crate) fn scene_extent(cameras: &[&Camera]) -> f64 {
-    let mean = cameras.iter().map(|c| c.center()).sum::<glam::DVec3>() / cameras.len().max(1) as f64;
+    let mean =
+        cameras.iter().map(|c| c.center()).sum::<glam::DVec3>() / cameras.len().max(1) as f64;
     let radius = cameras.iter().map(|c| c.center().distance(mean)).fold(0.0, f64::max);
     // One camera (or cameras at one point) still needs a scale: its distance to nothing is 0.
     1.1 * if radius > 0.0 { radius } else { 1.0 }
 }
 
 /// Mean PSNR and SSIM over `views` (RGB), and each view's render.
-pub(crate) fn evaluate(trainer: &mut Trainer, views: &[ViewTarget], settings: &RenderSettings, last_good: bool) -> Result<(f64, f64, Vec<Image>), TrainError> {
+pub(crate) fn evaluate(
+    trainer: &mut Trainer,
+    views: &[ViewTarget],
+    settings: &RenderSettings,
+    last_good: bool,
+) -> Result<(f64, f64, Vec<Image>), TrainError> {
     let (mut psnr_sum, mut ssim_sum, mut renders) = (0.0, 0.0, Vec::new());
     for v in views {
         let render = trainer.render(&v.camera, settings, last_good)?;
         let target = v.rgb();
         psnr_sum += psnr(&render, &target)?.min(100.0);
         ssim_sum += ssim(&render, &target, v.camera.width as usize, v.camera.height as usize, 3)?;
-        renders.push(Image { width: v.camera.width, height: v.camera.height, channels: 3, data: render });
+        renders.push(Image {
+            width: v.camera.width,
+            height: v.camera.height,
+            channels: 3,
+            data: render,
+        });
     }
     let n = views.len().max(1) as f64;
     Ok((psnr_sum / n, ssim_sum / n, renders))
@@ -203,7 +280,8 @@ fn non_finite_message(scene: &GaussianScene, first: u32, last: u32, terms: &Loss
         ("opacity logits", bad(&mut scene.opacity_logits.iter().copied())),
         ("SH", bad(&mut scene.sh.iter().copied())),
     ];
-    let params: Vec<String> = groups.iter().filter(|(_, n)| *n > 0).map(|(g, n)| format!("{n} {g} values")).collect();
+    let params: Vec<String> =
+        groups.iter().filter(|(_, n)| *n > 0).map(|(g, n)| format!("{n} {g} values")).collect();
     let which = if params.is_empty() { "no parameter yet".to_string() } else { params.join(", ") };
     format!(
         "the loss went non-finite between iterations {first} and {last} (L1 terms {:?}, SSIM terms {:?}; non-finite parameters: {which}); the Gaussians of iteration {} are kept",

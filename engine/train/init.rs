@@ -17,7 +17,11 @@ const INITIAL_OPACITY: f32 = 0.1;
 /// distance to the three nearest other points, identity rotation, opacity 0.1, SH DC from
 /// `colors` (linear [0, 1]; grey without), higher bands zero. Guarantees finite parameters for
 /// finite points, duplicates included (their scale falls back to a tiny positive value).
-pub fn gaussians_at_points(points: &[[f32; 3]], colors: Option<&[[f32; 3]]>, sh_degree: u32) -> GaussianScene {
+pub fn gaussians_at_points(
+    points: &[[f32; 3]],
+    colors: Option<&[[f32; 3]]>,
+    sh_degree: u32,
+) -> GaussianScene {
     let coefficients = sh_coefficients(sh_degree);
     let mut scene = GaussianScene { sh_degree, ..Default::default() };
     if points.is_empty() {
@@ -25,11 +29,13 @@ pub fn gaussians_at_points(points: &[[f32; 3]], colors: Option<&[[f32; 3]]>, sh_
     }
     let tree: ImmutableKdTree<f32, u32, 3, 32> = ImmutableKdTree::new_from_slice(points);
     let extent = (crate::mesh::bounding_diagonal(points) as f32).max(f32::MIN_POSITIVE);
-    let neighbour_count = std::num::NonZero::new(4.min(points.len())).unwrap_or(std::num::NonZero::<usize>::MIN);
+    let neighbour_count =
+        std::num::NonZero::new(4.min(points.len())).unwrap_or(std::num::NonZero::<usize>::MIN);
     for (i, p) in points.iter().enumerate() {
         let neighbours = tree.nearest_n::<SquaredEuclidean>(p, neighbour_count);
         let others: Vec<f32> = neighbours.iter().skip(1).map(|n| n.distance).collect();
-        let mean_squared = if others.is_empty() { 0.0 } else { others.iter().sum::<f32>() / others.len() as f32 };
+        let mean_squared =
+            if others.is_empty() { 0.0 } else { others.iter().sum::<f32>() / others.len() as f32 };
         // Coincident points would give ln 0: keep a scale far below the point spacing instead.
         let scale = mean_squared.sqrt().max(extent * 1e-6);
         scene.positions.push(*p);
@@ -62,14 +68,19 @@ pub struct MaskedView<'a> {
 /// projections: uniform samples in a box around the point nearest to every optical axis, kept
 /// when every view that sees them has them inside its mask (and at least half the views see
 /// them). Fails, naming the cause, when the masks do not intersect in space.
-pub fn points_inside_masks(views: &[MaskedView], count: usize, seed: u64) -> Result<ColoredPoints, TrainError> {
+pub fn points_inside_masks(
+    views: &[MaskedView],
+    count: usize,
+    seed: u64,
+) -> Result<ColoredPoints, TrainError> {
     if views.is_empty() {
         return Err(TrainError::Input("no views with masks to initialise from".into()));
     }
     let cameras: Vec<&Camera> = views.iter().map(|v| v.camera).collect();
     // Where the optical axes meet (an inward-looking rig), else the mean camera centre.
     let mean = cameras.iter().map(|c| c.center()).sum::<DVec3>() / cameras.len() as f64;
-    let centre = nearest_point_to_rays(cameras.iter().map(|c| c.pixel_ray(c.cx, c.cy))).unwrap_or(mean);
+    let centre =
+        nearest_point_to_rays(cameras.iter().map(|c| c.pixel_ray(c.cx, c.cy))).unwrap_or(mean);
     let radius = cameras.iter().map(|c| c.center().distance(centre)).fold(0.0, f64::max);
     let mut rng = SplitMix64::new(seed);
     let (mut points, mut colors) = (Vec::with_capacity(count), Vec::with_capacity(count));
@@ -78,7 +89,13 @@ pub fn points_inside_masks(views: &[MaskedView], count: usize, seed: u64) -> Res
         if points.len() == count {
             break;
         }
-        let p = centre + radius * DVec3::new(rng.next_f64() * 2.0 - 1.0, rng.next_f64() * 2.0 - 1.0, rng.next_f64() * 2.0 - 1.0);
+        let p = centre
+            + radius
+                * DVec3::new(
+                    rng.next_f64() * 2.0 - 1.0,
+                    rng.next_f64() * 2.0 - 1.0,
+                    rng.next_f64() * 2.0 - 1.0,
+                );
         if let Some(color) = color_if_inside(views, p) {
             points.push(p.as_vec3().to_array());
             colors.push(color);
@@ -119,10 +136,14 @@ mod tests {
 
     #[test]
     fn scales_follow_neighbour_distances_and_survive_duplicates() {
-        let points = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0]];
+        let points =
+            [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0]];
         let scene = gaussians_at_points(&points, None, 1);
         scene.check().unwrap();
-        assert!((scene.log_scales[0][0] - 1.0f32.ln()).abs() < 1e-6, "three neighbours at distance 1");
+        assert!(
+            (scene.log_scales[0][0] - 1.0f32.ln()).abs() < 1e-6,
+            "three neighbours at distance 1"
+        );
         assert!(scene.log_scales.iter().flatten().all(|s| s.is_finite()));
         assert_eq!(scene.sh.len(), 5 * 3 * 4);
         assert!(scene.sh[..3].iter().all(|&c| c == 0.0), "grey is DC 0");

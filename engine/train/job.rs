@@ -26,12 +26,18 @@ pub struct FitJob {
 }
 
 /// Loads the dataset, initialises, fits. The report's `frame` is the job's.
-pub fn run_fit_job(ctx: &Arc<GpuContext>, job: &FitJob, progress: &mut dyn FnMut(Progress)) -> Result<FitOutcome, TrainError> {
+pub fn run_fit_job(
+    ctx: &Arc<GpuContext>,
+    job: &FitJob,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<FitOutcome, TrainError> {
     job.config.check()?;
     let dataset = Dataset::load(&job.data)?;
     let use_masks = job.config.loss.mask > 0.0 || job.init.is_none();
-    let train = load_targets(&dataset, job.frame, &dataset.train, job.config.background, use_masks)?;
-    let held_out = load_targets(&dataset, job.frame, &dataset.test, job.config.background, use_masks)?;
+    let train =
+        load_targets(&dataset, job.frame, &dataset.train, job.config.background, use_masks)?;
+    let held_out =
+        load_targets(&dataset, job.frame, &dataset.test, job.config.background, use_masks)?;
     let initial = initial_gaussians(&train, job.init.as_deref(), &job.config)?;
     let (eval, held) = if held_out.is_empty() { (&train, false) } else { (&held_out, true) };
     let mut outcome = fit(ctx, &train, eval, held, initial, &job.config, progress)?;
@@ -40,14 +46,28 @@ pub fn run_fit_job(ctx: &Arc<GpuContext>, job: &FitJob, progress: &mut dyn FnMut
 }
 
 /// Gaussians at the vertices of `init`, or at points sampled inside the views' masks.
-pub fn initial_gaussians(views: &[ViewTarget], init: Option<&Path>, config: &FitConfig) -> Result<GaussianScene, TrainError> {
+pub fn initial_gaussians(
+    views: &[ViewTarget],
+    init: Option<&Path>,
+    config: &FitConfig,
+) -> Result<GaussianScene, TrainError> {
     let (points, colors) = match init {
         Some(path) => read_points(path)?,
         None => {
-            let masks: Vec<Vec<f32>> = views.iter().map(|v| v.target.iter().map(|p| p[3]).collect()).collect();
-            let rgbs: Vec<Vec<[f32; 3]>> = views.iter().map(|v| v.target.iter().map(|p| [p[0], p[1], p[2]]).collect()).collect();
-            let masked: Vec<MaskedView> = views.iter().zip(&masks).zip(&rgbs).map(|((v, mask), rgb)| MaskedView { camera: &v.camera, mask, rgb }).collect();
-            let (points, colors) = points_inside_masks(&masked, config.init.points as usize, config.seed)?;
+            let masks: Vec<Vec<f32>> =
+                views.iter().map(|v| v.target.iter().map(|p| p[3]).collect()).collect();
+            let rgbs: Vec<Vec<[f32; 3]>> = views
+                .iter()
+                .map(|v| v.target.iter().map(|p| [p[0], p[1], p[2]]).collect())
+                .collect();
+            let masked: Vec<MaskedView> = views
+                .iter()
+                .zip(&masks)
+                .zip(&rgbs)
+                .map(|((v, mask), rgb)| MaskedView { camera: &v.camera, mask, rgb })
+                .collect();
+            let (points, colors) =
+                points_inside_masks(&masked, config.init.points as usize, config.seed)?;
             (points, Some(colors))
         }
     };
@@ -85,7 +105,8 @@ fn read_points(path: &Path) -> Result<PointsAndColors, TrainError> {
     if let Some(i) = points.iter().position(|p: &[f32; 3]| !p.iter().all(|c| c.is_finite())) {
         return Err(bad(format!("vertex {i} is not finite")));
     }
-    let colors = colors.map(|c: Vec<[u8; 3]>| c.iter().map(|p| p.map(|v| v as f32 / 255.0)).collect());
+    let colors =
+        colors.map(|c: Vec<[u8; 3]>| c.iter().map(|p| p.map(|v| v as f32 / 255.0)).collect());
     Ok((points, colors))
 }
 

@@ -46,13 +46,25 @@ pub struct MeshTerm {
 
 impl MeshTerm {
     /// For `faces` over the Gaussians at `positions`, rendering `width × height` views.
-    pub fn new(ctx: &Arc<GpuContext>, positions: &[[f32; 3]], faces: &[[u32; 3]], width: u32, height: u32) -> Result<Self, TrainError> {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        positions: &[[f32; 3]],
+        faces: &[[u32; 3]],
+        width: u32,
+        height: u32,
+    ) -> Result<Self, TrainError> {
         let mesh = RasterMesh::uniform(positions.to_vec(), faces.to_vec(), [0.5; 3])?;
         let pixels = width as usize * height as usize;
         let mut loss = ImageLoss::new(ctx)?;
         loss.reserve(pixels)?;
         let pipeline = |name, spirv, bindings| {
-            let desc = PipelineDesc { name, spirv, bindings, push_constant_bytes: size_of::<BridgeParams>() as u32, specialization: &[WORKGROUP] };
+            let desc = PipelineDesc {
+                name,
+                spirv,
+                bindings,
+                push_constant_bytes: size_of::<BridgeParams>() as u32,
+                specialization: &[WORKGROUP],
+            };
             ComputePipeline::new(ctx, &desc)
         };
         let term = Self {
@@ -61,14 +73,22 @@ impl MeshTerm {
             settings: RasterSettings::scaled_to(positions),
             loss,
             mesh_colors: pipeline("mesh colours from SH", shaders::TRAIN_MESH_COLORS, 2)?,
-            sh_dc_gradient: pipeline("SH DC gradient from mesh colours", shaders::TRAIN_SH_DC_GRADIENT, 2)?,
+            sh_dc_gradient: pipeline(
+                "SH DC gradient from mesh colours",
+                shaders::TRAIN_SH_DC_GRADIENT,
+                2,
+            )?,
             pack: pipeline("pack mesh render", shaders::TRAIN_PACK_MESH_RENDER, 3)?,
             unpack: pipeline("unpack mesh gradient", shaders::TRAIN_UNPACK_MESH_GRADIENT, 3)?,
             packed: GpuBuffer::new(ctx, "mesh render rgba", pixels)?,
             packed_grad: GpuBuffer::new(ctx, "mesh render rgba gradient", pixels)?,
             color_grad: GpuBuffer::new(ctx, "mesh colour image gradient", 3 * pixels)?,
             mask_grad: GpuBuffer::new(ctx, "mesh mask image gradient", pixels)?,
-            vertex_color_grads: GpuBuffer::new(ctx, "mesh vertex colour gradients", 3 * positions.len())?,
+            vertex_color_grads: GpuBuffer::new(
+                ctx,
+                "mesh vertex colour gradients",
+                3 * positions.len(),
+            )?,
             terms: GpuBuffer::new(ctx, "mesh loss terms", 8)?,
         };
         let mut rec = Recorder::new(ctx)?;
@@ -78,10 +98,19 @@ impl MeshTerm {
     }
 
     /// New faces after a topology change (positions only size the near plane and the buffers).
-    pub fn set_mesh(&mut self, positions: &[[f32; 3]], faces: &[[u32; 3]]) -> Result<(), TrainError> {
-        self.raster.set_mesh(&RasterMesh::uniform(positions.to_vec(), faces.to_vec(), [0.5; 3])?)?;
+    pub fn set_mesh(
+        &mut self,
+        positions: &[[f32; 3]],
+        faces: &[[u32; 3]],
+    ) -> Result<(), TrainError> {
+        self.raster.set_mesh(&RasterMesh::uniform(
+            positions.to_vec(),
+            faces.to_vec(),
+            [0.5; 3],
+        )?)?;
         self.settings = RasterSettings::scaled_to(positions);
-        self.vertex_color_grads = GpuBuffer::new(&self.ctx, "mesh vertex colour gradients", 3 * positions.len())?;
+        self.vertex_color_grads =
+            GpuBuffer::new(&self.ctx, "mesh vertex colour gradients", 3 * positions.len())?;
         Ok(())
     }
 
@@ -92,15 +121,35 @@ impl MeshTerm {
     }
 
     /// Records the mesh render of `params` from `camera` into [`Self::packed`]'s buffer.
-    fn record_render<'a>(&'a self, rec: &mut Recorder<'a>, params: &'a GaussianBuffers, camera: &Camera, background: [f32; 3]) -> Result<crate::raster::RasterParams, TrainError> {
+    fn record_render<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        params: &'a GaussianBuffers,
+        camera: &Camera,
+        background: [f32; 3],
+    ) -> Result<crate::raster::RasterParams, TrainError> {
         let groups = |n: usize| n.div_ceil(WORKGROUP as usize) as u64;
         let vertices = self.bridge(params.len(), params, background);
-        rec.dispatch_1d(&self.mesh_colors, &[params.sh.binding(), self.raster.colors().binding()], &vertices, groups(params.len()))?;
+        rec.dispatch_1d(
+            &self.mesh_colors,
+            &[params.sh.binding(), self.raster.colors().binding()],
+            &vertices,
+            groups(params.len()),
+        )?;
         let raster = self.raster.params(camera, &self.settings)?;
         self.raster.record_forward_from(rec, &raster, &params.positions)?;
         let pixels = self.packed_grad.len();
-        let bindings = [self.raster.color_image().binding(), self.raster.mask_image().binding(), self.packed.binding()];
-        rec.dispatch_1d(&self.pack, &bindings, &self.bridge(pixels, params, background), groups(pixels))?;
+        let bindings = [
+            self.raster.color_image().binding(),
+            self.raster.mask_image().binding(),
+            self.packed.binding(),
+        ];
+        rec.dispatch_1d(
+            &self.pack,
+            &bindings,
+            &self.bridge(pixels, params, background),
+            groups(pixels),
+        )?;
         Ok(raster)
     }
 
@@ -125,14 +174,30 @@ impl MeshTerm {
         let loss = LossParams::new(camera.width, camera.height, lambda, false);
         self.loss.record(rec, &loss, &self.packed, target, None, &self.terms, &self.packed_grad)?;
         let pixels = self.packed_grad.len();
-        let unpack = [self.packed_grad.binding(), self.color_grad.binding(), self.mask_grad.binding()];
-        rec.dispatch_1d(&self.unpack, &unpack, &self.bridge(pixels, params, background), groups(pixels))?;
+        let unpack =
+            [self.packed_grad.binding(), self.color_grad.binding(), self.mask_grad.binding()];
+        rec.dispatch_1d(
+            &self.unpack,
+            &unpack,
+            &self.bridge(pixels, params, background),
+            groups(pixels),
+        )?;
         rec.end_pass();
         rec.begin_pass("mesh backward");
         rec.fill_buffer(&self.vertex_color_grads, 0);
-        self.raster.record_backward(rec, &raster, (&self.color_grad, &self.mask_grad), (&grads.positions, &self.vertex_color_grads))?;
+        self.raster.record_backward(
+            rec,
+            &raster,
+            (&self.color_grad, &self.mask_grad),
+            (&grads.positions, &self.vertex_color_grads),
+        )?;
         let dc = [self.vertex_color_grads.binding(), grads.sh.binding()];
-        rec.dispatch_1d(&self.sh_dc_gradient, &dc, &self.bridge(params.len(), params, background), groups(params.len()))?;
+        rec.dispatch_1d(
+            &self.sh_dc_gradient,
+            &dc,
+            &self.bridge(params.len(), params, background),
+            groups(params.len()),
+        )?;
         rec.end_pass();
         Ok(())
     }
@@ -143,11 +208,22 @@ impl MeshTerm {
     }
 
     /// The mesh render of `params` from `camera` (RGB over `background`, clamped to [0, 1]).
-    pub fn render(&self, params: &GaussianBuffers, camera: &Camera, background: [f32; 3]) -> Result<Vec<f32>, TrainError> {
+    pub fn render(
+        &self,
+        params: &GaussianBuffers,
+        camera: &Camera,
+        background: [f32; 3],
+    ) -> Result<Vec<f32>, TrainError> {
         let mut rec = Recorder::new(&self.ctx)?;
         self.record_render(&mut rec, params, camera, background)?;
         rec.submit_and_wait()?;
         let pixels = camera.width as usize * camera.height as usize;
-        Ok(self.packed.read_prefix(pixels)?.iter().flat_map(|p| [p[0], p[1], p[2]]).map(|c| c.clamp(0.0, 1.0)).collect())
+        Ok(self
+            .packed
+            .read_prefix(pixels)?
+            .iter()
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .map(|c| c.clamp(0.0, 1.0))
+            .collect())
     }
 }

@@ -19,8 +19,8 @@ mod views;
 pub use config::{ConfigError, FitConfig};
 pub use fit::{fit, FitOutcome, Progress};
 pub use job::{initial_gaussians, run_fit_job, write_fit_outputs, FitJob};
-pub use step::Trainer;
 pub use report::{write_curve_csv, write_curve_plot, CurvePoint, FitReport};
+pub use step::Trainer;
 pub use views::{load_targets, ViewTarget};
 
 use std::path::PathBuf;

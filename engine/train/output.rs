@@ -50,17 +50,29 @@ impl SequenceOutput {
     }
 
     /// Writes frame `t`: the Gaussians, then the mesh.
-    pub fn write_frame(&self, t: usize, mesh: &TriMesh, scene: &GaussianScene) -> Result<(), TrainError> {
+    pub fn write_frame(
+        &self,
+        t: usize,
+        mesh: &TriMesh,
+        scene: &GaussianScene,
+    ) -> Result<(), TrainError> {
         scene.write_ply(&self.gaussians_path(t)).map_err(|e| TrainError::Input(e.to_string()))?;
         mesh.write_ply(&self.mesh_path(t)).map_err(|e| TrainError::Input(e.to_string()))
     }
 
     /// A finished frame's mesh and Gaussians, as written.
     pub fn read_frame(&self, t: usize) -> Result<(TriMesh, GaussianScene), TrainError> {
-        let mesh = TriMesh::read_ply(&self.mesh_path(t)).map_err(|e| TrainError::Input(e.to_string()))?;
-        let scene = GaussianScene::read_ply(&self.gaussians_path(t)).map_err(|e| TrainError::Input(e.to_string()))?;
+        let mesh =
+            TriMesh::read_ply(&self.mesh_path(t)).map_err(|e| TrainError::Input(e.to_string()))?;
+        let scene = GaussianScene::read_ply(&self.gaussians_path(t))
+            .map_err(|e| TrainError::Input(e.to_string()))?;
         if mesh.positions.len() != scene.len() {
-            let problem = format!("{} vertices but {} has {} Gaussians", mesh.positions.len(), self.gaussians_path(t).display(), scene.len());
+            let problem = format!(
+                "{} vertices but {} has {} Gaussians",
+                mesh.positions.len(),
+                self.gaussians_path(t).display(),
+                scene.len()
+            );
             return Err(TrainError::Input(format!("{}: {problem}", self.mesh_path(t).display())));
         }
         Ok((mesh, scene))
@@ -68,15 +80,23 @@ impl SequenceOutput {
 
     /// Writes `sequence.obj` + `sequence.pc2` and `sequence.glb` (`fps` frames per second)
     /// from the meshes of `frames`; returns the paths.
-    pub fn export(&self, frames: std::ops::Range<usize>, fps: f64) -> Result<Vec<PathBuf>, TrainError> {
+    pub fn export(
+        &self,
+        frames: std::ops::Range<usize>,
+        fps: f64,
+    ) -> Result<Vec<PathBuf>, TrainError> {
         let mut sequence = MeshSequence::default();
         for t in frames {
-            let mesh = TriMesh::read_ply(&self.mesh_path(t)).map_err(|e| TrainError::Input(e.to_string()))?;
+            let mesh = TriMesh::read_ply(&self.mesh_path(t))
+                .map_err(|e| TrainError::Input(e.to_string()))?;
             if sequence.frames.is_empty() {
                 sequence.faces = mesh.faces.clone();
                 sequence.colors = mesh.colors.as_ref().map(|_| Vec::new());
             } else if mesh.faces != sequence.faces {
-                return Err(TrainError::Input(format!("{}: its faces differ from the first frame's", self.mesh_path(t).display())));
+                return Err(TrainError::Input(format!(
+                    "{}: its faces differ from the first frame's",
+                    self.mesh_path(t).display()
+                )));
             }
             if let (Some(all), Some(c)) = (sequence.colors.as_mut(), mesh.colors) {
                 all.push(c);
@@ -85,7 +105,9 @@ impl SequenceOutput {
         }
         let (pc2, glb) = (self.root.join("sequence.pc2"), self.root.join("sequence.glb"));
         for path in [&pc2, &glb] {
-            sequence.write(path, FrameFormat::Ply, fps).map_err(|e| TrainError::Input(e.to_string()))?;
+            sequence
+                .write(path, FrameFormat::Ply, fps)
+                .map_err(|e| TrainError::Input(e.to_string()))?;
         }
         Ok(vec![self.root.join("sequence.obj"), pc2, glb])
     }
@@ -95,7 +117,13 @@ impl SequenceOutput {
 pub fn dc_vertex_colors(scene: &GaussianScene) -> Vec<[u8; 3]> {
     const SH_C0: f32 = 0.282_094_8;
     let stride = scene.sh.len() / scene.len().max(1);
-    (0..scene.len()).map(|i| [0, 1, 2].map(|c| ((0.5 + SH_C0 * scene.sh[i * stride + c]).clamp(0.0, 1.0) * 255.0).round() as u8)).collect()
+    (0..scene.len())
+        .map(|i| {
+            [0, 1, 2].map(|c| {
+                ((0.5 + SH_C0 * scene.sh[i * stride + c]).clamp(0.0, 1.0) * 255.0).round() as u8
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -111,9 +139,14 @@ mod tests {
         let positions = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         let faces = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         for t in 0..2 {
-            let moved: Vec<[f32; 3]> = positions.iter().map(|p| [p[0] + t as f32, p[1], p[2]]).collect();
+            let moved: Vec<[f32; 3]> =
+                positions.iter().map(|p| [p[0] + t as f32, p[1], p[2]]).collect();
             let scene = gaussians_at_points(&moved, Some(&[[0.2, 0.4, 0.6]; 4]), 0);
-            let mesh = TriMesh { positions: moved, faces: faces.clone(), colors: Some(dc_vertex_colors(&scene)) };
+            let mesh = TriMesh {
+                positions: moved,
+                faces: faces.clone(),
+                colors: Some(dc_vertex_colors(&scene)),
+            };
             assert!(!out.is_complete(t));
             out.write_frame(t, &mesh, &scene).unwrap();
             assert!(out.is_complete(t));

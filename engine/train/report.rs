@@ -73,7 +73,11 @@ pub fn write_curve_csv(path: &Path, curve: &[CurvePoint]) -> Result<(), TrainErr
     write_atomically(path, |w| {
         writeln!(w, "iteration,wall_s,psnr,ssim,gaussians")?;
         for p in curve {
-            writeln!(w, "{},{:.4},{:.4},{:.6},{}", p.iteration, p.wall_s, p.psnr, p.ssim, p.gaussians)?;
+            writeln!(
+                w,
+                "{},{:.4},{:.4},{:.6},{}",
+                p.iteration, p.wall_s, p.psnr, p.ssim, p.gaussians
+            )?;
         }
         Ok(())
     })
@@ -83,6 +87,8 @@ pub fn write_curve_csv(path: &Path, curve: &[CurvePoint]) -> Result<(), TrainErr
 /// PSNR (up) against training seconds (right), drawn without text like every plot here; the
 /// CSV beside it carries the numbers.
 pub fn write_curve_plot(path: &Path, curve: &[CurvePoint]) -> Result<(), TrainError> {
-    let points: Vec<glam::DVec2> = curve.iter().map(|p| glam::DVec2::new(p.wall_s, -p.psnr)).collect();
-    crate::io::plot::write_line_plot(path, &[points]).map_err(|error| TrainError::Io { path: path.to_owned(), error })
+    let points: Vec<glam::DVec2> =
+        curve.iter().map(|p| glam::DVec2::new(p.wall_s, -p.psnr)).collect();
+    crate::io::plot::write_line_plot(path, &[points])
+        .map_err(|error| TrainError::Io { path: path.to_owned(), error })
 }

@@ -54,7 +54,11 @@ pub struct Trainer {
 
 impl Trainer {
     /// Uploads `scene` and the views' targets; the optimizer starts at zero moments.
-    pub fn new(ctx: &Arc<GpuContext>, scene: &GaussianScene, views: &[ViewTarget]) -> Result<Self, TrainError> {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        scene: &GaussianScene,
+        views: &[ViewTarget],
+    ) -> Result<Self, TrainError> {
         scene.check().map_err(crate::splat::SplatError::from)?;
         let max_pixels = views.iter().map(|v| v.target.len()).max().unwrap_or(0);
         let mut loss = ImageLoss::new(ctx)?;
@@ -65,7 +69,10 @@ impl Trainer {
             splatter: Splatter::new(ctx)?,
             loss,
             cameras: views.iter().map(|v| v.camera).collect(),
-            targets: views.iter().map(|v| GpuBuffer::from_slice(ctx, &format!("target {}", v.name), &v.target)).collect::<Result<_, _>>()?,
+            targets: views
+                .iter()
+                .map(|v| GpuBuffer::from_slice(ctx, &format!("target {}", v.name), &v.target))
+                .collect::<Result<_, _>>()?,
             grad_rgba: GpuBuffer::new(ctx, "loss gradient", max_pixels)?,
             grad_depth: GpuBuffer::new(ctx, "depth gradient (unused)", max_pixels)?,
             terms: GpuBuffer::new(ctx, "loss terms", 8)?,
@@ -100,7 +107,13 @@ impl Trainer {
     /// forward → loss (λ per rgba channel) → backward → Adam on training view `view`, in one
     /// submission. Returns the pass times and whether every intersection fit the splatter's
     /// buffers (see [`Self::finish_step`]).
-    pub fn step(&mut self, view: usize, settings: &RenderSettings, lambda: [f32; 4], adam: &AdamParams) -> Result<(PassTimes, bool), TrainError> {
+    pub fn step(
+        &mut self,
+        view: usize,
+        settings: &RenderSettings,
+        lambda: [f32; 4],
+        adam: &AdamParams,
+    ) -> Result<(PassTimes, bool), TrainError> {
         let frame = self.prepare_step(view, settings)?;
         let mut rec = Recorder::new(&self.ctx)?;
         self.record_splat(&mut rec, view, &frame, lambda)?;
@@ -114,26 +127,55 @@ impl Trainer {
     /// this step and then to [`Self::finish_step`]. A step with more terms than the splatting
     /// loss records them between [`Self::record_splat`] and [`Self::record_adam`], adding
     /// their gradients to [`Self::grads`].
-    pub fn prepare_step(&mut self, view: usize, settings: &RenderSettings) -> Result<FrameParams, TrainError> {
+    pub fn prepare_step(
+        &mut self,
+        view: usize,
+        settings: &RenderSettings,
+    ) -> Result<FrameParams, TrainError> {
         Ok(self.splatter.prepare_forward(&self.state.params, &self.cameras[view], settings)?)
     }
 
     /// Records zeroing the gradients, the splatting forward, its loss against the view's
     /// target (λ per rgba channel) and its backward.
-    pub fn record_splat<'a>(&'a self, rec: &mut Recorder<'a>, view: usize, frame: &FrameParams, lambda: [f32; 4]) -> Result<(), TrainError> {
+    pub fn record_splat<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        view: usize,
+        frame: &FrameParams,
+        lambda: [f32; 4],
+    ) -> Result<(), TrainError> {
         let (state, splatter, camera) = (&self.state, &self.splatter, &self.cameras[view]);
         splatter.record_forward(rec, &state.params, frame)?;
         rec.begin_pass("loss");
         state.grads.record_zero(rec);
         let params = LossParams::new(camera.width, camera.height, lambda, false);
-        self.loss.record(rec, &params, splatter.rgba(), &self.targets[view], None, &self.terms, &self.grad_rgba)?;
+        self.loss.record(
+            rec,
+            &params,
+            splatter.rgba(),
+            &self.targets[view],
+            None,
+            &self.terms,
+            &self.grad_rgba,
+        )?;
         rec.end_pass();
-        splatter.record_backward_of(rec, frame, &state.params, (&self.grad_rgba, &self.grad_depth), &state.grads, &state.densify_stats)?;
+        splatter.record_backward_of(
+            rec,
+            frame,
+            &state.params,
+            (&self.grad_rgba, &self.grad_depth),
+            &state.grads,
+            &state.densify_stats,
+        )?;
         Ok(())
     }
 
     /// Records the Adam step along the gradients recorded so far.
-    pub fn record_adam<'a>(&'a self, rec: &mut Recorder<'a>, adam: &AdamParams) -> Result<(), TrainError> {
+    pub fn record_adam<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        adam: &AdamParams,
+    ) -> Result<(), TrainError> {
         rec.begin_pass("adam");
         self.adam.record_step(rec, &self.state.params, &self.state.grads, adam)?;
         rec.end_pass();
@@ -215,9 +257,20 @@ impl Trainer {
     }
 
     /// Renders the current (or checkpointed) Gaussians from `camera`: RGB per pixel in [0, 1].
-    pub fn render(&mut self, camera: &Camera, settings: &RenderSettings, last_good: bool) -> Result<Vec<f32>, TrainError> {
+    pub fn render(
+        &mut self,
+        camera: &Camera,
+        settings: &RenderSettings,
+        last_good: bool,
+    ) -> Result<Vec<f32>, TrainError> {
         let params = if last_good { &self.state.last_good } else { &self.state.params };
         self.splatter.forward(params, camera, settings)?;
-        Ok(self.splatter.read_rgba()?.iter().flat_map(|p| [p[0], p[1], p[2]]).map(|c| c.clamp(0.0, 1.0)).collect())
+        Ok(self
+            .splatter
+            .read_rgba()?
+            .iter()
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .map(|c| c.clamp(0.0, 1.0))
+            .collect())
     }
 }

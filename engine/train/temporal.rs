@@ -27,7 +27,11 @@ pub fn extrapolate(prev: &GaussianScene, prev2: Option<&GaussianScene>) -> Gauss
 #[inline]
 fn quat([w, x, y, z]: [f32; 4]) -> Quat {
     let q = Quat::from_xyzw(x, y, z, w);
-    if q.length_squared() > 0.0 { q.normalize() } else { Quat::IDENTITY }
+    if q.length_squared() > 0.0 {
+        q.normalize()
+    } else {
+        Quat::IDENTITY
+    }
 }
 
 #[cfg(test)]

@@ -48,15 +48,38 @@ impl ViewTarget {
         }
         let c = &self.camera;
         let s = 1.0 / f as f64;
-        let camera = Camera { width: w, height: h, fx: c.fx * s, fy: c.fy * s, cx: c.cx * s, cy: c.cy * s, world_to_camera: c.world_to_camera };
+        let camera = Camera {
+            width: w,
+            height: h,
+            fx: c.fx * s,
+            fy: c.fy * s,
+            cx: c.cx * s,
+            cy: c.cy * s,
+            world_to_camera: c.world_to_camera,
+        };
         Self { name: self.name.clone(), camera, target }
     }
 }
 
 /// Loads the views of `frame` whose cameras are in `cameras`. Without masks (`use_masks`
 /// false) every pixel counts as foreground.
-pub fn load_targets(dataset: &Dataset, frame: usize, cameras: &[usize], background: [f32; 3], use_masks: bool) -> Result<Vec<ViewTarget>, TrainError> {
-    let views = &dataset.frames.get(frame).ok_or_else(|| TrainError::Input(format!("frame {frame} is past the dataset's {} frames", dataset.frames.len())))?.views;
+pub fn load_targets(
+    dataset: &Dataset,
+    frame: usize,
+    cameras: &[usize],
+    background: [f32; 3],
+    use_masks: bool,
+) -> Result<Vec<ViewTarget>, TrainError> {
+    let views = &dataset
+        .frames
+        .get(frame)
+        .ok_or_else(|| {
+            TrainError::Input(format!(
+                "frame {frame} is past the dataset's {} frames",
+                dataset.frames.len()
+            ))
+        })?
+        .views;
     let mut targets = Vec::new();
     for (index, view) in views.iter().enumerate().filter(|(_, v)| cameras.contains(&v.camera)) {
         let image = dataset.image(frame, index)?;
@@ -77,7 +100,13 @@ fn composite(image: &Image, mask: Option<&[f32]>, background: [f32; 3]) -> Vec<[
         .map(|p| {
             let m = mask.map_or(1.0, |m| m[p].clamp(0.0, 1.0));
             let c = |k: usize| image.data[p * channels + k.min(channels - 1)];
-            [0, 1, 2].map(|k| c(k) * m + background[k] * (1.0 - m)).into_iter().chain([m]).collect::<Vec<_>>().try_into().unwrap_or([0.0; 4])
+            [0, 1, 2]
+                .map(|k| c(k) * m + background[k] * (1.0 - m))
+                .into_iter()
+                .chain([m])
+                .collect::<Vec<_>>()
+                .try_into()
+                .unwrap_or([0.0; 4])
         })
         .collect()
 }

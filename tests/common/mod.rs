@@ -15,7 +15,8 @@ pub struct TestGpu {
 /// A validated context on the device the environment picks (lavapipe on CI).
 pub fn gpu() -> TestGpu {
     let options = ContextOptions { device: None, validation: Some(true) };
-    let ctx = GpuContext::new(&options).unwrap_or_else(|e| panic!("cannot create a Vulkan context: {e}"));
+    let ctx =
+        GpuContext::new(&options).unwrap_or_else(|e| panic!("cannot create a Vulkan context: {e}"));
     let log = ctx.validation().clone();
     TestGpu { ctx: Some(ctx), log }
 }
@@ -33,9 +34,17 @@ impl Drop for TestGpu {
         }
         // Destroy the context now, so messages about leaked objects are counted too.
         let ctx = self.ctx.take().expect("dropped once");
-        assert!(Arc::try_unwrap(ctx).is_ok(), "the GPU context is still referenced at the end of the test");
+        assert!(
+            Arc::try_unwrap(ctx).is_ok(),
+            "the GPU context is still referenced at the end of the test"
+        );
         let messages = self.log.messages();
-        assert!(messages.is_empty(), "{} validation message(s):\n{}", messages.len(), messages.join("\n"));
+        assert!(
+            messages.is_empty(),
+            "{} validation message(s):\n{}",
+            messages.len(),
+            messages.join("\n")
+        );
     }
 }
 

@@ -26,10 +26,19 @@ pub fn bend(t: f64, x: DVec3) -> DVec3 {
 /// `frames` frames (frame 0 is motion(0, ·)), with per-frame vertex colours.
 pub fn sequence(level: u32, frames: usize, motion: fn(f64, DVec3) -> DVec3) -> MeshSequence {
     let (sphere, faces) = unit_sphere(level);
-    let rest: Vec<DVec3> = sphere.iter().map(|p| DVec3::new(p[0] as f64, 0.7 * p[1] as f64, 0.5 * p[2] as f64)).collect();
-    let frames_positions = (0..frames).map(|t| rest.iter().map(|&x| motion(t as f64, x).as_vec3().to_array()).collect()).collect();
+    let rest: Vec<DVec3> = sphere
+        .iter()
+        .map(|p| DVec3::new(p[0] as f64, 0.7 * p[1] as f64, 0.5 * p[2] as f64))
+        .collect();
+    let frames_positions = (0..frames)
+        .map(|t| rest.iter().map(|&x| motion(t as f64, x).as_vec3().to_array()).collect())
+        .collect();
     let colors = (0..frames)
-        .map(|t| (0..rest.len()).map(|i| [(i % 256) as u8, ((i / 256 + t) % 256) as u8, (t * 37 % 256) as u8]).collect())
+        .map(|t| {
+            (0..rest.len())
+                .map(|i| [(i % 256) as u8, ((i / 256 + t) % 256) as u8, (t * 37 % 256) as u8])
+                .collect()
+        })
         .collect();
     MeshSequence { faces, frames: frames_positions, colors: Some(colors) }
 }

@@ -70,25 +70,55 @@ impl Drop for Owned {
 }
 
 impl Owned {
-    fn allocate(&mut self, name: &str, requirements: vk::MemoryRequirements, location: MemoryLocation, linear: bool) -> (vk::DeviceMemory, u64) {
-        let desc = AllocationCreateDesc { name, requirements, location, linear, allocation_scheme: AllocationScheme::GpuAllocatorManaged };
+    fn allocate(
+        &mut self,
+        name: &str,
+        requirements: vk::MemoryRequirements,
+        location: MemoryLocation,
+        linear: bool,
+    ) -> (vk::DeviceMemory, u64) {
+        let desc = AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        };
         let allocation = self.ctx.allocator().as_mut().unwrap().allocate(&desc).unwrap();
         let bound = (unsafe { allocation.memory() }, allocation.offset());
         self.allocations.push(allocation);
         bound
     }
 
-    fn buffer(&mut self, name: &str, bytes: u64, usage: vk::BufferUsageFlags, location: MemoryLocation) -> vk::Buffer {
+    fn buffer(
+        &mut self,
+        name: &str,
+        bytes: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> vk::Buffer {
         let d = self.ctx.device().clone();
         let info = vk::BufferCreateInfo::default().size(bytes.max(16)).usage(usage);
         let buffer = unsafe { d.create_buffer(&info, None) }.unwrap();
         self.buffers.push(buffer);
-        let (memory, offset) = self.allocate(name, unsafe { d.get_buffer_memory_requirements(buffer) }, location, true);
+        let (memory, offset) = self.allocate(
+            name,
+            unsafe { d.get_buffer_memory_requirements(buffer) },
+            location,
+            true,
+        );
         unsafe { d.bind_buffer_memory(buffer, memory, offset) }.unwrap();
         buffer
     }
 
-    fn image(&mut self, name: &str, format: vk::Format, usage: vk::ImageUsageFlags, aspect: vk::ImageAspectFlags, (w, h): (u32, u32)) -> vk::ImageView {
+    fn image(
+        &mut self,
+        name: &str,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        aspect: vk::ImageAspectFlags,
+        (w, h): (u32, u32),
+    ) -> vk::ImageView {
         let d = self.ctx.device().clone();
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
@@ -102,10 +132,25 @@ impl Owned {
             .initial_layout(vk::ImageLayout::UNDEFINED);
         let image = unsafe { d.create_image(&info, None) }.unwrap();
         self.images.push(image);
-        let (memory, offset) = self.allocate(name, unsafe { d.get_image_memory_requirements(image) }, MemoryLocation::GpuOnly, false);
+        let (memory, offset) = self.allocate(
+            name,
+            unsafe { d.get_image_memory_requirements(image) },
+            MemoryLocation::GpuOnly,
+            false,
+        );
         unsafe { d.bind_image_memory(image, memory, offset) }.unwrap();
-        let range = vk::ImageSubresourceRange { aspect_mask: aspect, base_mip_level: 0, level_count: 1, base_array_layer: 0, layer_count: 1 };
-        let view_info = vk::ImageViewCreateInfo::default().image(image).view_type(vk::ImageViewType::TYPE_2D).format(format).subresource_range(range);
+        let range = vk::ImageSubresourceRange {
+            aspect_mask: aspect,
+            base_mip_level: 0,
+            level_count: 1,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(image)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(format)
+            .subresource_range(range);
         let view = unsafe { d.create_image_view(&view_info, None) }.unwrap();
         self.views.push(view);
         view
@@ -133,8 +178,14 @@ fn render_pass(d: &ash::Device) -> vk::RenderPass {
             .initial_layout(vk::ImageLayout::UNDEFINED)
             .final_layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL),
     ];
-    let color_ref = [vk::AttachmentReference { attachment: 0, layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL }];
-    let depth_ref = vk::AttachmentReference { attachment: 1, layout: vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL };
+    let color_ref = [vk::AttachmentReference {
+        attachment: 0,
+        layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+    }];
+    let depth_ref = vk::AttachmentReference {
+        attachment: 1,
+        layout: vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+    };
     let subpass = [vk::SubpassDescription::default()
         .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
         .color_attachments(&color_ref)
@@ -147,38 +198,79 @@ fn render_pass(d: &ash::Device) -> vk::RenderPass {
         .dst_stage_mask(vk::PipelineStageFlags::TRANSFER)
         .src_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
         .dst_access_mask(vk::AccessFlags::TRANSFER_READ)];
-    let info = vk::RenderPassCreateInfo::default().attachments(&attachments).subpasses(&subpass).dependencies(&dependencies);
+    let info = vk::RenderPassCreateInfo::default()
+        .attachments(&attachments)
+        .subpasses(&subpass)
+        .dependencies(&dependencies);
     unsafe { d.create_render_pass(&info, None) }.unwrap()
 }
 
 fn pipeline(d: &ash::Device, owned: &mut Owned, (w, h): (u32, u32)) -> vk::Pipeline {
     let module = |spirv: &[u8]| {
         let code = ash::util::read_spv(&mut std::io::Cursor::new(spirv)).unwrap();
-        unsafe { d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None) }.unwrap()
+        unsafe { d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None) }
+            .unwrap()
     };
-    let (vert, frag) = (module(shaders::RASTER_ORACLE_IDS_VERT), module(shaders::RASTER_ORACLE_IDS_FRAG));
+    let (vert, frag) =
+        (module(shaders::RASTER_ORACLE_IDS_VERT), module(shaders::RASTER_ORACLE_IDS_FRAG));
     owned.modules.extend([vert, frag]);
     let stages = [
-        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vert).name(c"main"),
-        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(frag).name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(vert)
+            .name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(frag)
+            .name(c"main"),
     ];
-    let bindings = [vk::VertexInputBindingDescription { binding: 0, stride: 16, input_rate: vk::VertexInputRate::VERTEX }];
-    let attributes = [vk::VertexInputAttributeDescription { location: 0, binding: 0, format: vk::Format::R32G32B32A32_SFLOAT, offset: 0 }];
-    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default().vertex_binding_descriptions(&bindings).vertex_attribute_descriptions(&attributes);
-    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-    let viewports = [vk::Viewport { x: 0.0, y: 0.0, width: w as f32, height: h as f32, min_depth: 0.0, max_depth: 1.0 }];
-    let scissors = [vk::Rect2D { offset: vk::Offset2D { x: 0, y: 0 }, extent: vk::Extent2D { width: w, height: h } }];
-    let viewport = vk::PipelineViewportStateCreateInfo::default().viewports(&viewports).scissors(&scissors);
+    let bindings = [vk::VertexInputBindingDescription {
+        binding: 0,
+        stride: 16,
+        input_rate: vk::VertexInputRate::VERTEX,
+    }];
+    let attributes = [vk::VertexInputAttributeDescription {
+        location: 0,
+        binding: 0,
+        format: vk::Format::R32G32B32A32_SFLOAT,
+        offset: 0,
+    }];
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+        .vertex_binding_descriptions(&bindings)
+        .vertex_attribute_descriptions(&attributes);
+    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+        .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let viewports = [vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: w as f32,
+        height: h as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    }];
+    let scissors = [vk::Rect2D {
+        offset: vk::Offset2D { x: 0, y: 0 },
+        extent: vk::Extent2D { width: w, height: h },
+    }];
+    let viewport =
+        vk::PipelineViewportStateCreateInfo::default().viewports(&viewports).scissors(&scissors);
     let raster = vk::PipelineRasterizationStateCreateInfo::default()
         .polygon_mode(vk::PolygonMode::FILL)
         .cull_mode(vk::CullModeFlags::NONE)
         .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
         .line_width(1.0);
-    let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-    let depth = vk::PipelineDepthStencilStateCreateInfo::default().depth_test_enable(true).depth_write_enable(true).depth_compare_op(vk::CompareOp::LESS);
-    let blend_attachments = [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::R)];
+    let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+        .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(true)
+        .depth_write_enable(true)
+        .depth_compare_op(vk::CompareOp::LESS);
+    let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+        .color_write_mask(vk::ColorComponentFlags::R)];
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-    owned.layout = unsafe { d.create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default(), None) }.unwrap();
+    owned.layout =
+        unsafe { d.create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default(), None) }
+            .unwrap();
     let info = vk::GraphicsPipelineCreateInfo::default()
         .stages(&stages)
         .vertex_input_state(&vertex_input)
@@ -191,11 +283,19 @@ fn pipeline(d: &ash::Device, owned: &mut Owned, (w, h): (u32, u32)) -> vk::Pipel
         .layout(owned.layout)
         .render_pass(owned.render_pass)
         .subpass(0);
-    unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }.map_err(|(_, e)| e).unwrap()[0]
+    unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
+        .map_err(|(_, e)| e)
+        .unwrap()[0]
 }
 
 /// Triangle id per pixel (`u32::MAX` where nothing was drawn) for camera-space vertices `cam`.
-pub fn triangle_ids(ctx: &Arc<GpuContext>, cam: &[DVec3], faces: &[[u32; 3]], camera: &Camera, near: f64) -> Vec<u32> {
+pub fn triangle_ids(
+    ctx: &Arc<GpuContext>,
+    cam: &[DVec3],
+    faces: &[[u32; 3]],
+    camera: &Camera,
+    near: f64,
+) -> Vec<u32> {
     let d = ctx.device().clone();
     let size = (camera.width, camera.height);
     let pixels = size.0 as usize * size.1 as usize;
@@ -214,21 +314,52 @@ pub fn triangle_ids(ctx: &Arc<GpuContext>, cam: &[DVec3], faces: &[[u32; 3]], ca
         fence: vk::Fence::null(),
     };
     let corners = clip_positions(cam, faces, camera, near);
-    let vertex_buffer = owned.buffer("oracle vertices", (corners.len() * 16) as u64, vk::BufferUsageFlags::VERTEX_BUFFER, MemoryLocation::CpuToGpu);
+    let vertex_buffer = owned.buffer(
+        "oracle vertices",
+        (corners.len() * 16) as u64,
+        vk::BufferUsageFlags::VERTEX_BUFFER,
+        MemoryLocation::CpuToGpu,
+    );
     let corner_bytes: &[u8] = bytemuck::cast_slice(&corners);
-    unsafe { std::ptr::copy_nonoverlapping(corner_bytes.as_ptr(), owned.mapped::<u8>(0), corner_bytes.len()) };
-    let readback = owned.buffer("oracle readback", (pixels * 4) as u64, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu);
+    unsafe {
+        std::ptr::copy_nonoverlapping(
+            corner_bytes.as_ptr(),
+            owned.mapped::<u8>(0),
+            corner_bytes.len(),
+        )
+    };
+    let readback = owned.buffer(
+        "oracle readback",
+        (pixels * 4) as u64,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuToCpu,
+    );
     let color_usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
-    let color_view = owned.image("oracle ids", COLOR_FORMAT, color_usage, vk::ImageAspectFlags::COLOR, size);
-    let depth_view = owned.image("oracle depth", DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT, vk::ImageAspectFlags::DEPTH, size);
+    let color_view =
+        owned.image("oracle ids", COLOR_FORMAT, color_usage, vk::ImageAspectFlags::COLOR, size);
+    let depth_view = owned.image(
+        "oracle depth",
+        DEPTH_FORMAT,
+        vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+        vk::ImageAspectFlags::DEPTH,
+        size,
+    );
     let views = [color_view, depth_view];
-    let fb_info = vk::FramebufferCreateInfo::default().render_pass(owned.render_pass).attachments(&views).width(size.0).height(size.1).layers(1);
+    let fb_info = vk::FramebufferCreateInfo::default()
+        .render_pass(owned.render_pass)
+        .attachments(&views)
+        .width(size.0)
+        .height(size.1)
+        .layers(1);
     owned.framebuffer = unsafe { d.create_framebuffer(&fb_info, None) }.unwrap();
     owned.pipeline = pipeline(&d, &mut owned, size);
     let pool_info = vk::CommandPoolCreateInfo::default().queue_family_index(ctx.queue_family());
     owned.pool = unsafe { d.create_command_pool(&pool_info, None) }.unwrap();
     owned.fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.unwrap();
-    let cmd_info = vk::CommandBufferAllocateInfo::default().command_pool(owned.pool).level(vk::CommandBufferLevel::PRIMARY).command_buffer_count(1);
+    let cmd_info = vk::CommandBufferAllocateInfo::default()
+        .command_pool(owned.pool)
+        .level(vk::CommandBufferLevel::PRIMARY)
+        .command_buffer_count(1);
     let cmd = unsafe { d.allocate_command_buffers(&cmd_info) }.unwrap()[0];
     unsafe {
         d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
@@ -236,8 +367,15 @@ pub fn triangle_ids(ctx: &Arc<GpuContext>, cam: &[DVec3], faces: &[[u32; 3]], ca
             vk::ClearValue { color: vk::ClearColorValue { uint32: [u32::MAX; 4] } },
             vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } },
         ];
-        let area = vk::Rect2D { offset: vk::Offset2D { x: 0, y: 0 }, extent: vk::Extent2D { width: size.0, height: size.1 } };
-        let begin = vk::RenderPassBeginInfo::default().render_pass(owned.render_pass).framebuffer(owned.framebuffer).render_area(area).clear_values(&clears);
+        let area = vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: vk::Extent2D { width: size.0, height: size.1 },
+        };
+        let begin = vk::RenderPassBeginInfo::default()
+            .render_pass(owned.render_pass)
+            .framebuffer(owned.framebuffer)
+            .render_area(area)
+            .clear_values(&clears);
         d.cmd_begin_render_pass(cmd, &begin, vk::SubpassContents::INLINE);
         if !corners.is_empty() {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, owned.pipeline);
@@ -245,11 +383,34 @@ pub fn triangle_ids(ctx: &Arc<GpuContext>, cam: &[DVec3], faces: &[[u32; 3]], ca
             d.cmd_draw(cmd, corners.len() as u32, 1, 0, 0);
         }
         d.cmd_end_render_pass(cmd);
-        let layers = vk::ImageSubresourceLayers { aspect_mask: vk::ImageAspectFlags::COLOR, mip_level: 0, base_array_layer: 0, layer_count: 1 };
-        let region = vk::BufferImageCopy::default().image_subresource(layers).image_extent(vk::Extent3D { width: size.0, height: size.1, depth: 1 });
-        d.cmd_copy_image_to_buffer(cmd, owned.images[0], vk::ImageLayout::TRANSFER_SRC_OPTIMAL, readback, &[region]);
-        let to_host = vk::MemoryBarrier::default().src_access_mask(vk::AccessFlags::TRANSFER_WRITE).dst_access_mask(vk::AccessFlags::HOST_READ);
-        d.cmd_pipeline_barrier(cmd, vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::HOST, vk::DependencyFlags::empty(), &[to_host], &[], &[]);
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(layers)
+            .image_extent(vk::Extent3D { width: size.0, height: size.1, depth: 1 });
+        d.cmd_copy_image_to_buffer(
+            cmd,
+            owned.images[0],
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            readback,
+            &[region],
+        );
+        let to_host = vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(vk::AccessFlags::HOST_READ);
+        d.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &[to_host],
+            &[],
+            &[],
+        );
         d.end_command_buffer(cmd).unwrap();
         let cmds = [cmd];
         let submit = vk::SubmitInfo::default().command_buffers(&cmds);

@@ -15,7 +15,10 @@ const HEADER: &str = "frame,tracking_rmse_over_size,tracking_max_over_size,chamf
 
 /// Writes the three files into `dir` (created when needed), each atomically; returns their
 /// paths.
-pub fn write_sequence_eval(dir: &Path, eval: &SequenceEval) -> Result<Vec<PathBuf>, SequenceEvalError> {
+pub fn write_sequence_eval(
+    dir: &Path,
+    eval: &SequenceEval,
+) -> Result<Vec<PathBuf>, SequenceEvalError> {
     let io = |path: &Path| {
         let path = path.to_owned();
         move |source| SequenceEvalError::Io { path, source }
@@ -38,10 +41,25 @@ fn write_csv(w: &mut impl Write, frames: &[FrameScores]) -> std::io::Result<()> 
     let field = |v: Option<String>| v.unwrap_or_default();
     for f in frames {
         let t = &f.train;
-        let numbers = [f.tracking_rmse_over_size, f.tracking_max_over_size, Some(f.chamfer_over_size), t.psnr_gs_db, t.psnr_mesh_db];
-        let numbers: Vec<String> = numbers.iter().map(|v| field(v.map(|v| v.to_string()))).collect();
+        let numbers = [
+            f.tracking_rmse_over_size,
+            f.tracking_max_over_size,
+            Some(f.chamfer_over_size),
+            t.psnr_gs_db,
+            t.psnr_mesh_db,
+        ];
+        let numbers: Vec<String> =
+            numbers.iter().map(|v| field(v.map(|v| v.to_string()))).collect();
         let reason = field(t.stop_reason.as_deref().map(quoted));
-        writeln!(w, "{},{},{},{},{}", f.frame, numbers.join(","), field(t.iterations.map(|v| v.to_string())), field(t.wall_s.map(|v| v.to_string())), reason)?;
+        writeln!(
+            w,
+            "{},{},{},{},{}",
+            f.frame,
+            numbers.join(","),
+            field(t.iterations.map(|v| v.to_string())),
+            field(t.wall_s.map(|v| v.to_string())),
+            reason
+        )?;
     }
     Ok(())
 }
@@ -58,10 +76,16 @@ fn quoted(text: &str) -> String {
 /// One panel: tracking RMSE / size and Chamfer / size against the frame, with a zero line.
 fn draw_scores(frames: &[FrameScores]) -> RgbImage {
     // y grows downwards in the panel: negate the values.
-    let curve = |value: &dyn Fn(&FrameScores) -> Option<f64>| frames.iter().filter_map(|f| Some(DVec2::new(f.frame as f64, -value(f)?))).collect::<Vec<_>>();
+    let curve = |value: &dyn Fn(&FrameScores) -> Option<f64>| {
+        frames
+            .iter()
+            .filter_map(|f| Some(DVec2::new(f.frame as f64, -value(f)?)))
+            .collect::<Vec<_>>()
+    };
     let span = |f: Option<&FrameScores>| f.map_or(0.0, |f| f.frame as f64);
     let zero = vec![DVec2::new(span(frames.first()), 0.0), DVec2::new(span(frames.last()), 0.0)];
-    let curves = [curve(&|f| f.tracking_rmse_over_size), curve(&|f| Some(f.chamfer_over_size)), zero];
+    let curves =
+        [curve(&|f| f.tracking_rmse_over_size), curve(&|f| Some(f.chamfer_over_size)), zero];
     let mut image = RgbImage::from_pixel(PANEL, PANEL, BACKGROUND);
     draw_panel(&mut image, 0, &curves, false);
     image
@@ -73,8 +97,20 @@ mod tests {
     use crate::eval::sequence::FrameTrainStats;
 
     fn row(frame: usize, reason: Option<&str>) -> FrameScores {
-        let train = FrameTrainStats { iterations: Some(50), stop_reason: reason.map(str::to_owned), ..Default::default() };
-        FrameScores { frame, tracking_rmse_over_size: Some(0.5), tracking_max_over_size: None, chamfer_over_size: 0.25, chamfer_pred_to_gt_over_size: 0.2, chamfer_gt_to_pred_over_size: 0.3, train }
+        let train = FrameTrainStats {
+            iterations: Some(50),
+            stop_reason: reason.map(str::to_owned),
+            ..Default::default()
+        };
+        FrameScores {
+            frame,
+            tracking_rmse_over_size: Some(0.5),
+            tracking_max_over_size: None,
+            chamfer_over_size: 0.25,
+            chamfer_pred_to_gt_over_size: 0.2,
+            chamfer_gt_to_pred_over_size: 0.3,
+            train,
+        }
     }
 
     #[test]
@@ -82,7 +118,10 @@ mod tests {
         let mut buf = Vec::new();
         write_csv(&mut buf, &[row(0, None), row(1, Some("loss rose, twice"))]).unwrap();
         let text = String::from_utf8(buf).unwrap();
-        assert_eq!(text.lines().collect::<Vec<_>>(), [HEADER, "0,0.5,,0.25,,,50,,", "1,0.5,,0.25,,,50,,\"loss rose, twice\""]);
+        assert_eq!(
+            text.lines().collect::<Vec<_>>(),
+            [HEADER, "0,0.5,,0.25,,,50,,", "1,0.5,,0.25,,,50,,\"loss rose, twice\""]
+        );
     }
 
     #[test]

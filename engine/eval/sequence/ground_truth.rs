@@ -50,7 +50,10 @@ impl GroundTruth {
         let gt = GroundTruth { root: root.to_owned(), size, frames: 0, points, tracks };
         let frames = (0..).take_while(|&t| gt.mesh_path(t).is_file()).count();
         if frames == 0 {
-            return Err(SequenceEvalError::Invalid { path: gt.mesh_path(0), problem: "missing: the ground truth needs a frame-0 mesh".into() });
+            return Err(SequenceEvalError::Invalid {
+                path: gt.mesh_path(0),
+                problem: "missing: the ground truth needs a frame-0 mesh".into(),
+            });
         }
         Ok(GroundTruth { frames, ..gt })
     }
@@ -63,11 +66,18 @@ impl GroundTruth {
 
 /// `size` of an `info.json`: a finite positive number.
 fn read_size(path: &Path) -> Result<f64, SequenceEvalError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SequenceEvalError::Io { path: path.to_owned(), source })?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| SequenceEvalError::Io { path: path.to_owned(), source })?;
     let invalid = |problem: String| SequenceEvalError::Invalid { path: path.to_owned(), problem };
-    let info: serde_json::Value = serde_json::from_str(&text).map_err(|e| invalid(format!("not JSON: {e}")))?;
+    let info: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| invalid(format!("not JSON: {e}")))?;
     match info.get("size") {
-        Some(v) => v.as_f64().filter(|s| s.is_finite() && *s > 0.0).ok_or_else(|| invalid(format!("`size` is {v}, expected a positive number (scene units)"))),
-        None => Err(invalid("no `size` (the largest side of frame 0's bounding box, the unit of every score)".into())),
+        Some(v) => v.as_f64().filter(|s| s.is_finite() && *s > 0.0).ok_or_else(|| {
+            invalid(format!("`size` is {v}, expected a positive number (scene units)"))
+        }),
+        None => Err(invalid(
+            "no `size` (the largest side of frame 0's bounding box, the unit of every score)"
+                .into(),
+        )),
     }
 }

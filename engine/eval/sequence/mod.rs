@@ -125,11 +125,17 @@ pub struct SequenceEval {
 /// Scores the prediction folder `pred` against `gt` (see the module docs). Errors name the
 /// file: no predicted frame 0, a frame whose vertex count or faces differ from frame 0's, an
 /// unreadable mesh or report, a range past the ground truth.
-pub fn evaluate_sequence(pred: &Path, gt: &GroundTruth, options: &SequenceEvalOptions) -> Result<SequenceEval, SequenceEvalError> {
+pub fn evaluate_sequence(
+    pred: &Path,
+    gt: &GroundTruth,
+    options: &SequenceEvalOptions,
+) -> Result<SequenceEval, SequenceEvalError> {
     let range = frame_range(gt, options)?;
-    let (present, missing): (Vec<usize>, Vec<usize>) = range.partition(|&t| mesh_path(pred, t).is_file());
+    let (present, missing): (Vec<usize>, Vec<usize>) =
+        range.partition(|&t| mesh_path(pred, t).is_file());
     // Frame 0 binds the points even when the range starts later.
-    let loaded: Vec<usize> = std::iter::once(0).chain(present.iter().copied().filter(|&t| t > 0)).collect();
+    let loaded: Vec<usize> =
+        std::iter::once(0).chain(present.iter().copied().filter(|&t| t > 0)).collect();
     let sequence = read_predicted(pred, &loaded)?;
     let tracked = bind_points(pred, gt, &sequence)?;
     let tracking = tracking_scores(gt, &tracked, &loaded, &present)?;
@@ -138,7 +144,9 @@ pub fn evaluate_sequence(pred: &Path, gt: &GroundTruth, options: &SequenceEvalOp
     let mut frames = Vec::with_capacity(present.len());
     for (i, &t) in loaded.iter().enumerate().filter(|(_, t)| present.contains(t)) {
         let chamfer = chamfer_frame(pred, gt, t, (&sequence.frames[i], &sequence.faces), options)?;
-        let per_frame = |list: &[(u32, f64)]| list.iter().find(|(f, _)| *f as usize == t).map(|(_, v)| v / gt.size);
+        let per_frame = |list: &[(u32, f64)]| {
+            list.iter().find(|(f, _)| *f as usize == t).map(|(_, v)| v / gt.size)
+        };
         frames.push(FrameScores {
             frame: t,
             tracking_rmse_over_size: tracking.as_ref().and_then(|r| per_frame(&r.rmse_per_frame)),
@@ -149,15 +157,29 @@ pub fn evaluate_sequence(pred: &Path, gt: &GroundTruth, options: &SequenceEvalOp
             train: train.as_ref().and_then(|m| m.get(&t).cloned()).unwrap_or_default(),
         });
     }
-    let summary = summarize(gt, options, &tracked, tracking.as_ref(), &frames, missing, train.is_some().then_some(report_path));
+    let summary = summarize(
+        gt,
+        options,
+        &tracked,
+        tracking.as_ref(),
+        &frames,
+        missing,
+        train.is_some().then_some(report_path),
+    );
     Ok(SequenceEval { pred: pred.to_owned(), ground_truth: gt.root.clone(), summary, frames })
 }
 
 /// The requested frames, checked against the ground truth's.
-fn frame_range(gt: &GroundTruth, options: &SequenceEvalOptions) -> Result<Range<usize>, SequenceEvalError> {
+fn frame_range(
+    gt: &GroundTruth,
+    options: &SequenceEvalOptions,
+) -> Result<Range<usize>, SequenceEvalError> {
     let range = options.frames.clone().unwrap_or(0..gt.frames);
     if range.is_empty() || range.end > gt.frames {
-        let problem = format!("frames {}..{} requested, the ground truth has frames 0..{}", range.start, range.end, gt.frames);
+        let problem = format!(
+            "frames {}..{} requested, the ground truth has frames 0..{}",
+            range.start, range.end, gt.frames
+        );
         return Err(SequenceEvalError::Invalid { path: gt.root.join("meshes"), problem });
     }
     Ok(range)
@@ -168,7 +190,10 @@ fn frame_range(gt: &GroundTruth, options: &SequenceEvalOptions) -> Result<Range<
 fn read_predicted(pred: &Path, frames: &[usize]) -> Result<MeshSequence, SequenceEvalError> {
     let first = mesh_path(pred, 0);
     if !first.is_file() {
-        return Err(SequenceEvalError::Invalid { path: first, problem: "missing: frame 0 binds the ground-truth points".into() });
+        return Err(SequenceEvalError::Invalid {
+            path: first,
+            problem: "missing: frame 0 binds the ground-truth points".into(),
+        });
     }
     let mut sequence = MeshSequence::default();
     for &t in frames {
@@ -185,46 +210,90 @@ fn read_predicted(pred: &Path, frames: &[usize]) -> Result<MeshSequence, Sequenc
 }
 
 /// Every ground-truth point bound to the predicted frame 0 and followed through the sequence.
-fn bind_points(pred: &Path, gt: &GroundTruth, sequence: &MeshSequence) -> Result<TrackReport, SequenceEvalError> {
+fn bind_points(
+    pred: &Path,
+    gt: &GroundTruth,
+    sequence: &MeshSequence,
+) -> Result<TrackReport, SequenceEvalError> {
     let frame0 = mesh_path(pred, 0);
     let queries = Queries::Points(gt.points.clone());
     // No distance limit: a point far from the predicted surface is an error to score, not to drop.
-    let tracked = track(&sequence.faces, &sequence.frames, &queries, f64::INFINITY).map_err(|e| SequenceEvalError::Invalid { path: frame0.clone(), problem: e.to_string() })?;
+    let tracked = track(&sequence.faces, &sequence.frames, &queries, f64::INFINITY)
+        .map_err(|e| SequenceEvalError::Invalid { path: frame0.clone(), problem: e.to_string() })?;
     match tracked.unbound.first() {
-        Some(u) => Err(SequenceEvalError::Invalid { path: frame0, problem: format!("ground-truth point `{}` could not be bound: {}", u.id, u.reason) }),
+        Some(u) => Err(SequenceEvalError::Invalid {
+            path: frame0,
+            problem: format!("ground-truth point `{}` could not be bound: {}", u.id, u.reason),
+        }),
         None => Ok(tracked),
     }
 }
 
 /// Tracking errors over the `tracks.csv` rows of the `present` frames (None when there are
 /// none); `loaded[i]` is the frame of trajectory entry i.
-fn tracking_scores(gt: &GroundTruth, tracked: &TrackReport, loaded: &[usize], present: &[usize]) -> Result<Option<TrackingReport>, SequenceEvalError> {
+fn tracking_scores(
+    gt: &GroundTruth,
+    tracked: &TrackReport,
+    loaded: &[usize],
+    present: &[usize],
+) -> Result<Option<TrackingReport>, SequenceEvalError> {
     let predicted: Vec<TrackPoint> = tracked
         .points
         .iter()
-        .flat_map(|p| p.trajectory.iter().zip(loaded).map(|(&position, &t)| TrackPoint { id: p.id.clone(), frame: t as u32, position }))
+        .flat_map(|p| {
+            p.trajectory.iter().zip(loaded).map(|(&position, &t)| TrackPoint {
+                id: p.id.clone(),
+                frame: t as u32,
+                position,
+            })
+        })
         .collect();
-    let truth: Vec<TrackPoint> = gt.tracks.iter().filter(|r| present.contains(&(r.frame as usize))).cloned().collect();
+    let truth: Vec<TrackPoint> =
+        gt.tracks.iter().filter(|r| present.contains(&(r.frame as usize))).cloned().collect();
     if truth.is_empty() {
         return Ok(None);
     }
-    let report = tracking_error(&predicted, &truth).map_err(|source| SequenceEvalError::Metric { path: gt.root.join("tracks.csv"), source })?;
+    let report = tracking_error(&predicted, &truth)
+        .map_err(|source| SequenceEvalError::Metric { path: gt.root.join("tracks.csv"), source })?;
     Ok(Some(report))
 }
 
 /// Point-to-surface Chamfer of predicted frame `t` against the true mesh, scene units.
-fn chamfer_frame(pred: &Path, gt: &GroundTruth, t: usize, mesh: (&[[f32; 3]], &[[u32; 3]]), options: &SequenceEvalOptions) -> Result<super::SurfaceChamferReport, SequenceEvalError> {
+fn chamfer_frame(
+    pred: &Path,
+    gt: &GroundTruth,
+    t: usize,
+    mesh: (&[[f32; 3]], &[[u32; 3]]),
+    options: &SequenceEvalOptions,
+) -> Result<super::SurfaceChamferReport, SequenceEvalError> {
     let truth = TriMesh::read_ply(&gt.mesh_path(t))?;
-    chamfer_to_surface(mesh, (&truth.positions, &truth.faces), options.chamfer_samples, options.seed).map_err(|e| SequenceEvalError::Invalid {
+    chamfer_to_surface(
+        mesh,
+        (&truth.positions, &truth.faces),
+        options.chamfer_samples,
+        options.seed,
+    )
+    .map_err(|e| SequenceEvalError::Invalid {
         path: mesh_path(pred, t),
         problem: format!("against {}: {e}", gt.mesh_path(t).display()),
     })
 }
 
-fn summarize(gt: &GroundTruth, options: &SequenceEvalOptions, tracked: &TrackReport, tracking: Option<&TrackingReport>, frames: &[FrameScores], missing_frames: Vec<usize>, train_report: Option<PathBuf>) -> SequenceSummary {
+fn summarize(
+    gt: &GroundTruth,
+    options: &SequenceEvalOptions,
+    tracked: &TrackReport,
+    tracking: Option<&TrackingReport>,
+    frames: &[FrameScores],
+    missing_frames: Vec<usize>,
+    train_report: Option<PathBuf>,
+) -> SequenceSummary {
     let bindings: Vec<f64> = tracked.points.iter().map(|p| p.binding.distance / gt.size).collect();
     let worst = |value: &dyn Fn(&FrameScores) -> Option<f64>| {
-        frames.iter().filter_map(|f| Some(FrameValue { frame: f.frame, value: value(f)? })).max_by(|a, b| a.value.total_cmp(&b.value))
+        frames
+            .iter()
+            .filter_map(|f| Some(FrameValue { frame: f.frame, value: value(f)? }))
+            .max_by(|a, b| a.value.total_cmp(&b.value))
     };
     let (first, last) = (frames.first().map(|f| &f.train), frames.last().map(|f| &f.train));
     SequenceSummary {
@@ -238,7 +307,8 @@ fn summarize(gt: &GroundTruth, options: &SequenceEvalOptions, tracked: &TrackRep
         tracking_rmse_over_size: tracking.map(|r| r.rmse / gt.size),
         tracking_max_over_size: tracking.map(|r| r.max / gt.size),
         tracking_worst_frame: worst(&|f| f.tracking_rmse_over_size),
-        chamfer_mean_over_size: (!frames.is_empty()).then(|| frames.iter().map(|f| f.chamfer_over_size).sum::<f64>() / frames.len() as f64),
+        chamfer_mean_over_size: (!frames.is_empty())
+            .then(|| frames.iter().map(|f| f.chamfer_over_size).sum::<f64>() / frames.len() as f64),
         chamfer_worst_frame: worst(&|f| Some(f.chamfer_over_size)),
         psnr_gs_first_db: first.and_then(|s| s.psnr_gs_db),
         psnr_gs_last_db: last.and_then(|s| s.psnr_gs_db),

@@ -27,19 +27,26 @@ pub struct FrameTrainStats {
 /// The per-frame entries of the report at `path`, by frame; None when there is no such file.
 /// Errors (naming the file): unreadable, not JSON, `frames` not a list, an entry without a
 /// non-negative integer `frame`.
-pub fn read_train_report(path: &Path) -> Result<Option<BTreeMap<usize, FrameTrainStats>>, SequenceEvalError> {
+pub fn read_train_report(
+    path: &Path,
+) -> Result<Option<BTreeMap<usize, FrameTrainStats>>, SequenceEvalError> {
     if !path.exists() {
         return Ok(None);
     }
-    let text = std::fs::read_to_string(path).map_err(|source| SequenceEvalError::Io { path: path.to_owned(), source })?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| SequenceEvalError::Io { path: path.to_owned(), source })?;
     let invalid = |problem: String| SequenceEvalError::Invalid { path: path.to_owned(), problem };
-    let report: serde_json::Value = serde_json::from_str(&text).map_err(|e| invalid(format!("not JSON: {e}")))?;
+    let report: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| invalid(format!("not JSON: {e}")))?;
     let Some(frames) = report.get("frames").and_then(|f| f.as_array()) else {
         return Err(invalid("no `frames` list".into()));
     };
     let mut stats = BTreeMap::new();
     for (i, entry) in frames.iter().enumerate() {
-        let frame = entry.get("frame").and_then(|f| f.as_u64()).ok_or_else(|| invalid(format!("frames[{i}] has no `frame` index")))?;
+        let frame = entry
+            .get("frame")
+            .and_then(|f| f.as_u64())
+            .ok_or_else(|| invalid(format!("frames[{i}] has no `frame` index")))?;
         stats.insert(frame as usize, frame_stats(entry));
     }
     Ok(Some(stats))
@@ -53,7 +60,10 @@ fn frame_stats(entry: &serde_json::Value) -> FrameTrainStats {
         iterations: entry.get("iterations").and_then(|v| v.as_u64()),
         wall_s: number("wall_s"),
         // A reason given as something other than text is kept in its JSON form.
-        stop_reason: entry.get("stop_reason").filter(|v| !v.is_null()).map(|v| v.as_str().map_or_else(|| v.to_string(), str::to_owned)),
+        stop_reason: entry
+            .get("stop_reason")
+            .filter(|v| !v.is_null())
+            .map(|v| v.as_str().map_or_else(|| v.to_string(), str::to_owned)),
         lost_views: entry.get("lost_views").filter(|v| !v.is_null()).cloned(),
     }
 }
@@ -66,8 +76,16 @@ mod tests {
     fn fields_are_read_when_present_and_absent_otherwise() {
         let entry = serde_json::json!({"frame": 3, "psnr_gs": 31.5, "psnr_mesh": null, "iterations": 200, "stop_reason": "converged", "new_field": [1]});
         let s = frame_stats(&entry);
-        assert_eq!((s.psnr_gs_db, s.psnr_mesh_db, s.iterations, s.wall_s), (Some(31.5), None, Some(200), None));
+        assert_eq!(
+            (s.psnr_gs_db, s.psnr_mesh_db, s.iterations, s.wall_s),
+            (Some(31.5), None, Some(200), None)
+        );
         assert_eq!((s.stop_reason.as_deref(), s.lost_views), (Some("converged"), None));
-        assert_eq!(frame_stats(&serde_json::json!({"stop_reason": {"plateau": 40}})).stop_reason.as_deref(), Some("{\"plateau\":40}"));
+        assert_eq!(
+            frame_stats(&serde_json::json!({"stop_reason": {"plateau": 40}}))
+                .stop_reason
+                .as_deref(),
+            Some("{\"plateau\":40}")
+        );
     }
 }

@@ -31,7 +31,11 @@ impl ImageCache {
 
     /// The cached image at `path`, or `load(path)` inserted (evicting the least recently used
     /// images beyond the budget).
-    pub fn get_or_load<E>(&self, path: &Path, load: impl FnOnce(&Path) -> Result<Image, E>) -> Result<Arc<Image>, E> {
+    pub fn get_or_load<E>(
+        &self,
+        path: &Path,
+        load: impl FnOnce(&Path) -> Result<Image, E>,
+    ) -> Result<Arc<Image>, E> {
         {
             let mut e = self.inner.lock().unwrap_or_else(|p| p.into_inner());
             if let Some(image) = e.images.get(path).cloned() {
@@ -69,7 +73,8 @@ mod tests {
 
     #[test]
     fn evicts_least_recent_beyond_the_budget() {
-        let img = |_: &Path| Ok::<_, ()>(Image { width: 2, height: 2, channels: 1, data: vec![0.0; 4] }); // 16 bytes
+        let img =
+            |_: &Path| Ok::<_, ()>(Image { width: 2, height: 2, channels: 1, data: vec![0.0; 4] }); // 16 bytes
         let cache = ImageCache::new(40);
         let loads = std::cell::Cell::new(0);
         let counted = |p: &Path| {

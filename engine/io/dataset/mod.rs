@@ -32,7 +32,14 @@ pub enum DatasetError {
     #[error("missing image {}", .0.display())]
     MissingImage(PathBuf),
     #[error("{}: image is {width}×{height} but camera {camera} is {camera_width}×{camera_height}", path.display())]
-    SizeMismatch { path: PathBuf, camera: String, width: u32, height: u32, camera_width: u32, camera_height: u32 },
+    SizeMismatch {
+        path: PathBuf,
+        camera: String,
+        width: u32,
+        height: u32,
+        camera_width: u32,
+        camera_height: u32,
+    },
     #[error(transparent)]
     Image(#[from] ImageError),
     #[error("{}: has no alpha channel to use as the mask", .0.display())]
@@ -110,25 +117,54 @@ impl Dataset {
     /// Assembles a dataset, sorting frames by time and checking that every frame has the
     /// same set of cameras (unless every frame has exactly one view: a monocular sequence).
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn assemble(root: &Path, meta: &Path, format: Format, camera_names: Vec<String>, cameras: Vec<Camera>, mut frames: Vec<Frame>, train: Vec<usize>, test: Vec<usize>) -> Result<Self, DatasetError> {
+    pub(crate) fn assemble(
+        root: &Path,
+        meta: &Path,
+        format: Format,
+        camera_names: Vec<String>,
+        cameras: Vec<Camera>,
+        mut frames: Vec<Frame>,
+        train: Vec<usize>,
+        test: Vec<usize>,
+    ) -> Result<Self, DatasetError> {
         if frames.is_empty() {
-            return Err(DatasetError::File { path: meta.to_owned(), problem: "has no frames".into() });
+            return Err(DatasetError::File {
+                path: meta.to_owned(),
+                problem: "has no frames".into(),
+            });
         }
         frames.sort_by(|a, b| a.time.total_cmp(&b.time));
         for f in &mut frames {
             f.views.sort_by_key(|v| v.camera);
         }
         let monocular = frames.iter().all(|f| f.views.len() == 1);
-        let set = |f: &Frame| f.views.iter().map(|v| camera_names[v.camera].as_str()).collect::<Vec<_>>().join(", ");
+        let set = |f: &Frame| {
+            f.views.iter().map(|v| camera_names[v.camera].as_str()).collect::<Vec<_>>().join(", ")
+        };
         if !monocular {
             let first: Vec<usize> = frames[0].views.iter().map(|v| v.camera).collect();
             for (t, f) in frames.iter().enumerate() {
                 if !f.views.iter().map(|v| v.camera).eq(first.iter().copied()) {
-                    return Err(DatasetError::CameraSets { path: meta.to_owned(), frame: t, first: 0, found: set(f), expected: set(&frames[0]) });
+                    return Err(DatasetError::CameraSets {
+                        path: meta.to_owned(),
+                        frame: t,
+                        first: 0,
+                        found: set(f),
+                        expected: set(&frames[0]),
+                    });
                 }
             }
         }
-        Ok(Self { root: root.to_owned(), format, camera_names, cameras, frames, train, test, cache: ImageCache::new(DEFAULT_CACHE_BYTES) })
+        Ok(Self {
+            root: root.to_owned(),
+            format,
+            camera_names,
+            cameras,
+            frames,
+            train,
+            test,
+            cache: ImageCache::new(DEFAULT_CACHE_BYTES),
+        })
     }
 
     /// Replaces the image cache with one of `bytes` capacity.
@@ -174,7 +210,10 @@ impl Dataset {
         let v = self.view(frame, view);
         match &v.mask {
             MaskSource::File(path) => Ok(self.load_checked(path, v.camera)?.first_channel()),
-            MaskSource::Alpha => self.load_checked(&v.image, v.camera)?.alpha().ok_or_else(|| DatasetError::NoMask(v.image.clone())),
+            MaskSource::Alpha => self
+                .load_checked(&v.image, v.camera)?
+                .alpha()
+                .ok_or_else(|| DatasetError::NoMask(v.image.clone())),
         }
     }
 
@@ -187,10 +226,22 @@ impl Dataset {
         Ok(image)
     }
 
-    fn check_size(&self, path: &Path, camera: usize, (width, height): (u32, u32)) -> Result<(), DatasetError> {
+    fn check_size(
+        &self,
+        path: &Path,
+        camera: usize,
+        (width, height): (u32, u32),
+    ) -> Result<(), DatasetError> {
         let c = &self.cameras[camera];
         if (width, height) != (c.width, c.height) {
-            return Err(DatasetError::SizeMismatch { path: path.to_owned(), camera: self.camera_names[camera].clone(), width, height, camera_width: c.width, camera_height: c.height });
+            return Err(DatasetError::SizeMismatch {
+                path: path.to_owned(),
+                camera: self.camera_names[camera].clone(),
+                width,
+                height,
+                camera_width: c.width,
+                camera_height: c.height,
+            });
         }
         Ok(())
     }
@@ -235,6 +286,12 @@ pub fn every_eighth_held_out(count: usize) -> (Vec<usize>, Vec<usize>) {
 
 /// Reads a JSON file into `T`, naming the file on failure.
 pub(crate) fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, DatasetError> {
-    let text = std::fs::read_to_string(path).map_err(|e| DatasetError::File { path: path.to_owned(), problem: format!("cannot read: {e}") })?;
-    serde_json::from_str(&text).map_err(|e| DatasetError::File { path: path.to_owned(), problem: format!("invalid JSON: {e}") })
+    let text = std::fs::read_to_string(path).map_err(|e| DatasetError::File {
+        path: path.to_owned(),
+        problem: format!("cannot read: {e}"),
+    })?;
+    serde_json::from_str(&text).map_err(|e| DatasetError::File {
+        path: path.to_owned(),
+        problem: format!("invalid JSON: {e}"),
+    })
 }

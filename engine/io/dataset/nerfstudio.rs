@@ -10,14 +10,21 @@
 //! training cameras, `transforms_val.json` and `transforms_test.json` test cameras; a lone
 //! `transforms.json` holds out every eighth camera.
 
-use super::{every_eighth_held_out, read_json, Dataset, DatasetError, Format, Frame, MaskSource, View};
+use super::{
+    every_eighth_held_out, read_json, Dataset, DatasetError, Format, Frame, MaskSource, View,
+};
 use crate::camera::Camera;
 use crate::io::image::image_size;
 use glam::DMat4;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
-const FILES: [(&str, bool); 4] = [("transforms.json", false), ("transforms_train.json", false), ("transforms_val.json", true), ("transforms_test.json", true)];
+const FILES: [(&str, bool); 4] = [
+    ("transforms.json", false),
+    ("transforms_train.json", false),
+    ("transforms_val.json", true),
+    ("transforms_test.json", true),
+];
 
 /// The transforms files present in `dir`, with whether each holds test cameras.
 pub fn transform_files(dir: &Path) -> Vec<(PathBuf, bool)> {
@@ -36,7 +43,9 @@ pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
     let mut views = Vec::new();
     for (path, test) in &files {
         let json: Value = read_json(path)?;
-        let frames = json.get("frames").and_then(Value::as_array).ok_or_else(|| DatasetError::File { path: path.clone(), problem: "has no `frames` list".into() })?;
+        let frames = json.get("frames").and_then(Value::as_array).ok_or_else(|| {
+            DatasetError::File { path: path.clone(), problem: "has no `frames` list".into() }
+        })?;
         for (i, frame) in frames.iter().enumerate() {
             views.push(parse_frame(dir, path, &json, frame, i, *test)?);
         }
@@ -60,28 +69,62 @@ pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
         }
     }
     let single_file = files.len() == 1 && !files[0].1 && files[0].0.ends_with("transforms.json");
-    let (train, test) = if single_file { every_eighth_held_out(cameras.len()) } else { (0..cameras.len()).partition(|&i| !cameras[i].1) };
+    let (train, test) = if single_file {
+        every_eighth_held_out(cameras.len())
+    } else {
+        (0..cameras.len()).partition(|&i| !cameras[i].1)
+    };
     let names = (0..cameras.len()).map(|i| format!("cam{i:03}")).collect();
-    Dataset::assemble(dir, &meta, Format::Nerfstudio, names, cameras.into_iter().map(|(c, _)| c).collect(), frames, train, test)
+    Dataset::assemble(
+        dir,
+        &meta,
+        Format::Nerfstudio,
+        names,
+        cameras.into_iter().map(|(c, _)| c).collect(),
+        frames,
+        train,
+        test,
+    )
 }
 
-fn parse_frame(dir: &Path, path: &Path, top: &Value, frame: &Value, i: usize, test: bool) -> Result<Parsed, DatasetError> {
-    let bad = |problem: String| DatasetError::File { path: path.to_owned(), problem: format!("frame {i}: {problem}") };
+fn parse_frame(
+    dir: &Path,
+    path: &Path,
+    top: &Value,
+    frame: &Value,
+    i: usize,
+    test: bool,
+) -> Result<Parsed, DatasetError> {
+    let bad = |problem: String| DatasetError::File {
+        path: path.to_owned(),
+        problem: format!("frame {i}: {problem}"),
+    };
     // A per-frame value overrides the top-level one.
     let number = |key: &str| -> Result<Option<f64>, DatasetError> {
         match frame.get(key).or_else(|| top.get(key)) {
             None | Some(Value::Null) => Ok(None),
-            Some(v) => v.as_f64().filter(|x| x.is_finite()).map(Some).ok_or_else(|| bad(format!("`{key}` is not a finite number"))),
+            Some(v) => v
+                .as_f64()
+                .filter(|x| x.is_finite())
+                .map(Some)
+                .ok_or_else(|| bad(format!("`{key}` is not a finite number"))),
         }
     };
-    let file = frame.get("file_path").and_then(Value::as_str).ok_or_else(|| bad("has no `file_path`".into()))?;
+    let file = frame
+        .get("file_path")
+        .and_then(Value::as_str)
+        .ok_or_else(|| bad("has no `file_path`".into()))?;
     let mut image = path.parent().unwrap_or(dir).join(file.trim_start_matches("./"));
     if image.extension().is_none() {
         image.set_extension("png");
     }
     let (w, h) = match (number("w")?, number("h")?) {
-        (Some(w), Some(h)) if w >= 1.0 && h >= 1.0 && w.fract() == 0.0 && h.fract() == 0.0 => (w as u32, h as u32),
-        (Some(w), Some(h)) => return Err(bad(format!("image size {w}×{h} is not a positive integer size"))),
+        (Some(w), Some(h)) if w >= 1.0 && h >= 1.0 && w.fract() == 0.0 && h.fract() == 0.0 => {
+            (w as u32, h as u32)
+        }
+        (Some(w), Some(h)) => {
+            return Err(bad(format!("image size {w}×{h} is not a positive integer size")))
+        }
         _ if !image.is_file() => return Err(DatasetError::MissingImage(image)),
         _ => image_size(&image)?,
     };
@@ -97,9 +140,18 @@ fn parse_frame(dir: &Path, path: &Path, top: &Value, frame: &Value, i: usize, te
     };
     let cx = number("cx")?.unwrap_or(0.5 * w as f64);
     let cy = number("cy")?.unwrap_or(0.5 * h as f64);
-    let matrix = frame.get("transform_matrix").and_then(|m| serde_json::from_value::<[[f64; 4]; 4]>(m.clone()).ok()).ok_or_else(|| bad("`transform_matrix` is not a 4×4 list of numbers".into()))?;
+    let matrix = frame
+        .get("transform_matrix")
+        .and_then(|m| serde_json::from_value::<[[f64; 4]; 4]>(m.clone()).ok())
+        .ok_or_else(|| bad("`transform_matrix` is not a 4×4 list of numbers".into()))?;
     let c2w = DMat4::from_cols_array_2d(&matrix).transpose();
-    let camera = Camera::from_opengl_camera_to_world(w, h, fx, fy, cx, cy, c2w).map_err(|e| DatasetError::Camera { path: path.to_owned(), camera: format!("of frame {i} ({file})"), problem: e.to_string() })?;
+    let camera = Camera::from_opengl_camera_to_world(w, h, fx, fy, cx, cy, c2w).map_err(|e| {
+        DatasetError::Camera {
+            path: path.to_owned(),
+            camera: format!("of frame {i} ({file})"),
+            problem: e.to_string(),
+        }
+    })?;
     let time = number("time")?.unwrap_or(0.0);
     Ok(Parsed { camera, time, image, test })
 }

@@ -52,7 +52,10 @@ pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
     let meta: OwnMeta = read_json(&meta_path)?;
     let bad = |problem: String| DatasetError::File { path: meta_path.clone(), problem };
     if meta.format != FORMAT_NAME || meta.version != 1 {
-        return Err(bad(format!("format `{}` version {} is not {FORMAT_NAME} version 1", meta.format, meta.version)));
+        return Err(bad(format!(
+            "format `{}` version {} is not {FORMAT_NAME} version 1",
+            meta.format, meta.version
+        )));
     }
     if !(meta.fps > 0.0 && meta.fps.is_finite()) {
         return Err(bad(format!("fps {} must be positive", meta.fps)));
@@ -61,25 +64,56 @@ pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
         return Err(bad("lists no cameras".into()));
     }
     for (i, name) in meta.cameras.iter().enumerate() {
-        if name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.') || meta.cameras[..i].contains(name) {
+        if name.is_empty()
+            || name.contains(['/', '\\'])
+            || name.starts_with('.')
+            || meta.cameras[..i].contains(name)
+        {
             return Err(bad(format!("camera name `{name}` is empty, a path, or repeated")));
         }
     }
     let mut cameras = Vec::with_capacity(meta.cameras.len());
     for name in &meta.cameras {
         let path = camera_path(dir, name);
-        cameras.push(Camera::load_json(&path).map_err(|e| DatasetError::Camera { path, camera: name.clone(), problem: e.to_string() })?);
+        cameras.push(Camera::load_json(&path).map_err(|e| DatasetError::Camera {
+            path,
+            camera: name.clone(),
+            problem: e.to_string(),
+        })?);
     }
     let mut test = Vec::new();
     for name in &meta.test_cameras {
-        test.push(meta.cameras.iter().position(|c| c == name).ok_or_else(|| bad(format!("test camera `{name}` is not in `cameras`")))?);
+        test.push(
+            meta.cameras
+                .iter()
+                .position(|c| c == name)
+                .ok_or_else(|| bad(format!("test camera `{name}` is not in `cameras`")))?,
+        );
     }
     let train = (0..cameras.len()).filter(|i| !test.contains(i)).collect();
     let frames = (0..meta.frames)
         .map(|t| Frame {
             time: t as f64 / meta.fps,
-            views: meta.cameras.iter().enumerate().map(|(c, name)| View { camera: c, image: image_path(dir, name, t), mask: MaskSource::File(mask_path(dir, name, t)) }).collect(),
+            views: meta
+                .cameras
+                .iter()
+                .enumerate()
+                .map(|(c, name)| View {
+                    camera: c,
+                    image: image_path(dir, name, t),
+                    mask: MaskSource::File(mask_path(dir, name, t)),
+                })
+                .collect(),
         })
         .collect();
-    Dataset::assemble(dir, &meta_path, Format::Own, meta.cameras.clone(), cameras, frames, train, test)
+    Dataset::assemble(
+        dir,
+        &meta_path,
+        Format::Own,
+        meta.cameras.clone(),
+        cameras,
+        frames,
+        train,
+        test,
+    )
 }

@@ -52,7 +52,11 @@ pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
             time: t as f64,
             views: views
                 .into_iter()
-                .map(|(id, file)| View { camera: index(id), image: dir.join("ims").join(&file), mask: MaskSource::File(dir.join("seg").join(&file).with_extension("png")) })
+                .map(|(id, file)| View {
+                    camera: index(id),
+                    image: dir.join("ims").join(&file),
+                    mask: MaskSource::File(dir.join("seg").join(&file).with_extension("png")),
+                })
                 .collect(),
         })
         .collect();
@@ -62,11 +66,23 @@ pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
     Dataset::assemble(dir, &train_path, Format::Panoptic, names, cameras, frames, train, test)
 }
 
-fn read_meta(path: &Path, meta: &Meta, test: bool, rig: &mut Rig, per_frame: &mut Vec<Vec<(i64, String)>>) -> Result<(), DatasetError> {
+fn read_meta(
+    path: &Path,
+    meta: &Meta,
+    test: bool,
+    rig: &mut Rig,
+    per_frame: &mut Vec<Vec<(i64, String)>>,
+) -> Result<(), DatasetError> {
     let bad = |problem: String| DatasetError::File { path: path.to_owned(), problem };
     let t_count = meta.cam_id.len();
     if meta.k.len() != t_count || meta.w2c.len() != t_count || meta.files.len() != t_count {
-        return Err(bad(format!("k, w2c, fn and cam_id list {}, {}, {}, {} frames", meta.k.len(), meta.w2c.len(), meta.files.len(), t_count)));
+        return Err(bad(format!(
+            "k, w2c, fn and cam_id list {}, {}, {}, {} frames",
+            meta.k.len(),
+            meta.w2c.len(),
+            meta.files.len(),
+            t_count
+        )));
     }
     if per_frame.is_empty() {
         per_frame.resize(t_count, Vec::new());
@@ -80,29 +96,44 @@ fn read_meta(path: &Path, meta: &Meta, test: bool, rig: &mut Rig, per_frame: &mu
         }
         for c in 0..n {
             let id = meta.cam_id[t][c];
-            let camera_error = |problem: String| DatasetError::Camera { path: path.to_owned(), camera: id.to_string(), problem: format!("frame {t}: {problem}") };
+            let camera_error = |problem: String| DatasetError::Camera {
+                path: path.to_owned(),
+                camera: id.to_string(),
+                problem: format!("frame {t}: {problem}"),
+            };
             let k = meta.k[t][c];
             if k[0][1] != 0.0 || k[1][0] != 0.0 || k[2] != [0.0, 0.0, 1.0] {
-                return Err(camera_error(format!("intrinsics {k:?} are not a pinhole K (zero skew, last row 0 0 1)")));
+                return Err(camera_error(format!(
+                    "intrinsics {k:?} are not a pinhole K (zero skew, last row 0 0 1)"
+                )));
             }
             let w2c = DMat4::from_cols_array_2d(&meta.w2c[t][c]).transpose();
-            let camera = Camera::new(meta.w, meta.h, k[0][0], k[1][1], k[0][2] + 0.5, k[1][2] + 0.5, w2c).map_err(|e| camera_error(e.to_string()))?;
+            let camera =
+                Camera::new(meta.w, meta.h, k[0][0], k[1][1], k[0][2] + 0.5, k[1][2] + 0.5, w2c)
+                    .map_err(|e| camera_error(e.to_string()))?;
             match rig.get(&id) {
                 None => {
                     rig.insert(id, (camera, test));
                 }
                 Some((first, was_test)) => {
                     if *was_test != test {
-                        return Err(camera_error("appears in both the train and the test split".into()));
+                        return Err(camera_error(
+                            "appears in both the train and the test split".into(),
+                        ));
                     }
                     if !same_camera(first, &camera) {
-                        return Err(camera_error("differs from its first frame (a moving camera is not supported)".into()));
+                        return Err(camera_error(
+                            "differs from its first frame (a moving camera is not supported)"
+                                .into(),
+                        ));
                     }
                 }
             }
             let file = &meta.files[t][c];
             if Path::new(file).is_absolute() || file.split(['/', '\\']).any(|p| p == "..") {
-                return Err(bad(format!("frame {t}: image name `{file}` leaves the dataset folder")));
+                return Err(bad(format!(
+                    "frame {t}: image name `{file}` leaves the dataset folder"
+                )));
             }
             per_frame[t].push((id, file.clone()));
         }
@@ -112,6 +143,13 @@ fn read_meta(path: &Path, meta: &Meta, test: bool, rig: &mut Rig, per_frame: &mu
 
 fn same_camera(a: &Camera, b: &Camera) -> bool {
     let close = |x: f64, y: f64| (x - y).abs() <= 1e-9 * x.abs().max(y.abs()).max(1.0);
-    close(a.fx, b.fx) && close(a.fy, b.fy) && close(a.cx, b.cx) && close(a.cy, b.cy)
-        && a.world_to_camera.to_cols_array().iter().zip(b.world_to_camera.to_cols_array()).all(|(&x, y)| close(x, y))
+    close(a.fx, b.fx)
+        && close(a.fy, b.fy)
+        && close(a.cx, b.cx)
+        && close(a.cy, b.cy)
+        && a.world_to_camera
+            .to_cols_array()
+            .iter()
+            .zip(b.world_to_camera.to_cols_array())
+            .all(|(&x, y)| close(x, y))
 }

@@ -22,7 +22,10 @@ pub fn frame_files(dir: &Path) -> Result<Vec<PathBuf>, SequenceError> {
     }
     let first_ext = frame_extension(&names[0]);
     if let Some(other) = names.iter().find(|n| frame_extension(n) != first_ext) {
-        return Err(invalid(format!("has both {} and {other}: keep one kind of frame file", names[0])));
+        return Err(invalid(format!(
+            "has both {} and {other}: keep one kind of frame file",
+            names[0]
+        )));
     }
     names.sort_by(|a, b| natural_cmp(a, b));
     check_numbering(&names).map_err(invalid)?;
@@ -31,7 +34,10 @@ pub fn frame_files(dir: &Path) -> Result<Vec<PathBuf>, SequenceError> {
 
 /// Names of the visible `.ply` / `.obj` files in `dir`, unordered.
 pub fn frame_names(dir: &Path) -> Result<Vec<String>, SequenceError> {
-    let invalid = |e: std::io::Error| SequenceError::Invalid { path: dir.to_path_buf(), problem: format!("cannot list the folder: {e}") };
+    let invalid = |e: std::io::Error| SequenceError::Invalid {
+        path: dir.to_path_buf(),
+        problem: format!("cannot list the folder: {e}"),
+    };
     let mut names = Vec::new();
     for entry in std::fs::read_dir(dir).map_err(invalid)? {
         let entry = entry.map_err(invalid)?;
@@ -58,7 +64,11 @@ pub fn natural_cmp(a: &str, b: &str) -> Ordering {
         if a[i].is_ascii_digit() && b[j].is_ascii_digit() {
             let (ra, rb) = (digit_run(&a[i..]), digit_run(&b[j..]));
             let (ta, tb) = (trim_zeros(ra), trim_zeros(rb));
-            let order = ta.len().cmp(&tb.len()).then_with(|| ta.cmp(tb)).then_with(|| ra.len().cmp(&rb.len()));
+            let order = ta
+                .len()
+                .cmp(&tb.len())
+                .then_with(|| ta.cmp(tb))
+                .then_with(|| ra.len().cmp(&rb.len()));
             if order != Ordering::Equal {
                 return order;
             }
@@ -95,7 +105,13 @@ fn check_numbering(sorted: &[String]) -> Result<(), String> {
             return Err(format!("{} and {} are both frame {a}", sorted[k], sorted[k + 1]));
         }
         if b != a + 1 {
-            return Err(format!("frame file(s) {}..{} missing between {} and {}", a + 1, b - 1, sorted[k], sorted[k + 1]));
+            return Err(format!(
+                "frame file(s) {}..{} missing between {} and {}",
+                a + 1,
+                b - 1,
+                sorted[k],
+                sorted[k + 1]
+            ));
         }
     }
     Ok(())
@@ -116,15 +132,24 @@ mod tests {
     fn natural_order_puts_2_before_10() {
         let mut names = vec!["f10.ply", "f2.ply", "f1.ply", "f02.ply", "a.ply", "f.ply", "g1.ply"];
         names.sort_by(|a, b| natural_cmp(a, b));
-        assert_eq!(names, vec!["a.ply", "f.ply", "f1.ply", "f2.ply", "f02.ply", "f10.ply", "g1.ply"]);
+        assert_eq!(
+            names,
+            vec!["a.ply", "f.ply", "f1.ply", "f2.ply", "f02.ply", "f10.ply", "g1.ply"]
+        );
     }
 
     #[test]
     fn numbering_gaps_and_repeats_are_named() {
         let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
         assert!(check_numbering(&names(&["m_8.obj", "m_9.obj", "m_10.obj"])).is_ok());
-        assert_eq!(check_numbering(&names(&["m_1.obj", "m_2.obj", "m_4.obj"])).unwrap_err(), "frame file(s) 3..3 missing between m_2.obj and m_4.obj");
-        assert_eq!(check_numbering(&names(&["m_1.obj", "m_01.obj"])).unwrap_err(), "m_1.obj and m_01.obj are both frame 1");
+        assert_eq!(
+            check_numbering(&names(&["m_1.obj", "m_2.obj", "m_4.obj"])).unwrap_err(),
+            "frame file(s) 3..3 missing between m_2.obj and m_4.obj"
+        );
+        assert_eq!(
+            check_numbering(&names(&["m_1.obj", "m_01.obj"])).unwrap_err(),
+            "m_1.obj and m_01.obj are both frame 1"
+        );
         // No shared template: order only.
         assert!(check_numbering(&names(&["rest.obj", "walk_1.obj", "walk_5.obj"])).is_ok());
     }

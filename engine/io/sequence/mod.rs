@@ -62,7 +62,10 @@ impl MeshSequence {
             Some("pc2") => Self::read_pc2(path),
             Some("glb") => Ok(glb::read_glb(path)?),
             _ if !path.exists() => Err(invalid(path, "no such file or folder")),
-            _ => Err(invalid(path, "not a sequence: expected a folder of .ply/.obj frames, a .pc2 or a .glb")),
+            _ => Err(invalid(
+                path,
+                "not a sequence: expected a folder of .ply/.obj frames, a .pc2 or a .glb",
+            )),
         }
     }
 
@@ -90,14 +93,18 @@ impl MeshSequence {
     pub fn problem(&self) -> Option<String> {
         let n = self.frames.first().map(Vec::len)?;
         if let Some(t) = self.frames.iter().position(|f| f.len() != n) {
-            return Some(format!("frame {t} has {} vertices, frame 0 has {n}", self.frames[t].len()));
+            return Some(format!(
+                "frame {t} has {} vertices, frame 0 has {n}",
+                self.frames[t].len()
+            ));
         }
         if let Some(colors) = &self.colors {
             if colors.len() != self.frames.len() || colors.iter().any(|c| c.len() != n) {
                 return Some("the colours do not match the frames and vertices".into());
             }
         }
-        (0..self.frames.len()).find_map(|t| self.frame_mesh(t)?.problem().map(|p| format!("frame {t}: {p}")))
+        (0..self.frames.len())
+            .find_map(|t| self.frame_mesh(t)?.problem().map(|p| format!("frame {t}: {p}")))
     }
 
     /// Reads the frames of a folder (see [`folder`]), checking them against frame 0.
@@ -129,9 +136,13 @@ impl MeshSequence {
     /// already holds frame files, so old frames never mix with new ones.
     pub fn write_folder(&self, dir: &Path, format: FrameFormat) -> Result<(), SequenceError> {
         self.check(dir)?;
-        std::fs::create_dir_all(dir).map_err(|e| invalid(dir, format!("cannot create the folder: {e}")))?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| invalid(dir, format!("cannot create the folder: {e}")))?;
         if let Some(existing) = folder::frame_names(dir)?.first() {
-            return Err(invalid(dir, format!("already holds frame files ({existing}, ...): choose an empty folder")));
+            return Err(invalid(
+                dir,
+                format!("already holds frame files ({existing}, ...): choose an empty folder"),
+            ));
         }
         let ext = match format {
             FrameFormat::Ply => "ply",
@@ -161,10 +172,22 @@ impl MeshSequence {
             return Err(invalid(path, "no samples"));
         }
         if cache.samples[0].len() != base.positions.len() {
-            return Err(invalid(path, format!("{} points per sample, the base mesh {} has {} vertices", cache.samples[0].len(), base_path.display(), base.positions.len())));
+            return Err(invalid(
+                path,
+                format!(
+                    "{} points per sample, the base mesh {} has {} vertices",
+                    cache.samples[0].len(),
+                    base_path.display(),
+                    base.positions.len()
+                ),
+            ));
         }
         let frames = cache.samples.len();
-        Ok(MeshSequence { faces: base.faces, colors: base.colors.map(|c| vec![c; frames]), frames: cache.samples })
+        Ok(MeshSequence {
+            faces: base.faces,
+            colors: base.colors.map(|c| vec![c; frames]),
+            frames: cache.samples,
+        })
     }
 
     /// Writes `anim.pc2` (one sample per frame, starting at frame 0) and the base mesh
@@ -187,17 +210,43 @@ impl MeshSequence {
 }
 
 /// Frame `t` (read from `file`) must have frame 0's vertex count and faces.
-pub(crate) fn check_same_topology(sequence: &MeshSequence, mesh: &TriMesh, t: usize, file: &Path, first: &Path) -> Result<(), SequenceError> {
-    let first_name = first.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+pub(crate) fn check_same_topology(
+    sequence: &MeshSequence,
+    mesh: &TriMesh,
+    t: usize,
+    file: &Path,
+    first: &Path,
+) -> Result<(), SequenceError> {
+    let first_name =
+        first.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let n = sequence.frames[0].len();
     if mesh.positions.len() != n {
-        return Err(invalid(file, format!("frame {t} has {} vertices, frame 0 ({first_name}) has {n}", mesh.positions.len())));
+        return Err(invalid(
+            file,
+            format!(
+                "frame {t} has {} vertices, frame 0 ({first_name}) has {n}",
+                mesh.positions.len()
+            ),
+        ));
     }
     if mesh.faces.len() != sequence.faces.len() {
-        return Err(invalid(file, format!("frame {t} has {} faces, frame 0 ({first_name}) has {}", mesh.faces.len(), sequence.faces.len())));
+        return Err(invalid(
+            file,
+            format!(
+                "frame {t} has {} faces, frame 0 ({first_name}) has {}",
+                mesh.faces.len(),
+                sequence.faces.len()
+            ),
+        ));
     }
     if let Some(f) = (0..mesh.faces.len()).find(|&f| mesh.faces[f] != sequence.faces[f]) {
-        return Err(invalid(file, format!("frame {t} differs from frame 0 ({first_name}) at face {f}: {:?} instead of {:?}", mesh.faces[f], sequence.faces[f])));
+        return Err(invalid(
+            file,
+            format!(
+                "frame {t} differs from frame 0 ({first_name}) at face {f}: {:?} instead of {:?}",
+                mesh.faces[f], sequence.faces[f]
+            ),
+        ));
     }
     Ok(())
 }

@@ -37,8 +37,24 @@ pub struct CoverageTerm {
 
 impl CoverageTerm {
     /// For `vertices` vertices and views of at most `pixels` pixels, searching `radius` pixels.
-    pub fn new(ctx: &Arc<GpuContext>, vertices: usize, pixels: usize, radius: u32) -> GpuResult<Self> {
-        let pipeline = |name, spirv, bindings| ComputePipeline::new(ctx, &PipelineDesc { name, spirv, bindings, push_constant_bytes: size_of::<Push>() as u32, specialization: &[WORKGROUP] });
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        vertices: usize,
+        pixels: usize,
+        radius: u32,
+    ) -> GpuResult<Self> {
+        let pipeline = |name, spirv, bindings| {
+            ComputePipeline::new(
+                ctx,
+                &PipelineDesc {
+                    name,
+                    spirv,
+                    bindings,
+                    push_constant_bytes: size_of::<Push>() as u32,
+                    specialization: &[WORKGROUP],
+                },
+            )
+        };
         Ok(Self {
             seed: pipeline("coverage seed", shaders::LOSS_COVERAGE_SEED, 3)?,
             pull: pipeline("coverage pull", shaders::LOSS_COVERAGE_PULL, 7)?,
@@ -63,14 +79,23 @@ impl CoverageTerm {
         weight: f32,
         near: f32,
     ) -> GpuResult<()> {
-        let (vertices, pixels) = (positions.len() / 3, camera.width as usize * camera.height as usize);
+        let (vertices, pixels) =
+            (positions.len() / 3, camera.width as usize * camera.height as usize);
         if weight == 0.0 || vertices == 0 || pixels == 0 {
             return Ok(());
         }
         // Both buffers were sized at construction; a larger mesh or view would overrun them.
-        for (name, len, capacity) in [(self.projected.name(), vertices, self.projected.len()), (self.seeds.name(), pixels, self.seeds.len().min(target.len()).min(render.len()))] {
+        for (name, len, capacity) in [
+            (self.projected.name(), vertices, self.projected.len()),
+            (self.seeds.name(), pixels, self.seeds.len().min(target.len()).min(render.len())),
+        ] {
             if len > capacity {
-                return Err(crate::gpu::GpuError::LengthMismatch { what: "coverage term", name: name.to_string(), len, capacity });
+                return Err(crate::gpu::GpuError::LengthMismatch {
+                    what: "coverage term",
+                    name: name.to_string(),
+                    len,
+                    capacity,
+                });
             }
         }
         let push = Push {
@@ -84,8 +109,21 @@ impl CoverageTerm {
             near,
         };
         rec.fill_buffer(&self.seeds, u32::MAX);
-        rec.dispatch_1d(&self.seed, &[positions.binding(), self.projected.binding(), self.seeds.binding()], &push, (vertices as u64).div_ceil(WORKGROUP as u64))?;
-        let pull = [positions.binding(), self.projected.binding(), self.seeds.binding(), target.binding(), render.binding(), grad_positions.binding(), self.losses.binding()];
+        rec.dispatch_1d(
+            &self.seed,
+            &[positions.binding(), self.projected.binding(), self.seeds.binding()],
+            &push,
+            (vertices as u64).div_ceil(WORKGROUP as u64),
+        )?;
+        let pull = [
+            positions.binding(),
+            self.projected.binding(),
+            self.seeds.binding(),
+            target.binding(),
+            render.binding(),
+            grad_positions.binding(),
+            self.losses.binding(),
+        ];
         rec.dispatch_1d(&self.pull, &pull, &push, (pixels as u64).div_ceil(WORKGROUP as u64))
     }
 

@@ -38,7 +38,9 @@ fn transform_1d(f: &[f64]) -> Vec<f64> {
     let mut k = 0;
     bounds[0] = f64::NEG_INFINITY;
     bounds[1] = f64::INFINITY;
-    let meet = |q: usize, p: usize| ((f[q] + (q * q) as f64) - (f[p] + (p * p) as f64)) / (2.0 * q as f64 - 2.0 * p as f64);
+    let meet = |q: usize, p: usize| {
+        ((f[q] + (q * q) as f64) - (f[p] + (p * p) as f64)) / (2.0 * q as f64 - 2.0 * p as f64)
+    };
     for q in 1..n {
         let mut s = meet(q, vertices[k]);
         while s <= bounds[k] {
@@ -68,12 +70,22 @@ mod tests {
     #[test]
     fn matches_brute_force() {
         let (w, h) = (13, 9);
-        let mask: Vec<f32> = (0..w * h).map(|i| if (i * 7919) % 23 == 0 { 1.0 } else { 0.0 }).collect();
+        let mask: Vec<f32> =
+            (0..w * h).map(|i| if (i * 7919) % 23 == 0 { 1.0 } else { 0.0 }).collect();
         let field = mask_distance(&mask, w, h).unwrap();
         for y in 0..h {
             for x in 0..w {
-                let nearest = (0..w * h).filter(|&j| mask[j] > 0.5).map(|j| (((j % w) as f64 - x as f64).powi(2) + ((j / w) as f64 - y as f64).powi(2)).sqrt()).fold(f64::INFINITY, f64::min);
-                assert!(((nearest - 0.5).max(0.0) - field[y * w + x] as f64).abs() < 1e-5, "({x}, {y})");
+                let nearest = (0..w * h)
+                    .filter(|&j| mask[j] > 0.5)
+                    .map(|j| {
+                        (((j % w) as f64 - x as f64).powi(2) + ((j / w) as f64 - y as f64).powi(2))
+                            .sqrt()
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    ((nearest - 0.5).max(0.0) - field[y * w + x] as f64).abs() < 1e-5,
+                    "({x}, {y})"
+                );
             }
         }
     }

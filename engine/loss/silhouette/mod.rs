@@ -65,11 +65,16 @@ pub struct SilhouetteTerm {
 
 impl SilhouetteTerm {
     /// Uploads the views' fields. Views must be at least 2 × 2 pixels.
-    pub fn new(ctx: &Arc<GpuContext>, views: &[SilhouetteView]) -> Result<Self, crate::gpu::GpuError> {
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        views: &[SilhouetteView],
+    ) -> Result<Self, crate::gpu::GpuError> {
         let (mut gpu_views, mut fields, mut without_mask) = (Vec::new(), Vec::new(), Vec::new());
         for (index, view) in views.iter().enumerate() {
             let c = &view.camera;
-            let usable = view.field.as_ref().filter(|f| c.width >= 2 && c.height >= 2 && f.len() == (c.width * c.height) as usize);
+            let usable = view.field.as_ref().filter(|f| {
+                c.width >= 2 && c.height >= 2 && f.len() == (c.width * c.height) as usize
+            });
             if usable.is_none() {
                 without_mask.push(index);
             }
@@ -81,7 +86,16 @@ impl SilhouetteTerm {
             fields.extend_from_slice(usable.map_or(&[][..], |f| f));
         }
         Ok(Self {
-            pipeline: ComputePipeline::new(ctx, &PipelineDesc { name: "silhouette", spirv: shaders::LOSS_SILHOUETTE, bindings: 5, push_constant_bytes: size_of::<Push>() as u32, specialization: &[WORKGROUP] })?,
+            pipeline: ComputePipeline::new(
+                ctx,
+                &PipelineDesc {
+                    name: "silhouette",
+                    spirv: shaders::LOSS_SILHOUETTE,
+                    bindings: 5,
+                    push_constant_bytes: size_of::<Push>() as u32,
+                    specialization: &[WORKGROUP],
+                },
+            )?,
             views: GpuBuffer::from_slice(ctx, "silhouette views", &gpu_views)?,
             fields: GpuBuffer::from_slice(ctx, "silhouette distance fields", &fields)?,
             losses: GpuBuffer::from_slice(ctx, "silhouette loss", &[0.0])?,
@@ -99,14 +113,37 @@ impl SilhouetteTerm {
     /// Records the term for `vertices` positions (3 floats each), ADDING `weight` × its
     /// gradient (the mean over vertices and views with a mask) into `grad_positions`; the
     /// weighted value is summed for [`Self::take_loss`]. `near`: closer points are skipped.
-    pub fn record<'a>(&'a self, rec: &mut Recorder<'a>, positions: &'a GpuBuffer<f32>, grad_positions: &'a GpuBuffer<f32>, weight: f32, near: f32) -> GpuResult<()> {
+    pub fn record<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        positions: &'a GpuBuffer<f32>,
+        grad_positions: &'a GpuBuffer<f32>,
+        weight: f32,
+        near: f32,
+    ) -> GpuResult<()> {
         let vertices = positions.len() / 3;
         if vertices == 0 || self.with_mask == 0 || weight == 0.0 {
             return Ok(());
         }
-        let push = Push { vertices: vertices as u32, views: self.view_count as u32, scale: weight / (vertices * self.with_mask) as f32, near };
-        let buffers = [positions.binding(), self.views.binding(), self.fields.binding(), grad_positions.binding(), self.losses.binding()];
-        rec.dispatch_1d(&self.pipeline, &buffers, &push, (vertices as u64).div_ceil(WORKGROUP as u64))
+        let push = Push {
+            vertices: vertices as u32,
+            views: self.view_count as u32,
+            scale: weight / (vertices * self.with_mask) as f32,
+            near,
+        };
+        let buffers = [
+            positions.binding(),
+            self.views.binding(),
+            self.fields.binding(),
+            grad_positions.binding(),
+            self.losses.binding(),
+        ];
+        rec.dispatch_1d(
+            &self.pipeline,
+            &buffers,
+            &push,
+            (vertices as u64).div_ceil(WORKGROUP as u64),
+        )
     }
 
     /// The weighted loss summed since the last call (which restarts the sum).

@@ -8,7 +8,8 @@ fn field_at(field: &[f32], width: usize, height: usize, q: DVec2) -> (f64, DVec2
     let inside = q.clamp(DVec2::ZERO, DVec2::new(width as f64 - 1.0, height as f64 - 1.0));
     let base = inside.floor().min(DVec2::new(width as f64 - 2.0, height as f64 - 2.0));
     let f = inside - base;
-    let at = |dx: usize, dy: usize| field[(base.y as usize + dy) * width + base.x as usize + dx] as f64;
+    let at =
+        |dx: usize, dy: usize| field[(base.y as usize + dy) * width + base.x as usize + dx] as f64;
     let (d00, d10, d01, d11) = (at(0, 0), at(1, 0), at(0, 1), at(1, 1));
     let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
     let mut value = lerp(lerp(d00, d10, f.x), lerp(d01, d11, f.x), f.y);
@@ -23,8 +24,14 @@ fn field_at(field: &[f32], width: usize, height: usize, q: DVec2) -> (f64, DVec2
 }
 
 /// The term's value and its gradient per position (the kernel's definition, weight applied).
-pub fn silhouette_loss(positions: &[[f64; 3]], views: &[SilhouetteView], weight: f64, near: f64) -> (f64, Vec<[f64; 3]>) {
-    let usable: Vec<_> = views.iter().filter_map(|v| v.field.as_ref().map(|f| (&v.camera, f))).collect();
+pub fn silhouette_loss(
+    positions: &[[f64; 3]],
+    views: &[SilhouetteView],
+    weight: f64,
+    near: f64,
+) -> (f64, Vec<[f64; 3]>) {
+    let usable: Vec<_> =
+        views.iter().filter_map(|v| v.field.as_ref().map(|f| (&v.camera, f))).collect();
     let mut grads = vec![[0.0; 3]; positions.len()];
     if usable.is_empty() || positions.is_empty() {
         return (0.0, grads);
@@ -38,12 +45,18 @@ pub fn silhouette_loss(positions: &[[f64; 3]], views: &[SilhouetteView], weight:
             if !(c.z > near) {
                 continue;
             }
-            let q = DVec2::new(camera.fx * c.x / c.z + camera.cx, camera.fy * c.y / c.z + camera.cy) - 0.5;
+            let q =
+                DVec2::new(camera.fx * c.x / c.z + camera.cx, camera.fy * c.y / c.z + camera.cy)
+                    - 0.5;
             let (d, slope) = field_at(field, camera.width as usize, camera.height as usize, q);
             let inv = 1.0 / camera.width.max(camera.height) as f64;
             energy += scale * d * d * inv * inv;
             let dq = 2.0 * scale * d * inv * inv * slope;
-            let dc = DVec3::new(dq.x * camera.fx / c.z, dq.y * camera.fy / c.z, -(dq.x * camera.fx * c.x + dq.y * camera.fy * c.y) / (c.z * c.z));
+            let dc = DVec3::new(
+                dq.x * camera.fx / c.z,
+                dq.y * camera.fy / c.z,
+                -(dq.x * camera.fx * c.x + dq.y * camera.fy * c.y) / (c.z * c.z),
+            );
             g += DMat3::from_mat4(camera.world_to_camera).transpose() * dc;
         }
         *grad = g.to_array();
@@ -53,7 +66,14 @@ pub fn silhouette_loss(positions: &[[f64; 3]], views: &[SilhouetteView], weight:
 
 /// The coverage term (coverage_*.comp) for one view: `mask` and `coverage` per pixel
 /// (row-major), uncovered where mask > 0.5 and coverage < 0.5; value and position gradients.
-pub fn coverage_loss(positions: &[[f64; 3]], camera: &crate::camera::Camera, (mask, coverage): (&[f32], &[f32]), radius: i64, weight: f64, near: f64) -> (f64, Vec<[f64; 3]>) {
+pub fn coverage_loss(
+    positions: &[[f64; 3]],
+    camera: &crate::camera::Camera,
+    (mask, coverage): (&[f32], &[f32]),
+    radius: i64,
+    weight: f64,
+    near: f64,
+) -> (f64, Vec<[f64; 3]>) {
     let (w, h) = (camera.width as i64, camera.height as i64);
     let project = |x: [f64; 3]| {
         let c = camera.to_camera(DVec3::from(x));
@@ -74,7 +94,8 @@ pub fn coverage_loss(positions: &[[f64; 3]], camera: &crate::camera::Camera, (ma
             continue;
         }
         let centre = DVec2::new((p % w) as f64 + 0.5, (p / w) as f64 + 0.5);
-        let window = (-radius..=radius).flat_map(|dy| (-radius..=radius).map(move |dx| (p % w + dx, p / w + dy)));
+        let window = (-radius..=radius)
+            .flat_map(|dy| (-radius..=radius).map(move |dx| (p % w + dx, p / w + dy)));
         let nearest = window
             .filter(|&(x, y)| x >= 0 && y >= 0 && x < w && y < h)
             .map(|(x, y)| seeds[(y * w + x) as usize])
@@ -87,7 +108,11 @@ pub fn coverage_loss(positions: &[[f64; 3]], camera: &crate::camera::Camera, (ma
         let (c, uv) = project(positions[s]);
         energy += scale * (uv - centre).length_squared();
         let g = 2.0 * scale * (uv - centre);
-        let dc = DVec3::new(g.x * camera.fx / c.z, g.y * camera.fy / c.z, -(g.x * camera.fx * c.x + g.y * camera.fy * c.y) / (c.z * c.z));
+        let dc = DVec3::new(
+            g.x * camera.fx / c.z,
+            g.y * camera.fy / c.z,
+            -(g.x * camera.fx * c.x + g.y * camera.fy * c.y) / (c.z * c.z),
+        );
         let dx = DMat3::from_mat4(camera.world_to_camera).transpose() * dc;
         for a in 0..3 {
             grads[s][a] += dx[a];

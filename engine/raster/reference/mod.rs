@@ -69,7 +69,8 @@ pub fn render(mesh: &ReferenceMesh, camera: &Camera, near: f64) -> ReferenceFram
         }
         let f = mesh.faces[t as usize];
         let v = f.map(|k| cam[k as usize]);
-        let (px, py) = ((i % camera.width as usize) as f64 + 0.5, (i / camera.width as usize) as f64 + 0.5);
+        let (px, py) =
+            ((i % camera.width as usize) as f64 + 0.5, (i / camera.width as usize) as f64 + 0.5);
         let d = DVec3::new((px - camera.cx) / camera.fx, (py - camera.cy) / camera.fy, 1.0);
         let s = [d.dot(v[1].cross(v[2])), d.dot(v[2].cross(v[0])), d.dot(v[0].cross(v[1]))];
         let sum = s[0] + s[1] + s[2];

@@ -36,7 +36,11 @@ fn clip_near(corners: [(u32, DVec3); 3], near: f64) -> Vec<DVec3> {
             poly.push(DVec3::new(lo.x + s * (hi.x - lo.x), lo.y + s * (hi.y - lo.y), near));
         }
     }
-    if poly.len() < 3 { Vec::new() } else { poly }
+    if poly.len() < 3 {
+        Vec::new()
+    } else {
+        poly
+    }
 }
 
 fn edge(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> f64 {
@@ -59,7 +63,9 @@ fn draw(mut c: [([f64; 2], f64); 3], id: u32, (w, h): (usize, usize), best: &mut
     let xs = c.map(|v| v.0[0]);
     let ys = c.map(|v| v.0[1]);
     let lo = |v: [f64; 3]| (v.iter().copied().fold(f64::INFINITY, f64::min) - 0.5).ceil().max(0.0);
-    let hi = |v: [f64; 3], n: usize| (v.iter().copied().fold(f64::NEG_INFINITY, f64::max) - 0.5).floor().min(n as f64 - 1.0);
+    let hi = |v: [f64; 3], n: usize| {
+        (v.iter().copied().fold(f64::NEG_INFINITY, f64::max) - 0.5).floor().min(n as f64 - 1.0)
+    };
     let (x0, x1, y0, y1) = (lo(xs), hi(xs, w), lo(ys), hi(ys, h));
     if x0 > x1 || y0 > y1 {
         return;
@@ -68,7 +74,10 @@ fn draw(mut c: [([f64; 2], f64); 3], id: u32, (w, h): (usize, usize), best: &mut
         for x in x0 as usize..=x1 as usize {
             let p = [x as f64 + 0.5, y as f64 + 0.5];
             let e = [edge(c[1].0, c[2].0, p), edge(c[2].0, c[0].0, p), edge(c[0].0, c[1].0, p)];
-            if !(covers(e[0], c[1].0, c[2].0) && covers(e[1], c[2].0, c[0].0) && covers(e[2], c[0].0, c[1].0)) {
+            if !(covers(e[0], c[1].0, c[2].0)
+                && covers(e[1], c[2].0, c[0].0)
+                && covers(e[2], c[0].0, c[1].0))
+            {
                 continue;
             }
             let sum = e[0] + e[1] + e[2];

@@ -4,7 +4,10 @@
 pub(super) type Mat3 = [[f64; 3]; 3];
 
 /// `a · b`.
-pub(super) fn mul<const R: usize, const K: usize, const C: usize>(a: &[[f64; K]; R], b: &[[f64; C]; K]) -> [[f64; C]; R] {
+pub(super) fn mul<const R: usize, const K: usize, const C: usize>(
+    a: &[[f64; K]; R],
+    b: &[[f64; C]; K],
+) -> [[f64; C]; R] {
     std::array::from_fn(|r| std::array::from_fn(|c| (0..K).map(|k| a[r][k] * b[k][c]).sum()))
 }
 

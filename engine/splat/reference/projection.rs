@@ -94,11 +94,21 @@ pub(super) struct Forward {
 /// zero or below the smallest normal f32 (no f32 implementation can normalise it reliably);
 /// `det Σ' ≤ 0`; opacity below 1/255; or any non-finite result (mean, conic, colour before
 /// its clamp, which catches non-finite SH coefficients of the active degree).
-pub fn project(scene: &GaussianScene, camera: &Camera, settings: &RenderSettings, i: usize) -> Option<Projected> {
+pub fn project(
+    scene: &GaussianScene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    i: usize,
+) -> Option<Projected> {
     forward(scene, &View::new(camera), settings, i).map(|f| f.projected)
 }
 
-pub(super) fn forward(scene: &GaussianScene, view: &View, settings: &RenderSettings, i: usize) -> Option<Forward> {
+pub(super) fn forward(
+    scene: &GaussianScene,
+    view: &View,
+    settings: &RenderSettings,
+    i: usize,
+) -> Option<Forward> {
     let p = scene.positions[i].map(f64::from);
     let s = scene.log_scales[i].map(f64::from);
     let q = scene.rotations[i].map(f64::from);
@@ -137,7 +147,8 @@ pub(super) fn forward(scene: &GaussianScene, view: &View, settings: &RenderSetti
     if opacity < ALPHA_MIN {
         return None;
     }
-    let colour = if settings.mask_mode { Colour::mask() } else { Colour::of(scene, settings, view, i, p) };
+    let colour =
+        if settings.mask_mode { Colour::mask() } else { Colour::of(scene, settings, view, i, p) };
     let projected = Projected { mean, conic, opacity, color: colour.color, depth: z };
     let finite = mean.iter().chain(&conic).chain(&colour.sums).all(|v| v.is_finite());
     finite.then_some(Forward {
@@ -190,17 +201,33 @@ struct Colour {
 
 impl Colour {
     fn mask() -> Self {
-        Self { color: [1.0; 3], sums: [1.0; 3], direction: [0.0; 3], distance: 0.0, basis: [0.0; 16] }
+        Self {
+            color: [1.0; 3],
+            sums: [1.0; 3],
+            direction: [0.0; 3],
+            distance: 0.0,
+            basis: [0.0; 16],
+        }
     }
 
-    fn of(scene: &GaussianScene, settings: &RenderSettings, view: &View, i: usize, p: [f64; 3]) -> Self {
+    fn of(
+        scene: &GaussianScene,
+        settings: &RenderSettings,
+        view: &View,
+        i: usize,
+        p: [f64; 3],
+    ) -> Self {
         let offset: [f64; 3] = from_fn(|a| p[a] - view.center[a]);
         let distance = offset.iter().map(|v| v * v).sum::<f64>().sqrt();
         let direction = offset.map(|v| v / distance);
         let basis = sh::basis(direction);
         let stride = scene.coefficients();
         let used = sh_coefficients(settings.sh_degree.min(scene.sh_degree));
-        let sums = from_fn(|ch| 0.5 + (0..used).map(|k| basis[k] * f64::from(scene.sh[(i * stride + k) * 3 + ch])).sum::<f64>());
+        let sums = from_fn(|ch| {
+            0.5 + (0..used)
+                .map(|k| basis[k] * f64::from(scene.sh[(i * stride + k) * 3 + ch]))
+                .sum::<f64>()
+        });
         Self { color: sums.map(|sum: f64| sum.max(0.0)), sums, direction, distance, basis }
     }
 }

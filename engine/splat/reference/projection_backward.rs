@@ -19,7 +19,15 @@ pub(super) struct ProjectedGradient {
 }
 
 /// Writes Gaussian `i`'s parameter gradients into `out` (its rows are overwritten).
-pub(super) fn project_backward(f: &Forward, g: &ProjectedGradient, view: &View, scene: &GaussianScene, settings: &RenderSettings, i: usize, out: &mut Gradients) {
+pub(super) fn project_backward(
+    f: &Forward,
+    g: &ProjectedGradient,
+    view: &View,
+    scene: &GaussianScene,
+    settings: &RenderSettings,
+    i: usize,
+    out: &mut Gradients,
+) {
     let d_m = dilated_covariance_gradient(f, &g.conic);
     // Σ' = J V Jᵀ + 0.3 I with V = W Σ Wᵀ.
     let d_jacobian = mul(&mul(&d_m, &f.jacobian), &f.cov_view).map(|row| row.map(|v| 2.0 * v));
@@ -53,7 +61,12 @@ fn dilated_covariance_gradient(f: &Forward, d_conic: &[f64; 3]) -> [[f64; 2]; 2]
 
 /// dL/dv from the mean, the depth and the Jacobian. `J02 = −fx tx / z²` with
 /// `tx = z · ray_x`; `ray_x = v.x / z` unless the guard band clamps it to a constant.
-fn view_point_gradient(f: &Forward, view: &View, g: &ProjectedGradient, d_jacobian: &[[f64; 3]; 2]) -> [f64; 3] {
+fn view_point_gradient(
+    f: &Forward,
+    view: &View,
+    g: &ProjectedGradient,
+    d_jacobian: &[[f64; 3]; 2],
+) -> [f64; 3] {
     let v = f.view_point;
     let z = v[2];
     let mut d_v = [0.0, 0.0, g.depth];
@@ -82,7 +95,8 @@ fn covariance_backward(f: &Forward, d_cov: &Mat3) -> ([f64; 3], [f64; 4]) {
     let d_cov_sym: Mat3 = from_fn(|r| from_fn(|c| d_cov[r][c] + d_cov[c][r]));
     let d_rs = mul(&d_cov_sym, &rs);
     let d_rotation: Mat3 = from_fn(|r| from_fn(|c| d_rs[r][c] * f.scale[c]));
-    let d_log_scale = from_fn(|c| (0..3).map(|r| f.rotation[r][c] * d_rs[r][c]).sum::<f64>() * f.scale[c]);
+    let d_log_scale =
+        from_fn(|c| (0..3).map(|r| f.rotation[r][c] * d_rs[r][c]).sum::<f64>() * f.scale[c]);
     let d_unit = rotation_backward(f.unit_q, &d_rotation);
     let along = dot(f.unit_q, d_unit);
     (d_log_scale, from_fn(|k| (d_unit[k] - f.unit_q[k] * along) / f.q_norm))
@@ -92,15 +106,31 @@ fn covariance_backward(f: &Forward, d_cov: &Mat3) -> ([f64; 3], [f64; 4]) {
 fn rotation_backward([w, x, y, z]: [f64; 4], g: &Mat3) -> [f64; 4] {
     [
         2.0 * (-z * g[0][1] + y * g[0][2] + z * g[1][0] - x * g[1][2] - y * g[2][0] + x * g[2][1]),
-        2.0 * (y * g[0][1] + z * g[0][2] + y * g[1][0] - 2.0 * x * g[1][1] - w * g[1][2] + z * g[2][0] + w * g[2][1] - 2.0 * x * g[2][2]),
-        2.0 * (-2.0 * y * g[0][0] + x * g[0][1] + w * g[0][2] + x * g[1][0] + z * g[1][2] - w * g[2][0] + z * g[2][1] - 2.0 * y * g[2][2]),
-        2.0 * (-2.0 * z * g[0][0] - w * g[0][1] + x * g[0][2] + w * g[1][0] - 2.0 * z * g[1][1] + y * g[1][2] + x * g[2][0] + y * g[2][1]),
+        2.0 * (y * g[0][1] + z * g[0][2] + y * g[1][0] - 2.0 * x * g[1][1] - w * g[1][2]
+            + z * g[2][0]
+            + w * g[2][1]
+            - 2.0 * x * g[2][2]),
+        2.0 * (-2.0 * y * g[0][0] + x * g[0][1] + w * g[0][2] + x * g[1][0] + z * g[1][2]
+            - w * g[2][0]
+            + z * g[2][1]
+            - 2.0 * y * g[2][2]),
+        2.0 * (-2.0 * z * g[0][0] - w * g[0][1] + x * g[0][2] + w * g[1][0] - 2.0 * z * g[1][1]
+            + y * g[1][2]
+            + x * g[2][0]
+            + y * g[2][1]),
     ]
 }
 
 /// Writes the SH coefficient gradients of Gaussian `i` and returns dL/dposition through the
 /// view direction. A channel clamped at 0 passes nothing.
-fn color_backward(f: &Forward, g: &ProjectedGradient, scene: &GaussianScene, settings: &RenderSettings, i: usize, out: &mut Gradients) -> [f64; 3] {
+fn color_backward(
+    f: &Forward,
+    g: &ProjectedGradient,
+    scene: &GaussianScene,
+    settings: &RenderSettings,
+    i: usize,
+    out: &mut Gradients,
+) -> [f64; 3] {
     let d_sum: [f64; 3] = from_fn(|ch| if f.color_free[ch] { g.color[ch] } else { 0.0 });
     let stride = scene.coefficients();
     let used = sh_coefficients(settings.sh_degree.min(scene.sh_degree));

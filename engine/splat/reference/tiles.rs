@@ -13,7 +13,11 @@ pub fn tiles_touched(p: &Projected, width: u32, height: u32) -> Vec<u32> {
     let det = q00 * q11 - q01 * q01;
     // Half-extents of the ellipse's bounding box: sqrt(2 extent Σ'_aa), Σ' = Q⁻¹.
     let half = [(2.0 * extent * q11 / det).sqrt(), (2.0 * extent * q00 / det).sqrt()];
-    if !(extent >= 0.0 && det > 0.0 && q00 > 0.0 && half.iter().chain(&p.mean).all(|v| v.is_finite())) {
+    if !(extent >= 0.0
+        && det > 0.0
+        && q00 > 0.0
+        && half.iter().chain(&p.mean).all(|v| v.is_finite()))
+    {
         return Vec::new();
     }
     let tiles_x = width.div_ceil(TILE_SIZE);
@@ -79,7 +83,11 @@ mod tests {
             let (a, b) = (0.3 + 30.0 * rng.next_f64(), 0.3 + 3.0 * rng.next_f64());
             let (c, s) = (angle.cos(), angle.sin());
             // Σ' = R diag(a², b²) Rᵀ, conic = Σ'⁻¹.
-            let (s00, s01, s11) = (a * a * c * c + b * b * s * s, (a * a - b * b) * c * s, a * a * s * s + b * b * c * c);
+            let (s00, s01, s11) = (
+                a * a * c * c + b * b * s * s,
+                (a * a - b * b) * c * s,
+                a * a * s * s + b * b * c * c,
+            );
             let det = s00 * s11 - s01 * s01;
             let p = Projected {
                 mean: [rng.next_f64() * 100.0 - 16.0, rng.next_f64() * 60.0 - 14.0],
@@ -93,7 +101,8 @@ mod tests {
             for tile in 0..5 * 3u32 {
                 let (tx, ty) = (tile % 5, tile / 5);
                 let lo = [tx * 16, ty * 16].map(|v| f64::from(v) + 0.5);
-                let hi = [((tx + 1) * 16).min(width), ((ty + 1) * 16).min(height)].map(|v| f64::from(v) - 0.5);
+                let hi = [((tx + 1) * 16).min(width), ((ty + 1) * 16).min(height)]
+                    .map(|v| f64::from(v) - 0.5);
                 let steps = 60;
                 let sampled = (0..=steps)
                     .flat_map(|i| (0..=steps).map(move |j| (i, j)))
@@ -105,7 +114,10 @@ mod tests {
                 let exact = min_sigma(&p, lo, hi);
                 assert!(exact <= sampled + 1e-12, "exact minimum {exact} above a sample {sampled}");
                 if sampled <= extent {
-                    assert!(touched.contains(&tile), "tile {tile} holds a footprint sample but is not reported");
+                    assert!(
+                        touched.contains(&tile),
+                        "tile {tile} holds a footprint sample but is not reported"
+                    );
                 }
                 assert_eq!(touched.contains(&tile), exact <= extent);
             }
@@ -114,7 +126,13 @@ mod tests {
 
     #[test]
     fn invalid_footprints_touch_nothing() {
-        let p = Projected { mean: [5.0, 5.0], conic: [1.0, 0.0, 1.0], opacity: 0.5, color: [0.0; 3], depth: 1.0 };
+        let p = Projected {
+            mean: [5.0, 5.0],
+            conic: [1.0, 0.0, 1.0],
+            opacity: 0.5,
+            color: [0.0; 3],
+            depth: 1.0,
+        };
         assert_eq!(tiles_touched(&p, 32, 32), vec![0]);
         for conic in [[1.0, 2.0, 1.0], [f64::NAN, 0.0, 1.0], [-1.0, 0.0, -1.0]] {
             assert!(tiles_touched(&Projected { conic, ..p }, 32, 32).is_empty());

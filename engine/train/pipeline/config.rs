@@ -1,7 +1,9 @@
 //! The reconstruction pipeline's configuration: one TOML file, every key optional with a
 //! documented default (`tagsplat train --print-config`), errors naming the file and key.
 
-use crate::train::config::{check_appearance, check_ranges, load_toml, value_error, ConfigError, LearningRateConfig};
+use crate::train::config::{
+    check_appearance, check_ranges, load_toml, value_error, ConfigError, LearningRateConfig,
+};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -175,25 +177,65 @@ impl Default for TrainConfig {
 
 impl Default for CanonicalConfig {
     fn default() -> Self {
-        Self { iterations: 1000, densify_from: 200, densify_until: 700, densify_every: 100, densify_threshold: 2e-4, budget: 0, prune_opacity: 0.005, prune_scale: 0.1 }
+        Self {
+            iterations: 1000,
+            densify_from: 200,
+            densify_until: 700,
+            densify_every: 100,
+            densify_threshold: 2e-4,
+            budget: 0,
+            prune_opacity: 0.005,
+            prune_scale: 0.1,
+        }
     }
 }
 
 impl Default for TemporalConfig {
     fn default() -> Self {
-        Self { iterations: 300, min_iterations: 60, tolerance: 0.005, freeze_appearance: true, silhouette: 10.0, coverage: 0.01, coverage_radius: 24, regularizer_reference: ReferencePose::Previous, graph: GraphConfig::default() }
+        Self {
+            iterations: 300,
+            min_iterations: 60,
+            tolerance: 0.005,
+            freeze_appearance: true,
+            silhouette: 10.0,
+            coverage: 0.01,
+            coverage_radius: 24,
+            regularizer_reference: ReferencePose::Previous,
+            graph: GraphConfig::default(),
+        }
     }
 }
 
 impl Default for GraphConfig {
     fn default() -> Self {
-        Self { nodes: 200, levels: vec![2, 1], iterations: 150, min_iterations: 30, translation_lr: 2e-3, rotation_lr: 5e-3, arap: 1.0, rest: ReferencePose::Previous }
+        Self {
+            nodes: 200,
+            levels: vec![2, 1],
+            iterations: 150,
+            min_iterations: 30,
+            translation_lr: 2e-3,
+            rotation_lr: 5e-3,
+            arap: 1.0,
+            rest: ReferencePose::Previous,
+        }
     }
 }
 
 impl Default for PipelineWeights {
     fn default() -> Self {
-        Self { gaussian_color: 1.0, gaussian_mask: 3.0, mesh_color: 1.0, mesh_mask: 3.0, scale_2d: 1.0, laplacian: 5.0, normal: 1.0, edge_length: 0.4, rigidity: 0.4, rotation: 2.0, lambda_w: 1.0 }
+        Self {
+            gaussian_color: 1.0,
+            gaussian_mask: 3.0,
+            mesh_color: 1.0,
+            mesh_mask: 3.0,
+            scale_2d: 1.0,
+            laplacian: 5.0,
+            normal: 1.0,
+            edge_length: 0.4,
+            rigidity: 0.4,
+            rotation: 2.0,
+            lambda_w: 1.0,
+        }
     }
 }
 
@@ -282,17 +324,38 @@ impl TrainConfig {
         check_ranges(&positive, &non_negative)?;
         check_appearance(self.sh_degree, self.background)?;
         if !(c.prune_opacity < 1.0) {
-            return value_error("canonical.prune_opacity", format!("must be below 1 (got {})", c.prune_opacity));
+            return value_error(
+                "canonical.prune_opacity",
+                format!("must be below 1 (got {})", c.prune_opacity),
+            );
         }
         let (t, g) = (&self.temporal, &self.temporal.graph);
         if t.min_iterations > t.iterations || g.min_iterations > g.iterations {
-            return value_error("temporal.min_iterations", format!("({} / graph {}) must not exceed temporal.iterations ({} / graph {})", t.min_iterations, g.min_iterations, t.iterations, g.iterations));
+            return value_error(
+                "temporal.min_iterations",
+                format!(
+                    "({} / graph {}) must not exceed temporal.iterations ({} / graph {})",
+                    t.min_iterations, g.min_iterations, t.iterations, g.iterations
+                ),
+            );
         }
         if g.nodes > 0 && (g.levels.is_empty() || g.levels.iter().any(|&f| f == 0 || f > 16)) {
-            return value_error("temporal.graph.levels", format!("must be downsampling factors from 1 to 16, at least one (got {:?})", g.levels));
+            return value_error(
+                "temporal.graph.levels",
+                format!(
+                    "must be downsampling factors from 1 to 16, at least one (got {:?})",
+                    g.levels
+                ),
+            );
         }
         if c.densify_from > c.densify_until {
-            return value_error("canonical.densify_from", format!("({}) must not be after canonical.densify_until ({})", c.densify_from, c.densify_until));
+            return value_error(
+                "canonical.densify_from",
+                format!(
+                    "({}) must not be after canonical.densify_until ({})",
+                    c.densify_from, c.densify_until
+                ),
+            );
         }
         Ok(())
     }
@@ -307,7 +370,8 @@ mod tests {
         let config = TrainConfig::default();
         config.check().unwrap();
         assert_eq!(toml::from_str::<TrainConfig>(&config.to_toml()).unwrap(), config);
-        let unknown = toml::from_str::<TrainConfig>("[temporal]\niters = 3\n").unwrap_err().to_string();
+        let unknown =
+            toml::from_str::<TrainConfig>("[temporal]\niters = 3\n").unwrap_err().to_string();
         assert!(unknown.contains("iters"), "{unknown}");
         let config: TrainConfig = toml::from_str("[loss]\nrigidity = -4\n").unwrap();
         assert!(config.check().unwrap_err().to_string().contains("loss.rigidity"));

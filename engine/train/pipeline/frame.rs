@@ -13,10 +13,12 @@ use crate::optim::{AdamParams, LearningRates};
 use crate::regularize::{Losses, Neighbourhoods, Regularizers, Temporal};
 use crate::rng::SplitMix64;
 use crate::splat::{GaussianBuffers, GaussianScene, RenderSettings};
-use crate::topology::{compose, densify, face_scores, prune, DensifyConfig, ManifoldMesh, PruneConfig};
+use crate::topology::{
+    compose, densify, face_scores, prune, DensifyConfig, ManifoldMesh, PruneConfig,
+};
 use crate::train::fit::{self, add_times, learning_rates, scene_extent, shuffled};
 use crate::train::mesh_term::MeshTerm;
-use crate::train::{Trainer, TrainError, ViewTarget};
+use crate::train::{TrainError, Trainer, ViewTarget};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
@@ -72,21 +74,51 @@ pub struct FrameTask<'a> {
 /// The optimised Gaussians (or, after a non-finite loss, the error naming it). Later frames
 /// first solve the deformation graph (when configured), then refine per vertex until the loss
 /// stops improving; frame 0 runs its fixed iterations with densification and pruning.
-pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConfig, progress: &mut dyn FnMut(u32, u32)) -> Result<(GaussianScene, FrameReport), TrainError> {
+pub fn optimize_frame(
+    ctx: &Arc<GpuContext>,
+    task: FrameTask,
+    config: &TrainConfig,
+    progress: &mut dyn FnMut(u32, u32),
+) -> Result<(GaussianScene, FrameReport), TrainError> {
     let canonical = task.previous.is_none();
     let (w, bg, t) = (&config.loss, config.background, &config.temporal);
     let iterations = if canonical { config.canonical.iterations } else { t.iterations };
     let weights = ImageWeights {
-        gaussians: [w.gaussian_color / 3.0, w.gaussian_color / 3.0, w.gaussian_color / 3.0, w.gaussian_mask],
+        gaussians: [
+            w.gaussian_color / 3.0,
+            w.gaussian_color / 3.0,
+            w.gaussian_color / 3.0,
+            w.gaussian_mask,
+        ],
         mesh: [w.mesh_color / 3.0, w.mesh_color / 3.0, w.mesh_color / 3.0, w.mesh_mask],
     };
     let extent = scene_extent(&task.train.iter().map(|v| &v.camera).collect::<Vec<_>>());
-    let first = task.train.first().ok_or_else(|| TrainError::Input(format!("frame {}: no training views", task.frame)))?;
-    let mut settings = RenderSettings { background: bg, near: (extent * 1e-3) as f32, far: (extent * 1e3) as f32, sh_degree: config.sh_degree, mask_mode: false };
+    let first = task
+        .train
+        .first()
+        .ok_or_else(|| TrainError::Input(format!("frame {}: no training views", task.frame)))?;
+    let mut settings = RenderSettings {
+        background: bg,
+        near: (extent * 1e-3) as f32,
+        far: (extent * 1e3) as f32,
+        sh_degree: config.sh_degree,
+        mask_mode: false,
+    };
     let mut rng = SplitMix64::new(config.seed ^ task.frame as u64);
     let mut report = empty_report(task.frame);
 
-    let silhouette = if canonical || t.silhouette == 0.0 { None } else { Some(SilhouetteTerm::new(ctx, &task.train.iter().map(|v| SilhouetteView::from_mask(v.camera, &v.mask())).collect::<Vec<_>>())?) };
+    let silhouette = if canonical || t.silhouette == 0.0 {
+        None
+    } else {
+        Some(SilhouetteTerm::new(
+            ctx,
+            &task
+                .train
+                .iter()
+                .map(|v| SilhouetteView::from_mask(v.camera, &v.mask()))
+                .collect::<Vec<_>>(),
+        )?)
+    };
     let mut start = task.start;
     let mut train_s = 0.0;
     if let (false, true) = (canonical, t.graph.nodes > 0) {
@@ -99,23 +131,49 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
                 &no_silhouette
             }
         };
-        let (faces, neighbourhoods) = (task.mesh.live_faces(), Neighbourhoods::from_mesh(task.mesh));
-        let input = GraphInput { train: task.train, start: &start, frame0: task.frame0.unwrap_or(&start), faces: &faces, neighbourhoods: &neighbourhoods, silhouette };
+        let (faces, neighbourhoods) =
+            (task.mesh.live_faces(), Neighbourhoods::from_mesh(task.mesh));
+        let input = GraphInput {
+            train: task.train,
+            start: &start,
+            frame0: task.frame0.unwrap_or(&start),
+            faces: &faces,
+            neighbourhoods: &neighbourhoods,
+            silhouette,
+        };
         let (moved, graph) = solve_graph(ctx, &input, config, weights, &settings, &mut rng)?;
         (start, report.graph, train_s) = (moved, Some(graph), t0.elapsed().as_secs_f64());
     }
 
     let mut trainer = Trainer::new(ctx, &start, task.train)?;
     task.mesh.positions = start.positions.clone();
-    let mut mesh_term = MeshTerm::new(ctx, &start.positions, &task.mesh.live_faces(), first.camera.width, first.camera.height)?;
+    let mut mesh_term = MeshTerm::new(
+        ctx,
+        &start.positions,
+        &task.mesh.live_faces(),
+        first.camera.width,
+        first.camera.height,
+    )?;
     let mut regs = Regularizers::new(ctx)?;
     regs.upload(&Neighbourhoods::from_mesh(task.mesh))?;
-    let reference = t.regularizer_reference.pick(task.previous, task.frame0).map(|p| GaussianBuffers::from_scene(ctx, p)).transpose()?;
+    let reference = t
+        .regularizer_reference
+        .pick(task.previous, task.frame0)
+        .map(|p| GaussianBuffers::from_scene(ctx, p))
+        .transpose()?;
     let pixels = task.train.iter().map(|v| v.target.len()).max().unwrap_or(0);
-    let coverage = if canonical { None } else { Some(CoverageTerm::new(ctx, start.len(), pixels, t.coverage_radius)?) };
+    let coverage = if canonical {
+        None
+    } else {
+        Some(CoverageTerm::new(ctx, start.len(), pixels, t.coverage_radius)?)
+    };
 
     // Frame 0 runs all its iterations (min = max), reading the losses every `stats_every`.
-    let mut plateau = if canonical { Plateau::new(iterations, iterations, config.report.stats_every as usize, 0.0) } else { Plateau::new(t.min_iterations, iterations, task.train.len(), t.tolerance) };
+    let mut plateau = if canonical {
+        Plateau::new(iterations, iterations, config.report.stats_every as usize, 0.0)
+    } else {
+        Plateau::new(t.min_iterations, iterations, task.train.len(), t.tolerance)
+    };
     let (mut order, mut passes) = (Vec::new(), BTreeMap::new());
     let (mut interval_start, mut done) = (1, 0);
     for it in 1..=iterations {
@@ -132,14 +190,42 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
         let frame = trainer.prepare_step(view, &settings)?;
         let mut rec = Recorder::new(ctx)?;
         trainer.record_splat(&mut rec, view, &frame, weights.gaussians)?;
-        mesh_term.record(&mut rec, trainer.params(), trainer.grads(), trainer.camera(view), trainer.target(view), weights.mesh, bg)?;
+        mesh_term.record(
+            &mut rec,
+            trainer.params(),
+            trainer.grads(),
+            trainer.camera(view),
+            trainer.target(view),
+            weights.mesh,
+            bg,
+        )?;
         rec.begin_pass("regularizers");
-        regs.record(&mut rec, trainer.params(), trainer.grads(), &w.regularizers(trainer.gaussians()), reference.as_ref().map(Temporal::of))?;
+        regs.record(
+            &mut rec,
+            trainer.params(),
+            trainer.grads(),
+            &w.regularizers(trainer.gaussians()),
+            reference.as_ref().map(Temporal::of),
+        )?;
         if let Some(s) = &silhouette {
-            s.record(&mut rec, &trainer.params().positions, &trainer.grads().positions, t.silhouette, settings.near)?;
+            s.record(
+                &mut rec,
+                &trainer.params().positions,
+                &trainer.grads().positions,
+                t.silhouette,
+                settings.near,
+            )?;
         }
         if let Some(c) = &coverage {
-            c.record(&mut rec, trainer.camera(view), (trainer.target(view), trainer.rendered()), &trainer.params().positions, &trainer.grads().positions, t.coverage, settings.near)?;
+            c.record(
+                &mut rec,
+                trainer.camera(view),
+                (trainer.target(view), trainer.rendered()),
+                &trainer.params().positions,
+                &trainer.grads().positions,
+                t.coverage,
+                settings.near,
+            )?;
         }
         rec.end_pass();
         trainer.record_adam(&mut rec, &adam)?;
@@ -149,17 +235,36 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
 
         let pass_loss = if plateau.pass_ends(it) {
             let silhouettes = (silhouette.as_ref(), coverage.as_ref());
-            let mean = read_losses(&trainer, &mesh_term, &regs, silhouettes, weights, (interval_start, it), &mut report)?;
+            let mean = read_losses(
+                &trainer,
+                &mesh_term,
+                &regs,
+                silhouettes,
+                weights,
+                (interval_start, it),
+                &mut report,
+            )?;
             interval_start = it + 1;
             Some(mean)
         } else {
             None
         };
         let c = &config.canonical;
-        if canonical && it > c.densify_from && it <= c.densify_until.min(iterations.saturating_sub(c.densify_every)) && it % c.densify_every == 0 {
+        if canonical
+            && it > c.densify_from
+            && it <= c.densify_until.min(iterations.saturating_sub(c.densify_every))
+            && it % c.densify_every == 0
+        {
             let t0 = Instant::now();
             let budget = if c.budget > 0 { c.budget as usize } else { covered_pixels(task.train) };
-            report.topology_steps.push(topology_step(&mut trainer, (&mut mesh_term, &mut regs), task.mesh, config, (&first.camera, budget), it)?);
+            report.topology_steps.push(topology_step(
+                &mut trainer,
+                (&mut mesh_term, &mut regs),
+                task.mesh,
+                config,
+                (&first.camera, budget),
+                it,
+            )?);
             train_s += t0.elapsed().as_secs_f64();
         }
         progress(it, iterations);
@@ -174,8 +279,10 @@ pub fn optimize_frame(ctx: &Arc<GpuContext>, task: FrameTask, config: &TrainConf
     }
     let scene = trainer.scene()?;
     task.mesh.positions = scene.positions.clone();
-    (report.iterations, report.wall_s, report.gaussians, report.passes_ms) = (done, train_s, scene.len(), passes);
-    (report.psnr_gs, report.ssim_gs, report.psnr_mesh) = evaluate(&mut trainer, &mesh_term, task.eval, &settings)?;
+    (report.iterations, report.wall_s, report.gaussians, report.passes_ms) =
+        (done, train_s, scene.len(), passes);
+    (report.psnr_gs, report.ssim_gs, report.psnr_mesh) =
+        evaluate(&mut trainer, &mesh_term, task.eval, &settings)?;
     Ok((scene, report))
 }
 
@@ -192,17 +299,27 @@ fn read_losses(
     report: &mut FrameReport,
 ) -> Result<f64, TrainError> {
     let steps = (last - first + 1) as f32;
-    let (gs, mesh) = (trainer.take_terms()?.total(weights.gaussians) / steps, mesh_term.take_terms()?.total(weights.mesh) / steps);
-    let sil = (silhouette.map(|s| s.take_loss()).transpose()?.unwrap_or(0.0) + coverage.map(|c| c.take_loss()).transpose()?.unwrap_or(0.0)) / steps;
+    let (gs, mesh) = (
+        trainer.take_terms()?.total(weights.gaussians) / steps,
+        mesh_term.take_terms()?.total(weights.mesh) / steps,
+    );
+    let sil = (silhouette.map(|s| s.take_loss()).transpose()?.unwrap_or(0.0)
+        + coverage.map(|c| c.take_loss()).transpose()?.unwrap_or(0.0))
+        / steps;
     let regularizers: Losses<f32> = regs.read_losses()?;
-    if !(gs.is_finite() && mesh.is_finite() && sil.is_finite() && regularizers.slots().iter().all(|v| v.is_finite())) {
+    if !(gs.is_finite()
+        && mesh.is_finite()
+        && sil.is_finite()
+        && regularizers.slots().iter().all(|v| v.is_finite()))
+    {
         return Err(TrainError::Input(format!(
             "frame {}: the loss went non-finite between iterations {first} and {last} (Gaussian {gs}, mesh {mesh}, silhouette {sil}, regularizers {:?}); the finished frames are kept",
             report.frame,
             regularizers.slots()
         )));
     }
-    (report.loss_gs, report.loss_mesh, report.loss_silhouette, report.regularizers) = (gs, mesh, sil, regularizers.slots());
+    (report.loss_gs, report.loss_mesh, report.loss_silhouette, report.regularizers) =
+        (gs, mesh, sil, regularizers.slots());
     Ok((gs + mesh + sil) as f64)
 }
 
@@ -236,7 +353,13 @@ fn empty_report(frame: usize) -> FrameReport {
 }
 
 /// The learning rates of iteration `it`; later frames may keep their appearance.
-fn frame_rates(config: &TrainConfig, extent: f64, it: u32, iterations: u32, canonical: bool) -> LearningRates {
+fn frame_rates(
+    config: &TrainConfig,
+    extent: f64,
+    it: u32,
+    iterations: u32,
+    canonical: bool,
+) -> LearningRates {
     let scaled = crate::train::config::LearningRateConfig {
         positions: config.learning_rates.positions * config.position_lr_scale,
         positions_final: config.learning_rates.positions_final * config.position_lr_scale,
@@ -264,12 +387,29 @@ fn topology_step(
     mesh.positions = scene.positions.clone();
     // The statistic is in pixels; the threshold, as 3DGS's, in NDC units (a pixel is 2 / size).
     let ndc_scale = 0.5 * camera.width.max(camera.height) as f32;
-    let vertex_scores: Vec<f32> = trainer.densify_stats()?.iter().map(|&[sum, seen]| if seen > 0.0 { ndc_scale * sum / seen } else { 0.0 }).collect();
+    let vertex_scores: Vec<f32> = trainer
+        .densify_stats()?
+        .iter()
+        .map(|&[sum, seen]| if seen > 0.0 { ndc_scale * sum / seen } else { 0.0 })
+        .collect();
     let scores = face_scores(mesh, &vertex_scores);
     // Each split adds one Gaussian.
     let room = budget.saturating_sub(scene.len());
-    let densified = densify(mesh, &mut scene, &scores, &DensifyConfig { threshold: c.densify_threshold, max_splits: room, ..Default::default() })?;
-    let pruned = prune(mesh, &mut scene, &PruneConfig { min_opacity: c.prune_opacity, max_scale: c.prune_scale, ..Default::default() })?;
+    let densified = densify(
+        mesh,
+        &mut scene,
+        &scores,
+        &DensifyConfig { threshold: c.densify_threshold, max_splits: room, ..Default::default() },
+    )?;
+    let pruned = prune(
+        mesh,
+        &mut scene,
+        &PruneConfig {
+            min_opacity: c.prune_opacity,
+            max_scale: c.prune_scale,
+            ..Default::default()
+        },
+    )?;
     trainer.replace(&scene, &compose(&densified.old_of_new, &pruned.old_of_new))?;
     mesh_term.set_mesh(&scene.positions, &mesh.live_faces())?;
     regs.upload(&Neighbourhoods::from_mesh(mesh))?;
@@ -278,17 +418,25 @@ fn topology_step(
 
 /// Pixels the subject covers (mask > 0.5) in the median training view.
 fn covered_pixels(views: &[ViewTarget]) -> usize {
-    let mut counts: Vec<usize> = views.iter().map(|v| v.target.iter().filter(|p| p[3] > 0.5).count()).collect();
+    let mut counts: Vec<usize> =
+        views.iter().map(|v| v.target.iter().filter(|p| p[3] > 0.5).count()).collect();
     counts.sort_unstable();
     counts.get(counts.len() / 2).copied().unwrap_or(0)
 }
 
 /// Mean PSNR and SSIM of the Gaussian renders and PSNR of the mesh renders over `views`.
-fn evaluate(trainer: &mut Trainer, mesh_term: &MeshTerm, views: &[ViewTarget], settings: &RenderSettings) -> Result<(f64, f64, f64), TrainError> {
+fn evaluate(
+    trainer: &mut Trainer,
+    mesh_term: &MeshTerm,
+    views: &[ViewTarget],
+    settings: &RenderSettings,
+) -> Result<(f64, f64, f64), TrainError> {
     let (gs, gs_ssim, _) = fit::evaluate(trainer, views, settings, false)?;
     let mut mesh = 0.0;
     for v in views {
-        mesh += psnr(&mesh_term.render(trainer.params(), &v.camera, settings.background)?, &v.rgb())?.min(100.0);
+        mesh +=
+            psnr(&mesh_term.render(trainer.params(), &v.camera, settings.background)?, &v.rgb())?
+                .min(100.0);
     }
     Ok((gs, gs_ssim, mesh / views.len().max(1) as f64))
 }

@@ -15,7 +15,7 @@ use crate::rng::SplitMix64;
 use crate::splat::{GaussianScene, RenderSettings};
 use crate::train::fit::shuffled;
 use crate::train::mesh_term::MeshTerm;
-use crate::train::{Trainer, TrainError, ViewTarget};
+use crate::train::{TrainError, Trainer, ViewTarget};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -57,11 +57,20 @@ pub struct ImageWeights {
 
 /// Solves the graph level by level; returns the start moved by the graph (appearance
 /// unchanged) and what each level did.
-pub fn solve_graph(ctx: &Arc<GpuContext>, input: &GraphInput, config: &TrainConfig, weights: ImageWeights, settings: &RenderSettings, rng: &mut SplitMix64) -> Result<(GaussianScene, GraphReport), TrainError> {
+pub fn solve_graph(
+    ctx: &Arc<GpuContext>,
+    input: &GraphInput,
+    config: &TrainConfig,
+    weights: ImageWeights,
+    settings: &RenderSettings,
+    rng: &mut SplitMix64,
+) -> Result<(GaussianScene, GraphReport), TrainError> {
     let g = &config.temporal.graph;
     let rest = g.rest.pick(input.start, input.frame0);
-    let graph = build_graph(&rest.positions, |i| input.neighbourhoods.neighbours(i), g.nodes as usize);
-    let mut deformer = GraphDeformer::new(ctx, &graph, rest, g.arap).map_err(|e| TrainError::Input(format!("deformation graph: {e}")))?;
+    let graph =
+        build_graph(&rest.positions, |i| input.neighbourhoods.neighbours(i), g.nodes as usize);
+    let mut deformer = GraphDeformer::new(ctx, &graph, rest, g.arap)
+        .map_err(|e| TrainError::Input(format!("deformation graph: {e}")))?;
     if g.rest == ReferencePose::Frame0 {
         deformer.write_nodes(&fit_nodes(&rest.positions, &input.start.positions, &graph))?;
     }
@@ -75,12 +84,18 @@ pub fn solve_graph(ctx: &Arc<GpuContext>, input: &GraphInput, config: &TrainConf
         let mut trainer = Trainer::new(ctx, input.start, &views)?;
         let (width, height) = (views[0].camera.width, views[0].camera.height);
         let mesh_term = MeshTerm::new(ctx, &input.start.positions, input.faces, width, height)?;
-        let coverage = CoverageTerm::new(ctx, input.start.len(), (width * height) as usize, config.temporal.coverage_radius)?;
+        let coverage = CoverageTerm::new(
+            ctx,
+            input.start.len(),
+            (width * height) as usize,
+            config.temporal.coverage_radius,
+        )?;
         let mut rec = Recorder::new(ctx)?;
         deformer.record_blend(&mut rec, trainer.params())?;
         rec.submit_and_wait()?;
 
-        let mut plateau = Plateau::new(g.min_iterations, g.iterations, views.len(), config.temporal.tolerance);
+        let mut plateau =
+            Plateau::new(g.min_iterations, g.iterations, views.len(), config.temporal.tolerance);
         let (mut order, mut pass_start) = (Vec::new(), 1);
         for it in 1.. {
             if order.is_empty() {
@@ -90,15 +105,42 @@ pub fn solve_graph(ctx: &Arc<GpuContext>, input: &GraphInput, config: &TrainConf
             let frame = trainer.prepare_step(view, settings)?;
             let mut rec = Recorder::new(ctx)?;
             trainer.record_splat(&mut rec, view, &frame, weights.gaussians)?;
-            mesh_term.record(&mut rec, trainer.params(), trainer.grads(), trainer.camera(view), trainer.target(view), weights.mesh, settings.background)?;
-            input.silhouette.record(&mut rec, &trainer.params().positions, &trainer.grads().positions, config.temporal.silhouette, settings.near)?;
+            mesh_term.record(
+                &mut rec,
+                trainer.params(),
+                trainer.grads(),
+                trainer.camera(view),
+                trainer.target(view),
+                weights.mesh,
+                settings.background,
+            )?;
+            input.silhouette.record(
+                &mut rec,
+                &trainer.params().positions,
+                &trainer.grads().positions,
+                config.temporal.silhouette,
+                settings.near,
+            )?;
             let images = (trainer.target(view), trainer.rendered());
-            coverage.record(&mut rec, trainer.camera(view), images, &trainer.params().positions, &trainer.grads().positions, config.temporal.coverage, settings.near)?;
+            coverage.record(
+                &mut rec,
+                trainer.camera(view),
+                images,
+                &trainer.params().positions,
+                &trainer.grads().positions,
+                config.temporal.coverage,
+                settings.near,
+            )?;
             deformer.record_gradients(&mut rec, &trainer.grads().positions)?;
             adam_step += 1;
             // Tenfold decay over the level's cap.
             let decay = 0.1f32.powf(it as f32 / g.iterations as f32);
-            deformer.record_adam(&mut rec, g.translation_lr * diagonal * decay, g.rotation_lr * decay, adam_step)?;
+            deformer.record_adam(
+                &mut rec,
+                g.translation_lr * diagonal * decay,
+                g.rotation_lr * decay,
+                adam_step,
+            )?;
             deformer.record_blend(&mut rec, trainer.params())?;
             rec.submit_and_wait()?;
             trainer.finish_step(frame)?;
@@ -120,7 +162,13 @@ pub fn solve_graph(ctx: &Arc<GpuContext>, input: &GraphInput, config: &TrainConf
                 if !loss.is_finite() {
                     return Err(TrainError::Input(format!("the deformation graph's loss went non-finite at level {factor}, iteration {it}")));
                 }
-                report.levels.push(LevelReport { factor, iterations: it, stop_reason, wall_s: t0.elapsed().as_secs_f64(), loss });
+                report.levels.push(LevelReport {
+                    factor,
+                    iterations: it,
+                    stop_reason,
+                    wall_s: t0.elapsed().as_secs_f64(),
+                    loss,
+                });
                 break;
             }
         }

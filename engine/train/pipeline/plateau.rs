@@ -28,7 +28,13 @@ pub struct Plateau {
 impl Plateau {
     /// `window`: iterations per pass through the views (at least 1).
     pub fn new(min: u32, max: u32, window: usize, tolerance: f32) -> Self {
-        Self { min, max, window: (window as u32).max(1), tolerance: tolerance as f64, last_pass: None }
+        Self {
+            min,
+            max,
+            window: (window as u32).max(1),
+            tolerance: tolerance as f64,
+            last_pass: None,
+        }
     }
 
     /// Whether iteration `it` (from 1) ends a pass, after which [`Self::check`] wants its loss.
@@ -47,7 +53,9 @@ impl Plateau {
         let improved = previous.map(|p| (p - loss) / p.abs().max(f64::MIN_POSITIVE));
         // Phrased as "not above" so a NaN change stops too (the caller reports the NaN).
         match improved {
-            Some(change) if it >= self.min && !(change > self.tolerance) => Some(StopReason::Converged),
+            Some(change) if it >= self.min && !(change > self.tolerance) => {
+                Some(StopReason::Converged)
+            }
             _ => None,
         }
     }

@@ -56,18 +56,36 @@ pub struct TrainReport {
 }
 
 /// Runs (or resumes) `job`; `OUT/report.json` is rewritten after every frame.
-pub fn run_train(ctx: &Arc<GpuContext>, job: &TrainJob, progress: &mut dyn FnMut(TrainProgress)) -> Result<TrainReport, TrainError> {
+pub fn run_train(
+    ctx: &Arc<GpuContext>,
+    job: &TrainJob,
+    progress: &mut dyn FnMut(TrainProgress),
+) -> Result<TrainReport, TrainError> {
     job.config.check()?;
     let started = Instant::now();
     let dataset = Dataset::load(&job.data)?;
     let frames = job.frames.clone().unwrap_or(0..dataset.frames.len());
     if frames.is_empty() || frames.end > dataset.frames.len() {
-        return Err(TrainError::Input(format!("frames {}..{}: {} has frames 0..{}", frames.start, frames.end, job.data.display(), dataset.frames.len())));
+        return Err(TrainError::Input(format!(
+            "frames {}..{}: {} has frames 0..{}",
+            frames.start,
+            frames.end,
+            job.data.display(),
+            dataset.frames.len()
+        )));
     }
     let out = SequenceOutput::create(&job.out)?;
     // A range that starts later continues frames already on disk.
-    if let Some(missing) = [0, frames.start.saturating_sub(1)].into_iter().find(|&t| t < frames.start && !out.is_complete(t)) {
-        return Err(TrainError::Input(format!("frames {}..{} need frame {missing} in {}; run from an earlier frame", frames.start, frames.end, job.out.display())));
+    if let Some(missing) = [0, frames.start.saturating_sub(1)]
+        .into_iter()
+        .find(|&t| t < frames.start && !out.is_complete(t))
+    {
+        return Err(TrainError::Input(format!(
+            "frames {}..{} need frame {missing} in {}; run from an earlier frame",
+            frames.start,
+            frames.end,
+            job.out.display()
+        )));
     }
     let mut report = TrainReport {
         device: ctx.info().name.clone(),
@@ -80,7 +98,8 @@ pub fn run_train(ctx: &Arc<GpuContext>, job: &TrainJob, progress: &mut dyn FnMut
         faces: 0,
         outputs: vec![job.out.join("meshes"), job.out.join("gaussians")],
     };
-    let (mut mesh, mut previous) = canonical_start(ctx, &dataset, job, &out, &mut report, progress)?;
+    let (mut mesh, mut previous) =
+        canonical_start(ctx, &dataset, job, &out, &mut report, progress)?;
     let frame0 = previous.clone();
     // A range that starts after frame 1 continues from the frame before it (checked above).
     let first = 1.max(frames.start);
@@ -97,7 +116,11 @@ pub fn run_train(ctx: &Arc<GpuContext>, job: &TrainJob, progress: &mut dyn FnMut
             before_previous = Some(out.read_frame(t - 2)?.1);
         }
         if !out.is_complete(t - 1) {
-            return Err(TrainError::Input(format!("frame {t} needs frame {} in {}", t - 1, job.out.display())));
+            return Err(TrainError::Input(format!(
+                "frame {t} needs frame {} in {}",
+                t - 1,
+                job.out.display()
+            )));
         }
         let (train, eval) = views(&dataset, t, &job.config)?;
         // A view whose mask is empty has lost the subject: it is left out of this frame, and
@@ -110,8 +133,24 @@ pub fn run_train(ctx: &Arc<GpuContext>, job: &TrainJob, progress: &mut dyn FnMut
             mesh.positions = start.positions.clone();
             (start, report)
         } else {
-            let task = FrameTask { frame: t, train: &train, eval: &eval, start, mesh: &mut mesh, previous: Some(&previous), frame0: Some(&frame0) };
-            let (scene, report) = optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| progress(TrainProgress { frame: t, frames_end: frames.end, iteration, iterations }))?;
+            let task = FrameTask {
+                frame: t,
+                train: &train,
+                eval: &eval,
+                start,
+                mesh: &mut mesh,
+                previous: Some(&previous),
+                frame0: Some(&frame0),
+            };
+            let (scene, report) =
+                optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
+                    progress(TrainProgress {
+                        frame: t,
+                        frames_end: frames.end,
+                        iteration,
+                        iterations,
+                    })
+                })?;
             (scene, FrameReport { lost_views, ..report })
         };
         write_frame(&out, t, &mesh, &scene)?;
@@ -127,10 +166,18 @@ pub fn run_train(ctx: &Arc<GpuContext>, job: &TrainJob, progress: &mut dyn FnMut
 }
 
 /// Frame 0: read back when complete, else optimised from the initial mesh and written.
-fn canonical_start(ctx: &Arc<GpuContext>, dataset: &Dataset, job: &TrainJob, out: &SequenceOutput, report: &mut TrainReport, progress: &mut dyn FnMut(TrainProgress)) -> Result<(ManifoldMesh, GaussianScene), TrainError> {
+fn canonical_start(
+    ctx: &Arc<GpuContext>,
+    dataset: &Dataset,
+    job: &TrainJob,
+    out: &SequenceOutput,
+    report: &mut TrainReport,
+    progress: &mut dyn FnMut(TrainProgress),
+) -> Result<(ManifoldMesh, GaussianScene), TrainError> {
     if out.is_complete(0) {
         let (mesh, scene) = out.read_frame(0)?;
-        let topology = ManifoldMesh::new(mesh.positions, mesh.faces).map_err(|e| TrainError::Input(format!("{}: {e}", out.mesh_path(0).display())))?;
+        let topology = ManifoldMesh::new(mesh.positions, mesh.faces)
+            .map_err(|e| TrainError::Input(format!("{}: {e}", out.mesh_path(0).display())))?;
         return Ok((topology, scene));
     }
     let (mut mesh, colors) = initial_mesh(dataset, job)?;
@@ -138,8 +185,19 @@ fn canonical_start(ctx: &Arc<GpuContext>, dataset: &Dataset, job: &TrainJob, out
     let start = gaussians_from_mesh(&mesh, &colors, &init);
     let (train, eval) = views(dataset, 0, &job.config)?;
     let frames = job.frames.clone().unwrap_or(0..dataset.frames.len());
-    let task = FrameTask { frame: 0, train: &train, eval: &eval, start, mesh: &mut mesh, previous: None, frame0: None };
-    let (scene, frame_report) = optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| progress(TrainProgress { frame: 0, frames_end: frames.end, iteration, iterations }))?;
+    let task = FrameTask {
+        frame: 0,
+        train: &train,
+        eval: &eval,
+        start,
+        mesh: &mut mesh,
+        previous: None,
+        frame0: None,
+    };
+    let (scene, frame_report) =
+        optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
+            progress(TrainProgress { frame: 0, frames_end: frames.end, iteration, iterations })
+        })?;
     write_frame(out, 0, &mesh, &scene)?;
     report.frames.push(frame_report);
     Ok((mesh, scene))
@@ -147,7 +205,10 @@ fn canonical_start(ctx: &Arc<GpuContext>, dataset: &Dataset, job: &TrainJob, out
 
 /// The frame-0 mesh, imported as a manifold (welded, oriented; errors name the file), with
 /// vertex colours in [0, 1] (grey where it has none).
-fn initial_mesh(dataset: &Dataset, job: &TrainJob) -> Result<(ManifoldMesh, Vec<[f32; 3]>), TrainError> {
+fn initial_mesh(
+    dataset: &Dataset,
+    job: &TrainJob,
+) -> Result<(ManifoldMesh, Vec<[f32; 3]>), TrainError> {
     let (mesh, path) = match &job.mesh {
         Some(path) => {
             let is_obj = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
@@ -155,41 +216,82 @@ fn initial_mesh(dataset: &Dataset, job: &TrainJob) -> Result<(ManifoldMesh, Vec<
             (mesh.map_err(|e| TrainError::Input(e.to_string()))?, path.clone())
         }
         None => {
-            let vertices = (job.config.init.vertices > 0).then_some(job.config.init.vertices as usize);
-            let options = InitOptions { vertices, edge_pixels: job.config.init.edge_pixels, ..Default::default() };
-            let built = init_mesh(dataset, 0, &options).map_err(|e| TrainError::Input(format!("initial mesh from the masks: {e}")))?;
+            let vertices =
+                (job.config.init.vertices > 0).then_some(job.config.init.vertices as usize);
+            let options = InitOptions {
+                vertices,
+                edge_pixels: job.config.init.edge_pixels,
+                ..Default::default()
+            };
+            let built = init_mesh(dataset, 0, &options)
+                .map_err(|e| TrainError::Input(format!("initial mesh from the masks: {e}")))?;
             (built.mesh, dataset.root.join("(mesh from masks)"))
         }
     };
     let imported = import(&mesh, &path, true).map_err(|e| TrainError::Input(e.to_string()))?;
-    let colors = imported.old_of_new.iter().map(|&old| mesh.colors.as_ref().map_or([0.5; 3], |c| c[old as usize].map(|v| v as f32 / 255.0))).collect();
+    let colors = imported
+        .old_of_new
+        .iter()
+        .map(|&old| {
+            mesh.colors.as_ref().map_or([0.5; 3], |c| c[old as usize].map(|v| v as f32 / 255.0))
+        })
+        .collect();
     Ok((imported.mesh, colors))
 }
 
 /// Training and evaluation targets of frame `t` (evaluation on held-out cameras, or the
 /// training ones when there are none).
-fn views(dataset: &Dataset, t: usize, config: &TrainConfig) -> Result<(Vec<ViewTarget>, Vec<ViewTarget>), TrainError> {
+fn views(
+    dataset: &Dataset,
+    t: usize,
+    config: &TrainConfig,
+) -> Result<(Vec<ViewTarget>, Vec<ViewTarget>), TrainError> {
     let train = load_targets(dataset, t, &dataset.train, config.background, true)?;
-    let eval = if dataset.test.is_empty() { load_targets(dataset, t, &dataset.train, config.background, true)? } else { load_targets(dataset, t, &dataset.test, config.background, true)? };
+    let eval = if dataset.test.is_empty() {
+        load_targets(dataset, t, &dataset.train, config.background, true)?
+    } else {
+        load_targets(dataset, t, &dataset.test, config.background, true)?
+    };
     Ok((train, eval))
 }
 
-fn write_frame(out: &SequenceOutput, t: usize, mesh: &ManifoldMesh, scene: &GaussianScene) -> Result<(), TrainError> {
-    let tri = TriMesh { positions: scene.positions.clone(), faces: mesh.live_faces(), colors: Some(dc_vertex_colors(scene)) };
+fn write_frame(
+    out: &SequenceOutput,
+    t: usize,
+    mesh: &ManifoldMesh,
+    scene: &GaussianScene,
+) -> Result<(), TrainError> {
+    let tri = TriMesh {
+        positions: scene.positions.clone(),
+        faces: mesh.live_faces(),
+        colors: Some(dc_vertex_colors(scene)),
+    };
     out.write_frame(t, &tri, scene)
 }
 
-fn finish_report(report: &mut TrainReport, mesh: &ManifoldMesh, started: Instant, out: &Path) -> Result<(), TrainError> {
+fn finish_report(
+    report: &mut TrainReport,
+    mesh: &ManifoldMesh,
+    started: Instant,
+    out: &Path,
+) -> Result<(), TrainError> {
     report.total_wall_s = started.elapsed().as_secs_f64();
     report.vertices = mesh.positions.len();
     report.faces = mesh.live_faces().len();
     let path = out.join("report.json");
-    write_atomically(&path, |w| serde_json::to_writer_pretty(w, report).map_err(std::io::Error::other)).map_err(|error| TrainError::Io { path, error })
+    write_atomically(&path, |w| {
+        serde_json::to_writer_pretty(w, report).map_err(std::io::Error::other)
+    })
+    .map_err(|error| TrainError::Io { path, error })
 }
 
 /// Frames per second of the dataset's clock (10 when it has none).
 fn fps(dataset: &Dataset) -> f64 {
     let n = dataset.frames.len();
     let span = dataset.frames[n - 1].time - dataset.frames[0].time;
-    if n > 1 && span > 0.0 { (n - 1) as f64 / span } else { 10.0 }
+    if n > 1 && span > 0.0 {
+        (n - 1) as f64 / span
+    } else {
+        10.0
+    }
 }
