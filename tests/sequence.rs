@@ -1,10 +1,10 @@
 //! Sequence formats: round trips through every layout, the Khronos glTF validator on written
 //! GLB files, and clear errors for damaged sequences.
 
+mod common;
 mod deforming;
 
 use deforming::{affine, bend, sequence, temp_dir};
-use std::io::Write;
 use std::path::Path;
 use std::process::Command;
 use tagsplat::io::sequence::{FrameFormat, MeshSequence};
@@ -75,8 +75,8 @@ fn glb_round_trips_to_float_precision() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Runs the Khronos glTF validator on `path` when it is installed (scripts/setup.sh). Says
-/// loudly when it is not; TAGSPLAT_REQUIRE_GLTF_VALIDATOR=1 turns that into a failure.
+/// Runs the Khronos glTF validator on `path` when it is installed (scripts/setup.sh); without
+/// it the check says SKIPPED, and fails in CI.
 fn validate_gltf(path: &Path) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let installed =
@@ -88,15 +88,7 @@ fn validate_gltf(path: &Path) {
         } else {
             "node is not on PATH"
         };
-        if std::env::var("TAGSPLAT_REQUIRE_GLTF_VALIDATOR").is_ok_and(|v| v == "1") {
-            panic!("the glTF validator is required but unavailable: {why}");
-        }
-        // Straight to the process's stderr: libtest's capture hides eprintln! of passing tests.
-        let _ = writeln!(
-            std::io::stderr(),
-            "\n******** SKIPPED the Khronos glTF validator on {}: {why} ********\n",
-            path.display()
-        );
+        common::skipped(&format!("the Khronos glTF validator on {}", path.display()), why);
         return;
     }
     let out = Command::new("node")

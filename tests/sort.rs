@@ -3,6 +3,7 @@
 
 mod common;
 
+use tagsplat::bench::bench_sort;
 use tagsplat::gpu::{GpuBuffer, Recorder};
 use tagsplat::sort::{exclusive_scan_cpu, PrefixScan, RadixKey, RadixSort, RadixTuning};
 
@@ -36,15 +37,11 @@ fn scan_wraps_like_u32() {
     assert_eq!(gpu_scan(&gpu, &data), exclusive_scan_cpu(&data));
 }
 
-/// Every kernel variant and path: the device's own (the CPU one on lavapipe, which takes the
-/// bucket path where the keys allow), the CPU one held to its LSD passes, and the GPU one.
+/// Every kernel variant and path on every device: the CPU one (which takes the bucket path
+/// where the keys allow), the CPU one held to its LSD passes, and the GPU one.
 fn tunings(gpu: &common::TestGpu) -> Vec<RadixTuning> {
-    let mut tunings = vec![RadixTuning::for_device(gpu.ctx())];
-    if tunings[0] != RadixTuning::subgroups(gpu.ctx()) {
-        tunings.push(tunings[0].with_max_bucket_len(0));
-        tunings.push(RadixTuning::subgroups(gpu.ctx()));
-    }
-    tunings
+    let lanes = RadixTuning::lanes(gpu.ctx());
+    vec![lanes, lanes.with_max_bucket_len(0), RadixTuning::subgroups(gpu.ctx())]
 }
 
 /// Sorts on the GPU with every variant and checks against the CPU: keys equal `sort_unstable`
@@ -151,7 +148,7 @@ fn sort_millions_non_power_of_two() {
     let keys = random_keys(3_000_017, 11, |x| x as u32);
     check_sort(&gpu, &keys, 32, "millions");
     // Uniform keys are what the bucket path is for: the CPU variant must take it.
-    let tuning = RadixTuning::for_device(gpu.ctx());
+    let tuning = RadixTuning::lanes(gpu.ctx());
     let bucket_path = check_sort_with(&gpu, &keys, 32, "millions", tuning);
     assert_eq!(bucket_path, tuning.max_bucket_len() > 0, "millions of uniform keys: wrong path");
 }
@@ -179,16 +176,14 @@ fn one_heavy_bucket<K: RadixKey>(
 
 /// The bucket path sorts a bucket of exactly its limit in one invocation; lavapipe would cut
 /// the loops short (silently) if the limit ignored its loop budget. One pair more sends the
-/// sort down the LSD passes.
+/// sort down the LSD passes. The CPU variant on every device, so this runs on GPUs too.
 #[test]
 fn sort_bucket_at_its_limit() {
     let gpu = common::gpu();
-    let tuning = RadixTuning::for_device(gpu.ctx());
+    let tuning = RadixTuning::lanes(gpu.ctx());
     let u32_limit = RadixSort::<u32>::with_tuning(gpu.ctx(), 1, tuning).unwrap().bucket_limit(32);
     let u64_limit = RadixSort::<u64>::with_tuning(gpu.ctx(), 1, tuning).unwrap().bucket_limit(64);
-    if u32_limit == 0 {
-        return; // a GPU: no bucket path
-    }
+    assert!(u32_limit > 0 && u64_limit > 0, "the CPU variant has a bucket path");
     for heavy in [u32_limit, u32_limit + 1] {
         let keys = one_heavy_bucket(heavy, 60_000, 32, heavy as u64, |x| x as u32);
         let bucket_path = check_sort_with(
@@ -229,4 +224,23 @@ fn sort_rejects_bad_arguments() {
     let sorter = RadixSort::<u32>::new(gpu.ctx(), 3).unwrap();
     assert!(sorter.sort(&keys, &values, 4, 32).is_err(), "more pairs than the buffers hold");
     assert!(sorter.sort(&keys, &values, 3, 33).is_err(), "more bits than the key has");
+}
+
+/// `bench sort` reports both bounds: the LSD one (passes copies of the pairs) whatever ran,
+/// and the one for the copies of the path that ran (2 on the bucket path).
+#[test]
+fn bench_sort_reports_the_bound_of_the_path_that_ran() {
+    let gpu = common::gpu();
+    let lanes = RadixTuning::for_device(gpu.ctx()) == RadixTuning::lanes(gpu.ctx());
+    for lsd_only in [false, true] {
+        let report = bench_sort(gpu.ctx(), 200_000, 32, 2, lsd_only).unwrap();
+        assert!(report.verified);
+        assert_eq!(report.bucket_path, lanes && !lsd_only, "lsd_only {lsd_only}");
+        let copies = if report.bucket_path { 2 } else { 4 };
+        assert_eq!((report.passes, report.path_copies), (4, copies));
+        let per_copy = report.lsd_bound_ms / 4.0;
+        assert!((report.path_bound_ms - copies as f64 * per_copy).abs() <= 1e-9 * per_copy);
+        let rate = report.lsd_bound_fraction / report.lsd_bound_ms;
+        assert!((report.path_bound_fraction - rate * report.path_bound_ms).abs() <= 1e-9);
+    }
 }

@@ -581,10 +581,12 @@ fn ply_round_trip_renders_identically() {
     );
 }
 
-/// `tagsplat render` writes the PNG, alpha and depth it is asked for, and bad inputs get an
-/// error naming the file instead of a panic.
+/// `tagsplat render` writes the PNG, alpha and depth it is asked for (the depth equal to the
+/// library's render of the same scene), with no validation message (the CLI fails on any),
+/// and bad inputs get an error naming the file instead of a panic.
 #[test]
 fn render_cli_outputs_and_bad_inputs() {
+    let gpu = common::gpu();
     let dir = std::env::temp_dir().join(format!("tagsplat-render-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (splats, camera, out) = (dir.join("scene.ply"), dir.join("cam.json"), dir.join("out.png"));
@@ -606,7 +608,33 @@ fn render_cli_outputs_and_bad_inputs() {
     assert_eq!(rgb.dimensions(), (61, 45));
     assert!(rgb.pixels().any(|p| p.0 != [0, 0, 0]), "nothing drawn");
     assert_eq!(image::open(&alpha).unwrap().to_luma8().dimensions(), (61, 45));
-    assert!(std::fs::metadata(&depth).unwrap().len() > 0);
+    let expected = render(
+        gpu.ctx(),
+        &GaussianScene::read_ply(&splats).unwrap(),
+        &front_camera(61, 45),
+        &RenderSettings::default(),
+    );
+    assert_eq!(read_depth_exr(&depth), expected.depth);
+    assert!(expected.depth.iter().any(|&d| d > 0.0), "no depth drawn");
+
+    // With the best-practices checks on, the layer has things to say: the CLI must fail.
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"));
+    command.arg("render").env("TAGSPLAT_VALIDATION", "1");
+    command.env("VK_LAYER_ENABLES", "VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT");
+    let output = command
+        .args([
+            "--splats".as_ref(),
+            splats.as_os_str(),
+            "--camera".as_ref(),
+            camera.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("the Vulkan validation layer reported"), "{stderr}");
 
     let truncated = dir.join("truncated.ply");
     let bytes = std::fs::read(&splats).unwrap();
@@ -624,4 +652,13 @@ fn render_cli_outputs_and_bad_inputs() {
         assert!(!dir.join("never.png").exists());
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The single "Z" channel of a depth EXR written by `tagsplat render`, in row order.
+fn read_depth_exr(path: &std::path::Path) -> Vec<f32> {
+    use exr::prelude::*;
+    let image = read_first_flat_layer_from_file(path).unwrap();
+    let channels = &image.layer_data.channel_data.list;
+    assert_eq!(channels.len(), 1, "{}: one channel", path.display());
+    channels[0].sample_data.values_as_f32().collect()
 }

@@ -18,11 +18,12 @@ mod init_mesh;
 mod synth;
 mod topology;
 mod train;
+use std::cell::RefCell;
 use tagsplat::bench::{
     bench_mesh, bench_sort, bench_splat, bench_train, MeshBenchConfig, MeshBenchReport,
     SortBenchReport, SplatBenchConfig, SplatBenchReport, TrainBenchConfig, TrainBenchReport,
 };
-use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, DEVICE_ENV};
+use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, ValidationLog, DEVICE_ENV};
 
 #[derive(Parser)]
 #[command(
@@ -172,20 +173,27 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> Result<()> {
-    let options =
-        ContextOptions { device: cli.device.clone(), validation: cli.validation.then_some(true) };
-    match cli.command {
-        Command::Devices => devices(options.device.as_deref()),
+    let gpu = Contexts::new(ContextOptions {
+        device: cli.device.clone(),
+        validation: cli.validation.then_some(true),
+    });
+    let outcome = run_command(cli.command, &gpu);
+    outcome.and(gpu.check_validation())
+}
+
+fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
+    match command {
+        Command::Devices => devices(gpu.options.device.as_deref()),
         Command::Track(args) => track::track(args),
         Command::Convert(args) => track::convert(args),
         Command::InitMesh(args) => init_mesh::run(args),
         Command::Bench(Bench::Track(args)) => track::bench(args),
-        Command::Bench(Bench::Sequence(args)) => bench_sequence::run(|| context(&options), args),
-        Command::Bench(Bench::Topology(args)) => topology::bench(&context(&options)?, &args),
-        Command::Render(args) => render::render(&context(&options)?, &args),
-        Command::RenderMesh(args) => render_mesh::render_mesh(&context(&options)?, &args),
+        Command::Bench(Bench::Sequence(args)) => bench_sequence::run(|| gpu.create(), args),
+        Command::Bench(Bench::Topology(args)) => topology::bench(&gpu.create()?, &args),
+        Command::Render(args) => render::render(&gpu.create()?, &args),
+        Command::RenderMesh(args) => render_mesh::render_mesh(&gpu.create()?, &args),
         Command::Bench(Bench::Mesh { triangles, resolution, views, rounds, json }) => {
-            let ctx = context(&options)?;
+            let ctx = gpu.create()?;
             let config = MeshBenchConfig {
                 triangles: triangles as usize,
                 resolution,
@@ -202,13 +210,13 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Dataset(command) => dataset::run(command),
         Command::Synth(args) => synth::run(args),
-        Command::Fit(args) => fit::fit(|| context(&options), args),
-        Command::Train(args) => train::train(|| context(&options), args),
-        Command::Demo(args) => demo::demo(&context(&options)?, &args),
-        Command::Ablate(args) => demo::ablate(&context(&options)?, &args),
+        Command::Fit(args) => fit::fit(|| gpu.create(), args),
+        Command::Train(args) => train::train(|| gpu.create(), args),
+        Command::Demo(args) => demo::demo(&gpu.create()?, &args),
+        Command::Ablate(args) => demo::ablate(&gpu.create()?, &args),
         Command::Eval(args) => eval::run(args),
         Command::Bench(Bench::Sort { n, bits, repetitions, lsd_only, json }) => {
-            let ctx = context(&options)?;
+            let ctx = gpu.create()?;
             let report = bench_sort(&ctx, n, bits, repetitions as usize, lsd_only)
                 .with_context(|| format!("bench sort --n {n} --bits {bits}"))?;
             if json {
@@ -229,7 +237,7 @@ fn run(cli: Cli) -> Result<()> {
             iterations,
             json,
         }) => {
-            let ctx = context(&options)?;
+            let ctx = gpu.create()?;
             let scene = SplatBenchConfig {
                 gaussians,
                 views: views as usize,
@@ -248,7 +256,7 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Bench(Bench::Splat { gaussians, views, resolution, sh_degree, rounds, json }) => {
-            let ctx = context(&options)?;
+            let ctx = gpu.create()?;
             let config = SplatBenchConfig {
                 gaussians,
                 views: views as usize,
@@ -267,8 +275,35 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
-fn context(options: &ContextOptions) -> Result<Arc<GpuContext>> {
-    GpuContext::new(options).context("cannot create the Vulkan context")
+/// Creates the run's Vulkan contexts and keeps their validation logs: with validation on, any
+/// message fails the run, so a script or test that asks for validation cannot miss one.
+struct Contexts {
+    options: ContextOptions,
+    logs: RefCell<Vec<Arc<ValidationLog>>>,
+}
+
+impl Contexts {
+    fn new(options: ContextOptions) -> Self {
+        Self { options, logs: RefCell::default() }
+    }
+
+    fn create(&self) -> Result<Arc<GpuContext>> {
+        let ctx = GpuContext::new(&self.options).context("cannot create the Vulkan context")?;
+        if ctx.validation_enabled() {
+            self.logs.borrow_mut().push(ctx.validation().clone());
+        }
+        Ok(ctx)
+    }
+
+    /// Called once the command has dropped its contexts, so messages sent while they were
+    /// destroyed (leaked objects) count too. The messages themselves went to stderr.
+    fn check_validation(&self) -> Result<()> {
+        let count: usize = self.logs.borrow().iter().map(|log| log.messages().len()).sum();
+        if count > 0 {
+            bail!("the Vulkan validation layer reported {count} message(s) (printed above)");
+        }
+        Ok(())
+    }
 }
 
 fn devices(wanted: Option<&str>) -> Result<()> {
@@ -333,12 +368,19 @@ fn print_sort_report(r: &SortBenchReport) {
         r.copy.bytes >> 20
     );
     println!(
-        "bandwidth bound   {:.3} ms  ({} passes x {} B/pair at compute-copy bandwidth)",
-        r.bound_ms,
+        "LSD bound         {:.3} ms  ({} copies x {} B/pair at compute-copy bandwidth): fraction {:.3}",
+        r.lsd_bound_ms,
         r.passes,
-        r.key_bytes + 4
+        r.key_bytes + 4,
+        r.lsd_bound_fraction
     );
-    println!("bandwidth fraction {:.3}", r.bandwidth_fraction);
+    println!(
+        "this path's bound {:.3} ms  ({} copies, {}): fraction {:.3}",
+        r.path_bound_ms,
+        r.path_copies,
+        if r.bucket_path { "bucket path" } else { "LSD passes" },
+        r.path_bound_fraction
+    );
     println!(
         "CPU sort_unstable {:.3} ms  = {:.1} M pairs/s (one thread)",
         r.cpu_sort_ms,

@@ -86,7 +86,7 @@ pub fn run_with_progress(ctx: &Arc<GpuContext>, job: &TrainJob) -> Result<TrainR
 pub fn print_report(r: &TrainReport) {
     println!(
         "{} frames in {:.1} s on {} ({} vertices, {} faces; {} evaluation views)",
-        r.frames.len(),
+        r.frames.len() - r.resumed_frames.len(),
         r.total_wall_s,
         r.device,
         r.vertices,

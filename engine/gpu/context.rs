@@ -65,7 +65,13 @@ impl GpuContext {
         let instance = create_instance(&entry, validation, &validation_log)?;
         // From here on, a failure must destroy the instance: build the rest in a closure.
         let messenger = if validation {
-            Some(create_messenger(&entry, &instance, &validation_log))
+            match create_messenger(&entry, &instance, &validation_log) {
+                Ok(messenger) => Some(messenger),
+                Err(e) => {
+                    unsafe { destroy_instance(&instance, None) };
+                    return Err(e);
+                }
+            }
         } else {
             None
         };
@@ -251,17 +257,18 @@ fn messenger_create_info(log: &ValidationLog) -> vk::DebugUtilsMessengerCreateIn
         .user_data(log as *const ValidationLog as *mut _)
 }
 
+/// Requested validation that cannot report its messages is an error: every "no validation
+/// messages" check would otherwise pass without checking.
 fn create_messenger(
     entry: &ash::Entry,
     instance: &ash::Instance,
     log: &ValidationLog,
-) -> (ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT) {
+) -> GpuResult<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)> {
     let loader = ash::ext::debug_utils::Instance::new(entry, instance);
-    // A messenger that fails to appear only loses messages; the layer still prints them.
     let messenger =
         unsafe { loader.create_debug_utils_messenger(&messenger_create_info(log), None) }
-            .unwrap_or(vk::DebugUtilsMessengerEXT::null());
-    (loader, messenger)
+            .map_err(GpuError::NoValidationMessenger)?;
+    Ok((loader, messenger))
 }
 
 unsafe fn destroy_instance(

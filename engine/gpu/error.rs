@@ -14,6 +14,8 @@ pub enum GpuError {
     MissingFeatures { device: String, missing: Vec<&'static str> },
     #[error("validation was requested but VK_LAYER_KHRONOS_validation is not installed (Debian: vulkan-validationlayers)")]
     NoValidationLayer,
+    #[error("validation was requested but its message callback cannot be set up (vkCreateDebugUtilsMessengerEXT: {0})")]
+    NoValidationMessenger(vk::Result),
     #[error(
         "buffer \"{name}\" needs {bytes} bytes, over this device's {limit_name} of {limit} bytes"
     )]

@@ -37,17 +37,21 @@ impl RadixTuning {
     /// runs on one core and every memory access is a loop over the SIMD lanes;
     /// [`RadixVariant::Subgroups`] (at most 16 subgroups, 256 invocations) elsewhere.
     pub fn for_device(ctx: &GpuContext) -> Self {
-        let limits = ctx.limits();
         if ctx.info().kind == ash::vk::PhysicalDeviceType::CPU {
-            let workgroup_size = limits.subgroup_size.clamp(4, 16);
-            return Self {
-                variant: RadixVariant::Lanes,
-                workgroup_size,
-                keys_per_thread: 4096,
-                max_bucket_len: u32::MAX,
-            };
+            return Self::lanes(ctx);
         }
         Self::subgroups(ctx)
+    }
+
+    /// The CPU tuning, on any device (tests run it on GPUs too, so the bucket path is tested
+    /// wherever the suite runs).
+    pub fn lanes(ctx: &GpuContext) -> Self {
+        Self {
+            variant: RadixVariant::Lanes,
+            workgroup_size: ctx.limits().subgroup_size.clamp(4, 16),
+            keys_per_thread: 4096,
+            max_bucket_len: u32::MAX,
+        }
     }
 
     /// The GPU tuning, on any device (tests run it on lavapipe too).

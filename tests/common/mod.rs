@@ -52,3 +52,14 @@ impl Drop for TestGpu {
 pub fn rng(seed: u64) -> tagsplat::rng::SplitMix64 {
     tagsplat::rng::SplitMix64::new(seed)
 }
+
+/// Says loudly that a check was skipped because its oracle is missing, and fails when that is
+/// not allowed: in CI (`CI=true`), where the setup script must have installed every oracle.
+pub fn skipped(what: &str, why: &str) {
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        panic!("{what} is required in CI (CI=true) but unavailable: {why}");
+    }
+    // Straight to the process's stderr: libtest's capture hides eprintln! of passing tests.
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "\n******** SKIPPED {what}: {why} ********\n");
+}

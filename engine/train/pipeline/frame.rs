@@ -24,7 +24,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// What a frame's optimisation reports.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct FrameReport {
     pub frame: usize,
     /// Per-vertex iterations (the graph stage's are in `graph`).

@@ -20,7 +20,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// One level of the graph stage.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct LevelReport {
     /// Image downsampling factor.
     pub factor: u32,
@@ -31,7 +31,7 @@ pub struct LevelReport {
     pub loss: f64,
 }
 
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct GraphReport {
     pub nodes: usize,
     pub levels: Vec<LevelReport>,

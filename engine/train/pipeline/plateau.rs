@@ -3,7 +3,7 @@
 //! than a tolerance, once the minimum is done; or at the cap.
 
 /// Why a stage stopped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StopReason {
     /// The loss stopped improving (relative change below the tolerance).

@@ -48,6 +48,7 @@ pub struct TrainReport {
     pub eval_views: &'static str,
     /// Frames already complete on disk when this run started.
     pub resumed_frames: Vec<usize>,
+    /// Every frame of the run so far, those finished by earlier runs (from their report) too.
     pub frames: Vec<FrameReport>,
     pub vertices: usize,
     pub faces: usize,
@@ -98,6 +99,7 @@ pub fn run_train(
         faces: 0,
         outputs: vec![job.out.join("meshes"), job.out.join("gaussians")],
     };
+    report.frames = earlier_frame_reports(&job.out, &report.resumed_frames);
     let (mut mesh, mut previous) =
         canonical_start(ctx, &dataset, job, &out, &mut report, progress)?;
     let frame0 = previous.clone();
@@ -163,6 +165,21 @@ pub fn run_train(
     }
     finish_report(&mut report, &mesh, started, &job.out)?;
     Ok(report)
+}
+
+/// The reports of `complete` frames from an earlier run's `report.json`, so the report keeps
+/// every frame across resumes. A missing or unreadable report loses only those statistics.
+fn earlier_frame_reports(out: &Path, complete: &[usize]) -> Vec<FrameReport> {
+    #[derive(serde::Deserialize)]
+    struct Earlier {
+        frames: Vec<FrameReport>,
+    }
+    let earlier = std::fs::read_to_string(out.join("report.json"))
+        .ok()
+        .and_then(|text| serde_json::from_str::<Earlier>(&text).ok());
+    let mut frames = earlier.map_or_else(Vec::new, |e| e.frames);
+    frames.retain(|f| complete.contains(&f.frame));
+    frames
 }
 
 /// Frame 0: read back when complete, else optimised from the initial mesh and written.
