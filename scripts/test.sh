@@ -16,4 +16,6 @@ fi
 cargo fmt --check
 
 cargo test --lib --bins --tests "$@"
+# The library builds without the command-line program's crates (how embedders take it).
+cargo check --lib --no-default-features
 cargo build --benches
