@@ -48,6 +48,20 @@ pub mod topology;
 pub mod track;
 pub mod train;
 
+// The embedding API: what a program needs to reconstruct a sequence, read it, track points
+// through it and score it, at the crate root (tests/embed.rs uses nothing else). The modules
+// stay public for programs that drive single stages (splatting, the rasterizer, the sort).
+pub use camera::Camera;
+pub use eval::{evaluate_sequence, psnr, GroundTruth, SequenceEval, SequenceEvalOptions};
+pub use gpu::{ContextOptions, GpuContext, GpuError};
+pub use io::dataset::{Dataset, DatasetError};
+pub use io::sequence::{FrameFormat, MeshSequence, SequenceError};
+pub use mesh::TriMesh;
+pub use splat::{GaussianBuffers, GaussianScene, RenderSettings, SplatError, Splatter};
+pub use track::{track, Queries, TrackError, TrackReport};
+pub use train::pipeline::{run_train, TrainConfig, TrainJob, TrainProgress, TrainReport};
+pub use train::TrainError;
+
 /// SPIR-V of every compute shader, compiled from `shaders/` by `build.rs`.
 pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
