@@ -9,10 +9,10 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::DVec3;
 use std::hint::black_box;
 use std::time::Duration;
+use tagsplat::geometry::bvh::triangles;
+use tagsplat::geometry::sphere::unit_sphere;
+use tagsplat::geometry::{brute, SurfaceBvh};
 use tagsplat::rng::SplitMix64;
-use tagsplat::track::bvh::triangles;
-use tagsplat::track::sphere::unit_sphere;
-use tagsplat::track::{brute, SurfaceBvh};
 
 const LEVEL: u32 = 7;
 const QUERIES: usize = 1000;

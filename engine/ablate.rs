@@ -1,12 +1,12 @@
 //! `tagsplat ablate --temporal`: the temporal stage's parts switched off one at a time on a
-//! benchmark with ground truth (`DIR/gt/`, see `eval::sequence`), every variant continuing
+//! benchmark with ground truth (`DIR/gt/`, see `score`), every variant continuing
 //! one finished frame 0, so the rows differ only in what happens after it.
 
 use crate::demo::Ablation;
-use crate::eval::{
+use crate::gpu::GpuContext;
+use crate::score::{
     evaluate_sequence, find_ground_truth, GroundTruth, SequenceEvalError, SequenceEvalOptions,
 };
-use crate::gpu::GpuContext;
 use crate::train::output::SequenceOutput;
 use crate::train::pipeline::{run_train, ReferencePose, TrainConfig, TrainJob, TrainProgress};
 use crate::train::TrainError;

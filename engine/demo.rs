@@ -5,7 +5,7 @@
 
 use crate::eval::{evaluate_folders, FolderOptions, FolderReport};
 use crate::gpu::GpuContext;
-use crate::io::sequence::MeshSequence;
+use crate::sequence::MeshSequence;
 use crate::synth::{generate, SubjectSource, SynthOptions};
 use crate::track::output::write_tracks_csv;
 use crate::track::queries::read_points;
@@ -75,7 +75,7 @@ pub enum DemoError {
     #[error("evaluating: {0}")]
     Eval(#[from] crate::eval::FolderError),
     #[error("reading the result: {0}")]
-    Sequence(#[from] crate::io::sequence::SequenceError),
+    Sequence(#[from] crate::sequence::SequenceError),
 }
 
 /// Runs the demo in `dir` (`data/`, `out/`, `out/trajectories.csv`, `demo.json`). A finished

@@ -4,7 +4,7 @@
 use glam::{DMat4, DVec3, DVec4};
 use serde_json::json;
 use std::path::{Path, PathBuf};
-use tagsplat::io::dataset::{Dataset, DatasetError, Format};
+use tagsplat::dataset::{Dataset, DatasetError, Format};
 use tagsplat::io::image::{write_png, Image};
 
 fn temp(name: &str) -> PathBuf {

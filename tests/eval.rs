@@ -163,9 +163,8 @@ fn cube_and_a_scaled_cube_are_close_to_the_analytic_distance() {
 
 #[test]
 fn folders_compare_meshes_trajectories_and_images() {
-    use tagsplat::eval::{
-        evaluate_folders, read_trajectories_csv, write_trajectories_csv, FolderOptions,
-    };
+    use tagsplat::eval::{evaluate_folders, FolderOptions};
+    use tagsplat::io::trajectories::{read_trajectories_csv, write_trajectories_csv};
     use tagsplat::mesh::TriMesh;
     use tagsplat::synth::{generate, SubjectSource, SynthOptions};
     let root = std::env::temp_dir().join(format!("tagsplat-eval-folders-{}", std::process::id()));
@@ -332,7 +331,7 @@ fn temp(name: &str) -> std::path::PathBuf {
 
 #[test]
 fn benchmark_ground_truth_scores_a_perfect_and_an_offset_prediction() {
-    use tagsplat::eval::{
+    use tagsplat::score::{
         evaluate_sequence, find_ground_truth, write_sequence_eval, GroundTruth, SequenceEvalOptions,
     };
     let root = temp("sequence");
@@ -403,7 +402,7 @@ fn benchmark_ground_truth_scores_a_perfect_and_an_offset_prediction() {
 
 #[test]
 fn bad_benchmark_input_names_the_file() {
-    use tagsplat::eval::{evaluate_sequence, GroundTruth, SequenceEvalOptions};
+    use tagsplat::score::{evaluate_sequence, GroundTruth, SequenceEvalOptions};
     let root = temp("bad");
     write_gt(&root, 2);
     let gt_dir = root.join("gt");

@@ -8,17 +8,17 @@ use glam::DVec3;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use tagsplat::camera::Camera;
+use tagsplat::dataset::own::{self, OwnMeta};
+use tagsplat::dataset::Dataset;
 use tagsplat::eval::chamfer_meshes;
+use tagsplat::geometry::SurfaceBvh;
 use tagsplat::init::{init_mesh, init_mesh_from_views, HullView, InitError, InitMesh, InitOptions};
-use tagsplat::io::dataset::own::{self, OwnMeta};
-use tagsplat::io::dataset::Dataset;
 use tagsplat::io::image::{write_png, Image};
 use tagsplat::mesh::TriMesh;
 use tagsplat::synth::icosphere::icosphere;
 use tagsplat::synth::manifold::closed_manifold_problem;
 use tagsplat::synth::{generate, render, SubjectSource, SynthOptions, Texture};
 use tagsplat::topology::{vertex_normals, ManifoldMesh};
-use tagsplat::track::SurfaceBvh;
 
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("tagsplat-init-{name}-{}", std::process::id()));

@@ -5,9 +5,10 @@ mod common;
 
 use common::gpu;
 use std::path::{Path, PathBuf};
-use tagsplat::eval::{chamfer_meshes, read_trajectories_csv};
-use tagsplat::io::sequence::MeshSequence;
+use tagsplat::eval::chamfer_meshes;
+use tagsplat::io::trajectories::read_trajectories_csv;
 use tagsplat::mesh::TriMesh;
+use tagsplat::sequence::MeshSequence;
 use tagsplat::synth::manifold::closed_manifold_problem;
 use tagsplat::synth::{generate, SubjectSource, SynthOptions};
 use tagsplat::track::queries::read_points;

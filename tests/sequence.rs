@@ -7,8 +7,8 @@ mod deforming;
 use deforming::{affine, bend, sequence, temp_dir};
 use std::path::Path;
 use std::process::Command;
-use tagsplat::io::sequence::{FrameFormat, MeshSequence};
 use tagsplat::mesh::TriMesh;
+use tagsplat::sequence::{FrameFormat, MeshSequence};
 
 /// Largest |a − b| over all coordinates of all frames.
 fn max_difference(a: &MeshSequence, b: &MeshSequence) -> f32 {

@@ -6,9 +6,9 @@
 use glam::{DMat4, DQuat, DVec3};
 use std::path::{Path, PathBuf};
 use tagsplat::camera::Camera;
-use tagsplat::eval::read_trajectories_csv;
-use tagsplat::io::dataset::Dataset;
+use tagsplat::dataset::Dataset;
 use tagsplat::io::image::read_image;
+use tagsplat::io::trajectories::read_trajectories_csv;
 use tagsplat::mesh::TriMesh;
 use tagsplat::synth::gltf::load_gltf;
 use tagsplat::synth::manifold::closed_manifold_problem;

@@ -7,9 +7,10 @@ mod deforming;
 use deforming::{affine, bend, sequence, temp_dir};
 use glam::{DMat4, DVec3};
 use tagsplat::camera::Camera;
+use tagsplat::geometry::bvh::triangles;
+use tagsplat::geometry::{brute, SurfaceBvh, SurfaceError};
 use tagsplat::rng::SplitMix64;
-use tagsplat::track::bvh::triangles;
-use tagsplat::track::{brute, track, Queries, SurfaceBvh, TrackError};
+use tagsplat::track::{track, Queries};
 
 fn random_in_cube(rng: &mut SplitMix64) -> DVec3 {
     DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - 1.0
@@ -129,15 +130,15 @@ fn ray_casts_equal_brute_force_on_random_meshes() {
 #[test]
 fn unusable_meshes_are_errors_not_panics() {
     let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
-    assert!(matches!(SurfaceBvh::build(&p, &[]), Err(TrackError::EmptyMesh)));
+    assert!(matches!(SurfaceBvh::build(&p, &[]), Err(SurfaceError::EmptyMesh)));
     assert!(matches!(
         SurfaceBvh::build(&p, &[[0, 1, 3]]),
-        Err(TrackError::IndexOutOfRange { face: 0, index: 3, vertices: 3 })
+        Err(SurfaceError::IndexOutOfRange { face: 0, index: 3, vertices: 3 })
     ));
     let nan = [[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]];
     assert!(matches!(
         SurfaceBvh::build(&nan, &[[0, 1, 2]]),
-        Err(TrackError::NonFinitePosition { vertex: 1 })
+        Err(SurfaceError::NonFinitePosition { vertex: 1 })
     ));
     // A mesh made only of degenerate triangles still answers exactly.
     let flat = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
@@ -291,7 +292,7 @@ fn pixels_bind_where_their_rays_first_hit_the_surface() {
 fn cli_tracks_points_of_a_folder_sequence_into_csv_json_and_png() {
     let dir = temp_dir("cli-track");
     let seq = sequence(3, 6, bend);
-    seq.write_folder(&dir.join("frames"), tagsplat::io::sequence::FrameFormat::Ply).unwrap();
+    seq.write_folder(&dir.join("frames"), tagsplat::sequence::FrameFormat::Ply).unwrap();
     let csv: String = "id,x,y,z\n".to_string()
         + &[0usize, 17, 40]
             .iter()

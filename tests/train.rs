@@ -84,7 +84,7 @@ fn a_non_finite_loss_stops_and_keeps_the_last_good_gaussians() {
     let g = gpu();
     let dir = temp("nan");
     small_dataset(&dir);
-    let dataset = tagsplat::io::dataset::Dataset::load(&dir).unwrap();
+    let dataset = tagsplat::dataset::Dataset::load(&dir).unwrap();
     let mut train = load_targets(&dataset, 0, &dataset.train, [0.0; 3], true).unwrap();
     let held_out = load_targets(&dataset, 0, &dataset.test, [0.0; 3], true).unwrap();
     let config = FitConfig { iterations: 40, ..short_config() };
@@ -118,7 +118,7 @@ fn config_errors_name_the_file_and_key() {
 fn masks_that_do_not_intersect_are_reported() {
     let dir = temp("masks");
     small_dataset(&dir);
-    let dataset = tagsplat::io::dataset::Dataset::load(&dir).unwrap();
+    let dataset = tagsplat::dataset::Dataset::load(&dir).unwrap();
     let mut views = load_targets(&dataset, 0, &dataset.train, [0.0; 3], true).unwrap();
     // Two views whose masks cover disjoint halves of the image cannot agree on any point.
     for (i, v) in views.iter_mut().enumerate() {

@@ -5,8 +5,8 @@ use std::ops::Range;
 use std::path::PathBuf;
 use std::sync::Arc;
 use tagsplat::bench::{bench_sequence, SequenceBenchReport};
-use tagsplat::eval::SequenceEvalOptions;
 use tagsplat::gpu::GpuContext;
+use tagsplat::score::SequenceEvalOptions;
 use tagsplat::train::pipeline::{TrainConfig, TrainJob, TrainProgress};
 
 #[derive(clap::Args)]

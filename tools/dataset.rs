@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use std::path::PathBuf;
-use tagsplat::io::dataset::Dataset;
+use tagsplat::dataset::Dataset;
 
 #[derive(clap::Subcommand)]
 pub enum DatasetCommand {

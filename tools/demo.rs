@@ -108,7 +108,7 @@ pub fn ablate(ctx: &Arc<GpuContext>, args: &AblateArgs) -> Result<()> {
         Some(frame0) if args.temporal => {
             let frames = match &args.frames {
                 Some(range) => range.clone(),
-                None => 0..tagsplat::io::dataset::Dataset::load(&args.data)?.frames.len(),
+                None => 0..tagsplat::dataset::Dataset::load(&args.data)?.frames.len(),
             };
             let job = tagsplat::ablate::TemporalAblationJob {
                 data: args.data.clone(),

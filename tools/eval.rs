@@ -5,9 +5,9 @@
 use anyhow::{Context, Result};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
-use tagsplat::eval::sequence::{FrameScores, FrameValue};
-use tagsplat::eval::{
-    evaluate_folders, evaluate_sequence, find_ground_truth, write_sequence_eval, FolderOptions,
+use tagsplat::eval::{evaluate_folders, FolderOptions};
+use tagsplat::score::{
+    evaluate_sequence, find_ground_truth, write_sequence_eval, FrameScores, FrameValue,
     GroundTruth, SequenceEvalOptions, SequenceSummary,
 };
 

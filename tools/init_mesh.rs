@@ -2,8 +2,8 @@
 
 use anyhow::{Context, Result};
 use std::path::PathBuf;
+use tagsplat::dataset::Dataset;
 use tagsplat::init::{init_mesh, InitOptions};
-use tagsplat::io::dataset::Dataset;
 
 #[derive(clap::Args)]
 pub struct InitMeshArgs {

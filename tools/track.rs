@@ -4,7 +4,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use tagsplat::camera::Camera;
-use tagsplat::io::sequence::{FrameFormat, MeshSequence};
+use tagsplat::sequence::{FrameFormat, MeshSequence};
 use tagsplat::track::bench::{bench_track, TrackBenchReport};
 use tagsplat::track::output::{write_report_json, write_tracks_csv};
 use tagsplat::track::plot::write_plot;

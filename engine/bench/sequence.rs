@@ -4,12 +4,11 @@
 //! the time per frame. The evaluation files (`eval.csv`, `eval.json`, `eval.png`) go into the
 //! output folder.
 
-use crate::eval::sequence::FrameScores;
-use crate::eval::{
-    evaluate_sequence, find_ground_truth, write_sequence_eval, GroundTruth, SequenceEvalError,
-    SequenceEvalOptions, SequenceSummary,
-};
 use crate::gpu::GpuContext;
+use crate::score::{
+    evaluate_sequence, find_ground_truth, write_sequence_eval, FrameScores, GroundTruth,
+    SequenceEvalError, SequenceEvalOptions, SequenceSummary,
+};
 use crate::train::pipeline::{run_train, TrainJob, TrainProgress};
 use crate::train::TrainError;
 use serde::Serialize;

@@ -10,10 +10,11 @@
 //!   ground-truth image of the same name (RGB; an alpha channel is ignored).
 
 use super::{
-    chamfer_meshes, emd_meshes, psnr, read_trajectories_csv, ssim, tracking_error, ChamferReport,
-    EmdReport, EvalError, TrackingReport,
+    chamfer_meshes, emd_meshes, psnr, ssim, tracking_error, ChamferReport, EmdReport, EvalError,
+    TrackingReport,
 };
 use crate::io::image::{read_image, Image, ImageError};
+use crate::io::trajectories::{read_trajectories_csv, TrajectoriesError};
 use crate::mesh::{MeshError, TriMesh};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -40,6 +41,8 @@ pub enum FolderError {
     Mesh(#[from] MeshError),
     #[error(transparent)]
     Image(#[from] ImageError),
+    #[error(transparent)]
+    Trajectories(#[from] TrajectoriesError),
     #[error("missing prediction {} (the ground truth has {})", pred.display(), gt.display())]
     Missing { pred: PathBuf, gt: PathBuf },
     #[error("{}: {source}", path.display())]
@@ -129,10 +132,7 @@ pub fn evaluate_folders(
     };
     let tracking = match (pred.join("trajectories.csv"), gt.join("trajectories.csv")) {
         (p, g) if p.is_file() && g.is_file() => {
-            let a = read_trajectories_csv(&p)
-                .map_err(|source| FolderError::Metric { path: p.clone(), source })?;
-            let b = read_trajectories_csv(&g)
-                .map_err(|source| FolderError::Metric { path: g.clone(), source })?;
+            let (a, b) = (read_trajectories_csv(&p)?, read_trajectories_csv(&g)?);
             Some(tracking_error(&a, &b).map_err(|source| FolderError::Metric { path: p, source })?)
         }
         _ => None,

@@ -9,10 +9,9 @@
 //! - [`emd`]: earth mover's distance between equal-size surface samples (exact assignment).
 //! - [`tracking`]: MSE / RMSE of tracked points against ground-truth trajectories.
 //!
-//! Inputs are plain arrays; [`sample`] draws the surface samples, [`trajectories`] reads and
-//! writes the trajectory CSV (`id,frame,x,y,z`), [`folder`] compares a prediction folder with a
-//! ground-truth folder, [`sequence`] scores a trained sequence against a hard-motion
-//! benchmark's ground truth (`gt/` with `info.json`).
+//! Inputs are plain arrays; [`sample`] draws the surface samples, [`folder`] compares a
+//! prediction folder with a ground-truth folder. Scoring a whole trained sequence against a
+//! benchmark is [`crate::score`]'s, above this module and the tracker.
 
 pub mod assignment;
 pub mod chamfer;
@@ -20,27 +19,18 @@ pub mod emd;
 pub mod folder;
 pub mod psnr;
 pub mod sample;
-pub mod sequence;
 pub mod ssim;
 pub mod surface_chamfer;
 pub mod tracking;
-pub mod trajectories;
 
 pub use chamfer::{chamfer_distance, chamfer_meshes, ChamferReport};
 pub use emd::{emd_meshes, emd_points, EmdReport};
 pub use folder::{evaluate_folders, FolderError, FolderOptions, FolderReport};
 pub use psnr::psnr;
 pub use sample::{sample_surface, surface_points, SurfaceSample};
-pub use sequence::{
-    evaluate_sequence, find_ground_truth, write_sequence_eval, GroundTruth, SequenceEval,
-    SequenceEvalError, SequenceEvalOptions, SequenceSummary,
-};
 pub use ssim::ssim;
 pub use surface_chamfer::{chamfer_to_surface, SurfaceChamferReport};
 pub use tracking::{tracking_error, TrackingReport};
-pub use trajectories::{read_trajectories_csv, write_trajectories_csv, TrackPoint};
-
-use std::path::PathBuf;
 
 /// Why a metric could not be computed.
 #[derive(Debug, thiserror::Error)]
@@ -61,10 +51,6 @@ pub enum EvalError {
     SampleFace { face: u32, faces: usize },
     #[error("the mesh has no surface area to sample")]
     NoArea,
-    #[error("{path}: line {line}: {problem}")]
-    Csv { path: PathBuf, line: usize, problem: String },
-    #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
     #[error("ground-truth point `{id}` at frame {frame} has no prediction")]
     MissingPrediction { id: String, frame: u32 },
 }

@@ -9,13 +9,7 @@
 //! use_sample_covariance=False, data_range=1, channel_axis=-1)` computes for float64 input.
 
 use super::EvalError;
-
-/// Window radius: scikit-image uses `int(3.5 · σ + 0.5)` = 5 for σ = 1.5.
-pub(crate) const RADIUS: usize = 5;
-pub(crate) const WINDOW: usize = 2 * RADIUS + 1;
-const SIGMA: f64 = 1.5;
-pub(crate) const C1: f64 = 0.01 * 0.01;
-pub(crate) const C2: f64 = 0.03 * 0.03;
+use crate::ssim_window::{gaussian_weights, ssim_formula, RADIUS, WINDOW};
 
 /// Mean SSIM (unitless, ≤ 1) of `pred` against `gt`: interleaved `height × width × channels`
 /// arrays with values in [0, 1]. Both images must be at least 11×11.
@@ -44,16 +38,6 @@ pub fn ssim(
     let total: f64 =
         (0..channels).map(|c| ssim_channel(pred, gt, width, height, channels, c, &weights)).sum();
     Ok(total / channels as f64)
-}
-
-pub(crate) fn gaussian_weights() -> [f64; WINDOW] {
-    let mut w = [0.0; WINDOW];
-    for (k, wk) in w.iter_mut().enumerate() {
-        let x = k as f64 - RADIUS as f64;
-        *wk = (-0.5 * x * x / (SIGMA * SIGMA)).exp();
-    }
-    let sum: f64 = w.iter().sum();
-    w.map(|v| v / sum)
 }
 
 /// The five filtered moments (x, y, xx, yy, xy) of one channel, horizontal pass first over the
@@ -103,18 +87,10 @@ fn ssim_channel(
     sum / (out_w * out_h) as f64
 }
 
-/// S from the moments (μx, μy, E[x²], E[y²], E[xy]), with population (co)variances.
-#[inline]
-pub(crate) fn ssim_formula([ux, uy, uxx, uyy, uxy]: [f64; 5]) -> f64 {
-    let vx = uxx - ux * ux;
-    let vy = uyy - uy * uy;
-    let vxy = uxy - ux * uy;
-    ((2.0 * ux * uy + C1) * (2.0 * vxy + C2)) / ((ux * ux + uy * uy + C1) * (vx + vy + C2))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ssim_window::C1;
 
     #[test]
     fn identical_images_give_one_and_constant_offset_the_luminance_term() {

@@ -9,7 +9,7 @@
 
 use super::sample::{sample_surface, surface_points};
 use super::EvalError;
-use crate::track::SurfaceBvh;
+use crate::geometry::SurfaceBvh;
 use glam::DVec3;
 use serde::Serialize;
 

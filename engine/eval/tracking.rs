@@ -5,8 +5,8 @@
 //! largest ‖p − g‖ (scene units); the same per frame. Predictions for pairs the ground truth lacks are ignored
 //! (counted in `ignored`); a ground-truth pair without a prediction is an error.
 
-use super::trajectories::TrackPoint;
 use super::EvalError;
+use crate::io::trajectories::TrackPoint;
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 

@@ -5,9 +5,9 @@
 //! normal and the view direction; vertices no view sees take the mean of coloured neighbours.
 
 use crate::camera::Camera;
+use crate::geometry::{SurfaceBvh, SurfaceError};
 use crate::io::image::Image;
 use crate::topology::{vertex_normals, ManifoldMesh};
-use crate::track::{SurfaceBvh, TrackError};
 use glam::DVec3;
 
 /// A view to colour from: its camera, image, and mask (one value per pixel).
@@ -24,7 +24,7 @@ pub fn vertex_colors(
     mesh: &ManifoldMesh,
     views: &[ColorSource],
     tolerance: f64,
-) -> Result<(Vec<[u8; 3]>, usize), TrackError> {
+) -> Result<(Vec<[u8; 3]>, usize), SurfaceError> {
     let (positions, faces) = (&mesh.positions, &mesh.live_faces());
     let bvh = SurfaceBvh::build(positions, faces)?;
     let normals = vertex_normals(mesh);

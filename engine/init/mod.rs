@@ -31,7 +31,7 @@ pub mod holes;
 pub mod remesh;
 
 use crate::camera::Camera;
-use crate::io::dataset::{Dataset, DatasetError};
+use crate::dataset::{Dataset, DatasetError};
 use crate::io::image::Image;
 use crate::mesh::TriMesh;
 use crate::topology::ManifoldMesh;
@@ -116,7 +116,7 @@ pub enum InitError {
     #[error("invalid options: {0}")]
     Options(String),
     #[error("colouring or remeshing: {0}")]
-    Surface(#[from] crate::track::TrackError),
+    Surface(#[from] crate::geometry::SurfaceError),
     #[error("the extracted hull is not a manifold (a bug): {0}")]
     Topology(#[from] crate::topology::TopologyError),
 }
@@ -427,7 +427,7 @@ fn remeshed(
     if options.remesh_rounds == 0 {
         return Ok((mesh, remesh::RemeshStats::default()));
     }
-    let reference = crate::track::SurfaceBvh::build(&hull.positions, &hull.faces)?;
+    let reference = crate::geometry::SurfaceBvh::build(&hull.positions, &hull.faces)?;
     let mut stats = remesh::remesh(&mut mesh, &reference, edge_length, options.remesh_rounds);
     if let Some(n) = options.vertices {
         let corrected = edge_length * (mesh.vertex_count() as f64 / n as f64).sqrt();

@@ -9,8 +9,8 @@
 //!    back onto the reference surface (the extracted hull surface). A move that would turn a
 //!    face against its old normal is undone.
 
+use crate::geometry::SurfaceBvh;
 use crate::topology::{prev, vertex_normals, ManifoldMesh, NONE};
-use crate::track::SurfaceBvh;
 use glam::DVec3;
 
 /// Counts of what the rounds did.

@@ -2,17 +2,15 @@
 //!
 //! - [`ply`]: generic PLY (ascii and binary in, binary little-endian out).
 //! - [`image`]: PNG / EXR as float arrays.
-//! - [`dataset`]: synchronized multi-view video (own layout, Panoptic, nerfstudio / D-NeRF).
+//! - [`pc2`]: the point-cache container; [`trajectories`]: the trajectory CSV.
 //! - [`write_atomically`]: every output goes to a temporary name and is renamed into place, so a
 //!   crash never leaves a half-written file behind.
 
-pub mod dataset;
-pub mod glb;
 pub mod image;
 pub mod pc2;
 pub mod plot;
 pub mod ply;
-pub mod sequence;
+pub mod trajectories;
 
 use std::fs::File;
 use std::io::{BufWriter, Write};

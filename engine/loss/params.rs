@@ -1,6 +1,6 @@
 //! The push constants of the loss kernels (`LossParams` in shaders/loss/loss.glsl).
 
-use crate::eval::ssim::{gaussian_weights, RADIUS, WINDOW};
+use crate::ssim_window::{gaussian_weights, RADIUS, WINDOW};
 use bytemuck::{Pod, Zeroable};
 
 /// Shares of the two terms of the image loss (3DGS's λ_D-SSIM = 0.2).

@@ -3,7 +3,7 @@
 //! same maths for the tests to compare against.
 
 use super::{LOSS_SHARE_L1, LOSS_SHARE_SSIM};
-use crate::eval::ssim::{gaussian_weights, ssim_formula, C1, C2, RADIUS, WINDOW};
+use crate::ssim_window::{gaussian_weights, ssim_formula, C1, C2, RADIUS, WINDOW};
 
 /// Loss value, its per-channel terms and dL/drender.
 pub struct ReferenceLoss {

@@ -1,5 +1,5 @@
 //! Writes a synthetic dataset with ground truth in the project's own layout
-//! (`io::dataset::own`), plus:
+//! (`dataset::own`), plus:
 //!
 //! ```text
 //! DIR/meshes/<t>.ply       ground-truth mesh of frame t: same faces every frame, vertex colours
@@ -21,9 +21,10 @@ use super::raster::{render, RenderError};
 use super::texture::Texture;
 use super::Subject;
 use crate::camera::{Camera, CameraError};
-use crate::eval::{sample_surface, write_trajectories_csv, EvalError, TrackPoint};
-use crate::io::dataset::own::{self, OwnMeta};
+use crate::dataset::own::{self, OwnMeta};
+use crate::eval::{sample_surface, EvalError};
 use crate::io::image::{write_png, Image, ImageError};
+use crate::io::trajectories::{write_trajectories_csv, TrackPoint};
 use crate::mesh::{MeshError, TriMesh};
 use crate::rng::SplitMix64;
 use glam::DVec3;
@@ -203,7 +204,7 @@ pub fn generate(options: &SynthOptions, out: &Path) -> Result<SynthReport, Synth
     write_tracks(out, &subject, &frames, &tracks)?;
     render_all(options, out, &subject, &frames, &cameras, &names, &texture)?;
 
-    let (_, test) = crate::io::dataset::every_eighth_held_out(cameras.len());
+    let (_, test) = crate::dataset::every_eighth_held_out(cameras.len());
     let meta = OwnMeta {
         format: own::FORMAT_NAME.into(),
         version: 1,

@@ -2,10 +2,11 @@
 //! ~100k-triangle mesh, against brute force measured in the same run on a subset of the same
 //! queries (brute force is O(faces) per query), with every BVH answer checked against it.
 
-use super::brute;
-use super::bvh::{triangles, SurfaceBvh};
-use super::sphere::unit_sphere;
 use super::TrackError;
+use crate::geometry::brute;
+use crate::geometry::bvh::{triangles, SurfaceBvh};
+use crate::geometry::sphere::unit_sphere;
+use crate::geometry::SurfaceError;
 use crate::rng::SplitMix64;
 use glam::DVec3;
 use serde::Serialize;
@@ -54,7 +55,7 @@ pub fn bench_track(
         build_ms = build_ms.min(start.elapsed().as_secs_f64() * 1e3);
         bvh = Some(built);
     }
-    let bvh = bvh.ok_or(TrackError::EmptyMesh)?;
+    let bvh = bvh.ok_or(SurfaceError::EmptyMesh)?;
     let mut rng = SplitMix64::new(8);
     let mut random_unit = || loop {
         let v = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - 1.0;

@@ -1,6 +1,6 @@
 //! Binding query points to the frame-0 surface as (face, barycentric).
 
-use super::bvh::SurfaceBvh;
+use crate::geometry::bvh::SurfaceBvh;
 use glam::DVec3;
 
 /// A point fixed to the surface: its position in a frame with vertices v is Σ bₖ·v[face[k]].

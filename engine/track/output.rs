@@ -3,7 +3,7 @@
 
 use super::bind::Binding;
 use super::TrackError;
-use crate::eval::{write_trajectories_csv, TrackPoint};
+use crate::io::trajectories::{write_trajectories_csv, TrackPoint};
 use crate::io::write_atomically;
 use serde::Serialize;
 use std::io::Write;
@@ -41,7 +41,7 @@ pub struct UnboundPoint {
 }
 
 /// Writes `id,frame,x,y,z`, one row per point per frame, atomically, in the trajectory CSV
-/// format of [`crate::eval::write_trajectories_csv`] (shortest round-trip floats).
+/// format of [`crate::io::trajectories::write_trajectories_csv`] (shortest round-trip floats).
 pub fn write_tracks_csv(path: &Path, points: &[TrackedPoint]) -> Result<(), TrackError> {
     let rows: Vec<TrackPoint> = points
         .iter()

@@ -1,11 +1,12 @@
 //! One tracking run: bind the queries on frame 0, follow them through every frame.
 
 use super::bind::{bind_point, bind_ray, Binding, Unbound};
-use super::bvh::SurfaceBvh;
 use super::output::{TrackReport, TrackedPoint, UnboundPoint};
 use super::trajectory::trajectories;
 use super::TrackError;
 use crate::camera::Camera;
+use crate::geometry::bvh::SurfaceBvh;
+use crate::geometry::SurfaceError;
 use crate::mesh::bounding_diagonal;
 use glam::DVec3;
 
@@ -27,7 +28,7 @@ pub fn track(
     queries: &Queries,
     max_distance_relative: f64,
 ) -> Result<TrackReport, TrackError> {
-    let frame0 = frames.first().ok_or(TrackError::EmptyMesh)?;
+    let frame0 = frames.first().ok_or(SurfaceError::EmptyMesh)?;
     let bvh = SurfaceBvh::build(frame0, faces)?;
     let max_distance = max_distance_relative * bounding_diagonal(frame0);
     let results: Vec<(&str, Result<Binding, Unbound>)> = match queries {

@@ -30,7 +30,7 @@ pub enum TrainError {
     #[error(transparent)]
     Config(#[from] ConfigError),
     #[error(transparent)]
-    Dataset(#[from] crate::io::dataset::DatasetError),
+    Dataset(#[from] crate::dataset::DatasetError),
     #[error(transparent)]
     Splat(#[from] crate::splat::SplatError),
     #[error(transparent)]

@@ -4,9 +4,9 @@
 //! after the last complete frame. The sequence formats come last, from the meshes on disk.
 
 use super::TrainError;
-use crate::io::dataset::own::frame_name;
-use crate::io::sequence::{FrameFormat, MeshSequence};
+use crate::dataset::own::frame_name;
 use crate::mesh::TriMesh;
+use crate::sequence::{FrameFormat, MeshSequence};
 use crate::splat::GaussianScene;
 use std::path::{Path, PathBuf};
 

@@ -3,7 +3,7 @@
 
 use super::TrainError;
 use crate::camera::Camera;
-use crate::io::dataset::Dataset;
+use crate::dataset::Dataset;
 use crate::io::image::Image;
 
 pub struct ViewTarget {

@@ -1,11 +1,11 @@
 //! Test sequences with known motion, built in the test: the subdivided sphere of
-//! `tagsplat::track::sphere`, squashed into an ellipsoid, moved by an analytic motion.
+//! `tagsplat::geometry::sphere`, squashed into an ellipsoid, moved by an analytic motion.
 
 #![allow(dead_code)] // Each test binary uses its own part.
 
 use glam::{DMat3, DVec3};
-use tagsplat::io::sequence::MeshSequence;
-use tagsplat::track::sphere::unit_sphere;
+use tagsplat::geometry::sphere::unit_sphere;
+use tagsplat::sequence::MeshSequence;
 
 /// An affine motion x ↦ A(t)·x + c(t): a rotation about a tilted axis, a pulsing anisotropic
 /// scale and a translation. Affine maps commute with barycentric combinations, so every

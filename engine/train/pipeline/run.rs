@@ -4,9 +4,9 @@
 
 use super::config::TrainConfig;
 use super::frame::{optimize_frame, FrameReport, FrameTask};
+use crate::dataset::Dataset;
 use crate::gpu::GpuContext;
 use crate::init::{init_mesh, InitOptions};
-use crate::io::dataset::Dataset;
 use crate::io::write_atomically;
 use crate::mesh::TriMesh;
 use crate::splat::GaussianScene;

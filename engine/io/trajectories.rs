@@ -2,10 +2,18 @@
 //! `id,frame,x,y,z`, then one row per point and frame (id a non-empty name without commas or
 //! quotes, as the tracker writes it; frame an unsigned integer; positions in scene units). Rows may come in any order; an (id, frame) pair appears once.
 
-use super::EvalError;
 use std::collections::HashSet;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// A trajectory CSV that cannot be read; names the file (and the line).
+#[derive(Debug, thiserror::Error)]
+pub enum TrajectoriesError {
+    #[error("{}: line {line}: {problem}", path.display())]
+    Csv { path: PathBuf, line: usize, problem: String },
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+}
 
 /// One point of a trajectory: point `id` at `frame`.
 #[derive(Clone, Debug, PartialEq)]
@@ -32,10 +40,10 @@ pub fn write_trajectories_csv(out: &mut impl Write, points: &[TrackPoint]) -> st
 
 /// Reads the CSV at `path`. Every malformed line, non-finite coordinate or repeated
 /// (id, frame) pair is an error naming the file and the line.
-pub fn read_trajectories_csv(path: &Path) -> Result<Vec<TrackPoint>, EvalError> {
+pub fn read_trajectories_csv(path: &Path) -> Result<Vec<TrackPoint>, TrajectoriesError> {
     let text = std::fs::read_to_string(path)
-        .map_err(|source| EvalError::Io { path: path.to_owned(), source })?;
-    parse_trajectories_csv(&text).map_err(|(line, problem)| EvalError::Csv {
+        .map_err(|source| TrajectoriesError::Io { path: path.to_owned(), source })?;
+    parse_trajectories_csv(&text).map_err(|(line, problem)| TrajectoriesError::Csv {
         path: path.to_owned(),
         line,
         problem,

@@ -8,7 +8,7 @@
 //! answer: results equal brute force over the same triangle routines.
 
 use super::triangle::{closest_on_triangle, interpolate, ray_triangle};
-use super::TrackError;
+use super::SurfaceError;
 use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
@@ -39,7 +39,7 @@ impl SurfaceBvh {
     /// Builds the BVH over `faces` of `positions`.
     ///
     /// Errors: no faces, a face index out of range, a non-finite position.
-    pub fn build(positions: &[[f32; 3]], faces: &[[u32; 3]]) -> Result<SurfaceBvh, TrackError> {
+    pub fn build(positions: &[[f32; 3]], faces: &[[u32; 3]]) -> Result<SurfaceBvh, SurfaceError> {
         let triangles = triangles(positions, faces)?;
         // No spatial splits: every leaf box then holds its whole triangle (see the module doc).
         let params = BvhBuildParams { pre_split: false, ..BvhBuildParams::medium_build() };
@@ -177,19 +177,19 @@ impl SurfaceBvh {
 pub fn triangles(
     positions: &[[f32; 3]],
     faces: &[[u32; 3]],
-) -> Result<Vec<[[f32; 3]; 3]>, TrackError> {
+) -> Result<Vec<[[f32; 3]; 3]>, SurfaceError> {
     if faces.is_empty() {
-        return Err(TrackError::EmptyMesh);
+        return Err(SurfaceError::EmptyMesh);
     }
     if let Some(vertex) = positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
-        return Err(TrackError::NonFinitePosition { vertex });
+        return Err(SurfaceError::NonFinitePosition { vertex });
     }
     faces
         .iter()
         .enumerate()
         .map(|(face, f)| {
             let corner = |k: usize| {
-                positions.get(f[k] as usize).copied().ok_or(TrackError::IndexOutOfRange {
+                positions.get(f[k] as usize).copied().ok_or(SurfaceError::IndexOutOfRange {
                     face,
                     index: f[k],
                     vertices: positions.len(),

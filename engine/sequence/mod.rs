@@ -5,17 +5,18 @@
 //!   ([`folder`]).
 //! - A base OBJ plus a PC2 point cache beside it (`anim.obj` + `anim.pc2`).
 //! - glTF 2.0 binary: base mesh, one morph target per frame, a stepping animation
-//!   ([`crate::io::glb`]).
+//!   ([`glb`]).
 //!
 //! Reading any of them checks that every frame has frame 0's vertex count and face list, and
 //! names the first frame that differs. Colours: a folder keeps them per frame; the OBJ + PC2
 //! and GLB layouts store the frame-0 colours only, and read them back for every frame.
 
 pub mod folder;
+pub mod glb;
 
-use crate::io::glb::{self, GlbError};
 use crate::io::pc2::{self, Pc2Error, PointCache};
 use crate::mesh::{MeshError, TriMesh};
+use glb::GlbError;
 use std::path::{Path, PathBuf};
 
 /// What can go wrong reading or writing a sequence; every message names the file.

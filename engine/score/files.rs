@@ -94,7 +94,7 @@ fn draw_scores(frames: &[FrameScores]) -> RgbImage {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eval::sequence::FrameTrainStats;
+    use crate::score::FrameTrainStats;
 
     fn row(frame: usize, reason: Option<&str>) -> FrameScores {
         let train = FrameTrainStats {

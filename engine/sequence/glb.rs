@@ -13,7 +13,7 @@
 //! animation (or none: one frame): frame k = base + Σⱼ wₖⱼ·targetⱼ at keyframe k. Node
 //! transforms are not applied (positions stay in mesh space); external buffers are refused.
 
-use crate::io::sequence::MeshSequence;
+use super::MeshSequence;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::Write;

@@ -6,8 +6,8 @@
 //!   the unit every benchmark score is divided by.
 
 use super::SequenceEvalError;
-use crate::eval::{read_trajectories_csv, TrackPoint};
-use crate::io::dataset::own::frame_name;
+use crate::dataset::own::frame_name;
+use crate::io::trajectories::{read_trajectories_csv, TrackPoint};
 use crate::track::queries::read_points;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};

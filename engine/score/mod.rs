@@ -19,9 +19,10 @@ pub use files::write_sequence_eval;
 pub use ground_truth::{find_ground_truth, GroundTruth};
 pub use train_report::{read_train_report, FrameTrainStats};
 
-use super::{chamfer_to_surface, tracking_error, EvalError, TrackPoint, TrackingReport};
-use crate::io::sequence::{check_same_topology, MeshSequence, SequenceError};
+use crate::eval::{chamfer_to_surface, tracking_error, EvalError, TrackingReport};
+use crate::io::trajectories::{TrackPoint, TrajectoriesError};
 use crate::mesh::{MeshError, TriMesh};
+use crate::sequence::{check_same_topology, MeshSequence, SequenceError};
 use crate::track::{track, Queries, TrackError, TrackReport};
 use crate::train::output::mesh_path;
 use serde::Serialize;
@@ -39,7 +40,7 @@ pub enum SequenceEvalError {
     Metric { path: PathBuf, source: EvalError },
     /// A reader's error that names its file already.
     #[error(transparent)]
-    Read(EvalError),
+    Read(TrajectoriesError),
     #[error(transparent)]
     Query(TrackError),
     #[error(transparent)]
@@ -265,7 +266,7 @@ fn chamfer_frame(
     t: usize,
     mesh: (&[[f32; 3]], &[[u32; 3]]),
     options: &SequenceEvalOptions,
-) -> Result<super::SurfaceChamferReport, SequenceEvalError> {
+) -> Result<crate::eval::SurfaceChamferReport, SequenceEvalError> {
     let truth = TriMesh::read_ply(&gt.mesh_path(t))?;
     chamfer_to_surface(
         mesh,

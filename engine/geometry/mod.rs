@@ -1,0 +1,24 @@
+//! Surface geometry that several stages share: the first mesh (`init`), scoring (`eval`) and
+//! tracking (`track`) all ask for the closest surface point or a ray's first hit.
+//! - [`triangle`]: closest point on a triangle and ray–triangle intersection, in f64.
+//! - [`bvh`]: `obvhs` BVH over a mesh's triangles with exact closest-point and ray queries.
+//! - [`brute`]: the same queries by testing every triangle (the reference for tests and bench).
+//! - [`sphere`]: a subdivided-octahedron sphere, the surface of tests and benchmarks.
+
+pub mod brute;
+pub mod bvh;
+pub mod sphere;
+pub mod triangle;
+
+pub use bvh::{triangles, SurfaceBvh, SurfacePoint};
+
+/// A mesh that cannot be queried.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SurfaceError {
+    #[error("the mesh has no faces")]
+    EmptyMesh,
+    #[error("vertex {vertex} has a non-finite position")]
+    NonFinitePosition { vertex: usize },
+    #[error("face {face} uses vertex {index}, but the mesh has {vertices} vertices")]
+    IndexOutOfRange { face: usize, index: u32, vertices: usize },
+}
