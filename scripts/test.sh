@@ -16,6 +16,21 @@ fi
 cargo fmt --check
 
 cargo test --lib --bins --tests "$@"
+
+# The GPU kernels again at lavapipe's other subgroup sizes (the run above used its default,
+# 256-bit vectors: 8 lanes). tests/gpu.rs checks that the size took effect.
+kernel_tests=(--test gpu --test sort --test splat --test raster --test loss --test silhouette
+    --test regularize --test optim --test deform)
+if [[ "${VK_ICD_FILENAMES:-}" == *lvp_icd* ]]; then
+    echo "== GPU kernels at subgroup size 4 (LP_NATIVE_VECTOR_WIDTH=128)"
+    LP_NATIVE_VECTOR_WIDTH=128 cargo test "${kernel_tests[@]}" "$@"
+    if grep -qw avx512f /proc/cpuinfo; then
+        echo "== GPU kernels at subgroup size 16 (LP_NATIVE_VECTOR_WIDTH=512)"
+        LP_NATIVE_VECTOR_WIDTH=512 cargo test "${kernel_tests[@]}" "$@"
+    else
+        echo "SKIPPED: subgroup size 16 (LP_NATIVE_VECTOR_WIDTH=512) needs AVX-512, which this CPU lacks"
+    fi
+fi
 # The library builds without the command-line program's crates (how embedders take it).
 cargo check --lib --no-default-features
 cargo build --benches

@@ -17,6 +17,21 @@ fn context_reports_device_and_limits() {
     assert!(listed.iter().any(|d| d.name == ctx.info().name));
 }
 
+/// The subgroup-size runs of `scripts/test.sh` set `LP_NATIVE_VECTOR_WIDTH`; this proves that
+/// lavapipe took it (128 bits → 4 lanes of 32 bits, 256 → 8, 512 → 16).
+#[test]
+fn lavapipe_subgroup_size_follows_the_native_vector_width() {
+    let gpu = common::gpu();
+    let ctx = gpu.ctx();
+    let width = std::env::var("LP_NATIVE_VECTOR_WIDTH");
+    let (Ok(width), true) = (width, ctx.info().name.contains("llvmpipe")) else {
+        eprintln!("not applicable: LP_NATIVE_VECTOR_WIDTH unset or the device is not lavapipe");
+        return;
+    };
+    let bits: u32 = width.parse().expect("LP_NATIVE_VECTOR_WIDTH is a number of bits");
+    assert_eq!(ctx.limits().subgroup_size, bits / 32, "{}", ctx.info().name);
+}
+
 #[test]
 fn buffer_round_trip_and_partial_read() {
     let gpu = common::gpu();
