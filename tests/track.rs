@@ -340,14 +340,33 @@ fn cli_tracks_points_of_a_folder_sequence_into_csv_json_and_png() {
     assert!(json["points"][0]["face"].as_u64().unwrap() < seq.faces.len() as u64);
     let png = image::open(dir.join("tracks.png")).unwrap();
     assert_eq!((png.width(), png.height()), (1200, 600));
-    // A point far away fails the run (naming it) unless --skip-unbound.
+    // A point far away is listed (stderr, tracks.unbound.csv, the JSON) and the others tracked;
+    // --strict refuses the run instead.
     std::fs::write(dir.join("points.csv"), "id,x,y,z\nok,1,0,0\nmoon,50,0,0\n").unwrap();
-    let failed = run(&[]);
-    let stderr = String::from_utf8_lossy(&failed.stderr);
-    assert!(!failed.status.success() && stderr.contains("point moon not bound"), "{stderr}");
-    assert!(run(&["--skip-unbound"]).status.success());
+    let partial = run(&[]);
+    let stderr = String::from_utf8_lossy(&partial.stderr);
+    assert!(partial.status.success() && stderr.contains("point moon not bound"), "{stderr}");
+    assert!(stderr.contains("1 of 2 points not bound"), "{stderr}");
+    assert!(String::from_utf8_lossy(&partial.stdout).contains("tracked 1 of 2 points"));
+    let tracked = std::fs::read_to_string(dir.join("tracks.csv")).unwrap();
+    assert!(tracked.lines().skip(1).all(|row| row.starts_with("ok,")), "{tracked}");
+    let unbound = std::fs::read_to_string(dir.join("tracks.unbound.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = unbound.lines().map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows[0], ["id", "distance", "tolerance", "reason"]);
+    let (distance, tolerance): (f64, f64) =
+        (rows[1][1].parse().unwrap(), rows[1][2].parse().unwrap());
+    assert!(
+        rows.len() == 2 && rows[1][0] == "moon" && distance > 48.0 && tolerance < 0.1,
+        "{unbound}"
+    );
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("tracks.json")).unwrap()).unwrap();
     assert_eq!(json["unbound"][0]["id"], "moon");
+    let failed = run(&["--strict"]);
+    let stderr = String::from_utf8_lossy(&failed.stderr);
+    assert!(!failed.status.success() && stderr.contains("--strict refuses"), "{stderr}");
+    // Once every point binds, the earlier list goes.
+    std::fs::write(dir.join("points.csv"), "id,x,y,z\nok,1,0,0\n").unwrap();
+    assert!(run(&[]).status.success() && !dir.join("tracks.unbound.csv").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }

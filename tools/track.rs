@@ -2,14 +2,14 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use tagsplat::camera::Camera;
 use tagsplat::sequence::{FrameFormat, MeshSequence};
 use tagsplat::track::bench::{bench_track, TrackBenchReport};
-use tagsplat::track::output::{write_report_json, write_tracks_csv};
+use tagsplat::track::output::{write_report_json, write_tracks_csv, write_unbound_csv};
 use tagsplat::track::plot::write_plot;
 use tagsplat::track::queries::{read_pixels, read_points};
-use tagsplat::track::{track as track_sequence, Queries};
+use tagsplat::track::{track as track_sequence, Queries, TrackReport};
 
 #[derive(Args)]
 pub struct TrackArgs {
@@ -40,10 +40,10 @@ pub struct TrackArgs {
     /// bounding-box diagonal. Farther points are not bound.
     #[arg(long, default_value_t = 0.01)]
     max_distance: f64,
-    /// Leave out points that cannot be bound (listed on stderr and in the JSON) instead of
-    /// failing.
+    /// Fail when any point cannot be bound. Without it the others are tracked and the unbound
+    /// ones listed on stderr and in OUT's `.unbound.csv` (id, distance, tolerance, reason).
     #[arg(long)]
-    skip_unbound: bool,
+    strict: bool,
 }
 
 pub fn track(args: TrackArgs) -> Result<()> {
@@ -60,27 +60,11 @@ pub fn track(args: TrackArgs) -> Result<()> {
     };
     let report = track_sequence(&sequence.faces, &sequence.frames, &queries, args.max_distance)
         .with_context(|| format!("cannot track on {}", args.sequence.display()))?;
-    for u in &report.unbound {
-        eprintln!(
-            "{}: point {} not bound: {}",
-            if args.skip_unbound { "warning" } else { "error" },
-            u.id,
-            u.reason
-        );
-    }
-    if !report.unbound.is_empty() && !args.skip_unbound {
-        let hint = match queries {
-            Queries::Points(_) => format!(
-                " (farther than --max-distance {} x the frame-0 extent = {})",
-                args.max_distance, report.max_distance
-            ),
-            Queries::Pixels { .. } => String::new(),
-        };
-        bail!(
-            "{} of {} points not bound{hint}; fix them, or pass --skip-unbound to track the rest",
-            report.unbound.len(),
-            report.unbound.len() + report.points.len()
-        );
+    if report.unbound.is_empty() {
+        // A list from an earlier run would describe points that are now tracked.
+        let _ = std::fs::remove_file(unbound_path(&args.out));
+    } else {
+        report_unbound(&args, &queries, &report)?;
     }
     write_tracks_csv(&args.out, &report.points)?;
     if let Some(json) = &args.json {
@@ -95,14 +79,51 @@ pub fn track(args: TrackArgs) -> Result<()> {
         write_plot(plot, &paths)?;
     }
     println!(
-        "tracked {} points through {} frames ({} vertices, {} faces) -> {}",
+        "tracked {} of {} points through {} frames ({} vertices, {} faces) -> {}",
         report.points.len(),
+        report.points.len() + report.unbound.len(),
         report.frames,
         report.vertices,
         report.faces,
         args.out.display()
     );
     Ok(())
+}
+
+/// Lists the points that were not bound on stderr and beside `--out`, or fails with `--strict`.
+fn report_unbound(args: &TrackArgs, queries: &Queries, report: &TrackReport) -> Result<()> {
+    let level = if args.strict { "error" } else { "warning" };
+    for u in &report.unbound {
+        eprintln!("{level}: point {} not bound: {}", u.id, u.reason);
+    }
+    let total = report.unbound.len() + report.points.len();
+    if args.strict {
+        let hint = match queries {
+            Queries::Points(_) => format!(
+                " (farther than --max-distance {} x the frame-0 extent = {})",
+                args.max_distance, report.max_distance
+            ),
+            Queries::Pixels { .. } => String::new(),
+        };
+        bail!(
+            "{} of {total} points not bound{hint}; --strict refuses the run",
+            report.unbound.len()
+        );
+    }
+    let listed = unbound_path(&args.out);
+    write_unbound_csv(&listed, report)?;
+    eprintln!(
+        "{} of {total} points not bound (tolerance {} scene units), listed in {}",
+        report.unbound.len(),
+        report.max_distance,
+        listed.display()
+    );
+    Ok(())
+}
+
+/// `tracks.csv` → `tracks.unbound.csv`.
+fn unbound_path(out: &Path) -> PathBuf {
+    out.with_extension("unbound.csv")
 }
 
 #[derive(Clone, Copy, ValueEnum)]

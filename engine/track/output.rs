@@ -57,6 +57,27 @@ pub fn write_tracks_csv(path: &Path, points: &[TrackedPoint]) -> Result<(), Trac
         .map_err(|error| TrackError::Io { path: path.to_owned(), error })
 }
 
+/// Writes `id,distance,tolerance,reason`, one row per query that was not bound, atomically:
+/// distance (to the frame-0 surface) and tolerance ([`TrackReport::max_distance`]) in scene
+/// units, distance empty when the reason is not the distance (a ray that misses, NaN input).
+pub fn write_unbound_csv(path: &Path, report: &TrackReport) -> Result<(), TrackError> {
+    write_atomically(path, |w| {
+        writeln!(w, "id,distance,tolerance,reason")?;
+        for u in &report.unbound {
+            let distance = u.distance.map(|d| d.to_string()).unwrap_or_default();
+            writeln!(
+                w,
+                "{},{distance},{},{}",
+                u.id,
+                report.max_distance,
+                u.reason.replace(',', ";")
+            )?;
+        }
+        Ok(())
+    })
+    .map_err(|error| TrackError::Io { path: path.to_owned(), error })
+}
+
 /// Writes the report as pretty JSON, atomically.
 pub fn write_report_json(path: &Path, report: &TrackReport) -> Result<(), TrackError> {
     write_atomically(path, |w| {
