@@ -4,8 +4,9 @@
 # Khronos validation layer the tests use as an oracle, and the shader tools and shaderc
 # libraries build.rs compiles shaders/ with. Idempotent: packages already installed are
 # skipped, and when none is missing it touches neither the network nor apt's lists.
-# Then, optionally, the Khronos glTF validator (npm `gltf-validator`, under .tools/) that the
-# GLB tests run: when npm or the network is missing it warns and the tests say they skipped it.
+# Then, optionally, the Khronos glTF validator (npm `gltf-validator`) and Pixar's USD library
+# (PyPI `usd-core`), under .tools/, that the GLB and USD tests run: when npm, python3-venv or
+# the network is missing it warns and the tests say they skipped them.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 
@@ -55,21 +56,45 @@ else
     echo "setup.sh: installed ${#missing[@]} missing package(s): ${missing[*]}"
 fi
 
-# The glTF validator: optional, never fatal.
-validator_version=2.0.0-dev.3.10
-validator_dir="$root/.tools/gltf-validator"
-validator_package="$validator_dir/node_modules/gltf-validator/package.json"
-if [ -f "$validator_package" ] && grep -q "\"version\": \"$validator_version\"" "$validator_package"; then
-    echo "setup.sh: gltf-validator $validator_version already installed"
-    exit 0
-fi
-if ! command -v npm >/dev/null 2>&1 && can_install; then
-    apt_install nodejs npm || true
-fi
-if command -v npm >/dev/null 2>&1 && npm install --prefix "$validator_dir" --no-audit --no-fund --loglevel=error \
-        "gltf-validator@$validator_version" >/dev/null; then
-    echo "setup.sh: installed gltf-validator $validator_version into $validator_dir"
-else
-    echo "setup.sh: WARNING: could not install the glTF validator (no npm or no network);" \
-        "the GLB validation tests will report that they SKIPPED it" >&2
-fi
+# The glTF validator and Pixar's USD library (PyPI `usd-core`), both under .tools/: optional,
+# never fatal here; the tests that use them say SKIPPED without them (and fail when CI=true).
+install_gltf_validator() {
+    local version=2.0.0-dev.3.10
+    local dir="$root/.tools/gltf-validator"
+    local package="$dir/node_modules/gltf-validator/package.json"
+    if [ -f "$package" ] && grep -q "\"version\": \"$version\"" "$package"; then
+        echo "setup.sh: gltf-validator $version already installed"
+        return
+    fi
+    if ! command -v npm >/dev/null 2>&1 && can_install; then
+        apt_install nodejs npm || true
+    fi
+    if command -v npm >/dev/null 2>&1 && npm install --prefix "$dir" --no-audit --no-fund \
+            --loglevel=error "gltf-validator@$version" >/dev/null; then
+        echo "setup.sh: installed gltf-validator $version into $dir"
+    else
+        echo "setup.sh: WARNING: could not install the glTF validator (no npm or no network);" \
+            "the GLB validation tests will report that they SKIPPED it" >&2
+    fi
+}
+
+install_usd_core() {
+    local version=26.11
+    local venv="$root/.tools/usd"
+    if "$venv/bin/python" -c "import pxr.Usd as u; assert u.GetVersion() == (0, ${version%%.*}, ${version#*.})" 2>/dev/null; then
+        echo "setup.sh: usd-core $version already installed"
+        return
+    fi
+    if ! python3 -c "import ensurepip" 2>/dev/null && can_install; then
+        apt_install python3-venv || true
+    fi
+    if python3 -m venv "$venv" >/dev/null && "$venv/bin/pip" install -q "usd-core==$version"; then
+        echo "setup.sh: installed usd-core $version into $venv"
+    else
+        echo "setup.sh: WARNING: could not install usd-core (no python3-venv or no network);" \
+            "the USD tests will report that they SKIPPED it" >&2
+    fi
+}
+
+install_gltf_validator
+install_usd_core

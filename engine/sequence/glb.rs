@@ -419,7 +419,7 @@ fn write_container(w: &mut impl Write, json: &[u8], bin: &[u8]) -> std::io::Resu
 
 /// sRGB-encoded 8-bit value to linear [0, 1] (IEC 61966-2-1).
 #[inline]
-fn srgb_to_linear(c: u8) -> f32 {
+pub(super) fn srgb_to_linear(c: u8) -> f32 {
     let c = c as f64 / 255.0;
     (if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }) as f32
 }
