@@ -134,6 +134,10 @@ fn panoptic_bad_input_is_named() {
     std::fs::write(&meta, j.to_string()).unwrap();
     let e = Dataset::load(&dir).unwrap_err();
     assert!(matches!(e, DatasetError::CameraSets { frame: 1, .. }), "{e}");
+    j["fn"][0][0] = json!("/etc/passwd");
+    std::fs::write(&meta, j.to_string()).unwrap();
+    let e = Dataset::load(&dir).unwrap_err().to_string();
+    assert!(e.contains("train_meta.json: frame 0: image name `/etc/passwd` is not a path"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -240,6 +244,12 @@ fn nerfstudio_monocular_and_bad_input() {
     let e =
         one(json!({"file_path": "./train/gone"}), gl_c2w(DVec3::Z * 3.0)).unwrap_err().to_string();
     assert!(e.contains("gone.png"), "{e}");
+    // Image paths that leave the dataset folder.
+    for file in ["/etc/passwd", "../x.png"] {
+        let e = one(json!({"file_path": file}), gl_c2w(DVec3::Z * 3.0)).unwrap_err().to_string();
+        let expected = format!("transforms_train.json: frame 0: file_path `{file}` is not a path");
+        assert!(e.contains(&expected), "{e}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
     assert!(matches!(Dataset::load(&temp("empty")), Err(DatasetError::Unknown(_))));
 }
