@@ -290,3 +290,24 @@ fn own_layout_with_a_bounded_cache() {
     assert!(e.contains("cam004.json"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `tagsplat dataset info | head`: a reader that has gone away ends the program quietly, as it
+/// ends a Unix tool, instead of a panic ("failed printing to stdout: Broken pipe").
+#[test]
+fn dataset_info_into_a_closed_pipe_ends_quietly() {
+    let dir = temp("closed-pipe");
+    nerfstudio(&dir, "transforms.json", &[0.0], &[DVec3::new(0.0, 1.0, 4.0)], "images");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+        .args(["dataset".as_ref(), "info".as_ref(), "--data".as_ref(), dir.as_os_str()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The only read end closes before the child has loaded the dataset and printed a line.
+    drop(child.stdout.take());
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!stderr.contains("panicked") && stderr.is_empty(), "{stderr}");
+    assert!(matches!(output.status.code(), Some(0 | 141)), "{:?}: {stderr}", output.status);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
