@@ -134,6 +134,10 @@ fn panoptic_bad_input_is_named() {
     std::fs::write(&meta, j.to_string()).unwrap();
     let e = Dataset::load(&dir).unwrap_err();
     assert!(matches!(e, DatasetError::CameraSets { frame: 1, .. }), "{e}");
+    j["fn"][0][0] = json!("/etc/passwd");
+    std::fs::write(&meta, j.to_string()).unwrap();
+    let e = Dataset::load(&dir).unwrap_err().to_string();
+    assert!(e.contains("train_meta.json: frame 0: image name `/etc/passwd` is not a path"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -240,6 +244,12 @@ fn nerfstudio_monocular_and_bad_input() {
     let e =
         one(json!({"file_path": "./train/gone"}), gl_c2w(DVec3::Z * 3.0)).unwrap_err().to_string();
     assert!(e.contains("gone.png"), "{e}");
+    // Image paths that leave the dataset folder.
+    for file in ["/etc/passwd", "../x.png"] {
+        let e = one(json!({"file_path": file}), gl_c2w(DVec3::Z * 3.0)).unwrap_err().to_string();
+        let expected = format!("transforms_train.json: frame 0: file_path `{file}` is not a path");
+        assert!(e.contains(&expected), "{e}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
     assert!(matches!(Dataset::load(&temp("empty")), Err(DatasetError::Unknown(_))));
 }
@@ -278,5 +288,26 @@ fn own_layout_with_a_bounded_cache() {
     std::fs::write(&cam, j.to_string()).unwrap();
     let e = Dataset::load(&dir).unwrap_err().to_string();
     assert!(e.contains("cam004.json"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `tagsplat dataset info | head`: a reader that has gone away ends the program quietly, as it
+/// ends a Unix tool, instead of a panic ("failed printing to stdout: Broken pipe").
+#[test]
+fn dataset_info_into_a_closed_pipe_ends_quietly() {
+    let dir = temp("closed-pipe");
+    nerfstudio(&dir, "transforms.json", &[0.0], &[DVec3::new(0.0, 1.0, 4.0)], "images");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+        .args(["dataset".as_ref(), "info".as_ref(), "--data".as_ref(), dir.as_os_str()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The only read end closes before the child has loaded the dataset and printed a line.
+    drop(child.stdout.take());
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!stderr.contains("panicked") && stderr.is_empty(), "{stderr}");
+    assert!(matches!(output.status.code(), Some(0 | 141)), "{:?}: {stderr}", output.status);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -601,6 +601,58 @@ fn bad_input_is_refused_with_a_clear_error() {
     assert!(e.contains("dL/dcolour"), "{e}");
 }
 
+/// `tagsplat render-mesh` on malformed PLY files: a float list count (which used to panic) and
+/// a trillion rows of no properties, ascii and binary (which used to spin forever) exit with
+/// code 1 and an error naming the file, at once.
+#[test]
+fn render_mesh_cli_refuses_malformed_ply_at_once() {
+    let dir = std::env::temp_dir().join(format!("tagsplat-render-mesh-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let camera_path = dir.join("cam.json");
+    camera(16, 16, 20.0, [0.0, 0.0, 3.0], [0.0; 3]).save_json(&camera_path).unwrap();
+    let face = "element face 1\nproperty list uchar int vertex_indices\nend_header\n3 0 1 2\n";
+    let cases = [
+        ("float-count.ply", "ascii", face.replace("list uchar", "list float")),
+        ("empty-rows-ascii.ply", "ascii", format!("element vertex 1000000000000\n{face}")),
+        ("empty-rows.ply", "binary_little_endian", format!("element vertex 1000000000000\n{face}")),
+    ];
+    for (name, format, rest) in cases {
+        let mesh = dir.join(name);
+        std::fs::write(&mesh, format!("ply\nformat {format} 1.0\n{rest}")).unwrap();
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+            .arg("render-mesh")
+            .args([
+                "--mesh".as_ref(),
+                mesh.as_os_str(),
+                "--camera".as_ref(),
+                camera_path.as_os_str(),
+            ])
+            .args(["--out".as_ref(), dir.join("never.png").as_os_str()])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let started = std::time::Instant::now();
+        while child.try_wait().unwrap().is_none() {
+            if started.elapsed() > std::time::Duration::from_secs(20) {
+                child.kill().unwrap();
+                child.wait().unwrap();
+                panic!("render-mesh on {name} still runs after 20 s");
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        let output = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{name}: {stderr}");
+        assert!(
+            stderr.contains(&mesh.display().to_string()) && !stderr.contains("panicked"),
+            "{stderr}"
+        );
+    }
+    assert!(!dir.join("never.png").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Σ weights · (anti-aliased rgb, mask) of the reference render.
 fn reference_loss(scene: &Scene, cam: &Camera, near: f64, weights: &[[f64; 4]]) -> f64 {
     let frame = scene.reference(cam, near);

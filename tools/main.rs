@@ -4,6 +4,16 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+// The program's `println!` and `print!`: the modules below see these instead of std's, which
+// panic when the reader of stdout has gone away (`tagsplat dataset info | head`).
+macro_rules! println {
+    () => { $crate::print_or_exit(format_args!("\n")) };
+    ($($arg:tt)*) => { $crate::print_or_exit(format_args!("{}\n", format_args!($($arg)*))) };
+}
+macro_rules! print {
+    ($($arg:tt)*) => { $crate::print_or_exit(format_args!($($arg)*)) };
+}
+
 mod render;
 mod render_mesh;
 mod track;
@@ -169,6 +179,20 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Writes to stdout. A closed stdout ends the program with status 141 and no message, as a
+/// Unix tool stopped by SIGPIPE ends (Rust ignores SIGPIPE, so the write fails instead); any
+/// other failure to write is an error on stderr and status 1.
+fn print_or_exit(text: std::fmt::Arguments) {
+    use std::io::Write;
+    if let Err(e) = std::io::stdout().write_fmt(text) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(141);
+        }
+        eprintln!("error: cannot write to stdout: {e}");
+        std::process::exit(1);
     }
 }
 

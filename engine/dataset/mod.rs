@@ -17,7 +17,7 @@ pub mod panoptic;
 use crate::camera::Camera;
 use crate::io::image::{read_image, Image, ImageError};
 use cache::ImageCache;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
 
 /// Default budget of decoded pixel data kept in memory.
@@ -284,6 +284,26 @@ pub fn every_eighth_held_out(count: usize) -> (Vec<usize>, Vec<usize>) {
     (0..count).partition(|i| i % 8 != 7)
 }
 
+/// A file or folder name read from the metadata file `meta`, as a path relative to the dataset
+/// folder (`.` components dropped). Every layout's metadata names go through here: an absolute
+/// name or a `..` would reach files outside the dataset (a downloaded dataset must not read
+/// `/etc/passwd`), so they are refused, as is an empty name, naming `meta` and `what` it is.
+pub(crate) fn inside_dataset(meta: &Path, what: &str, name: &str) -> Result<PathBuf, DatasetError> {
+    let components = Path::new(name).components();
+    let inside = components.clone().all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
+    let relative: PathBuf = components.filter(|c| matches!(c, Component::Normal(_))).collect();
+    if !inside || relative.as_os_str().is_empty() {
+        return Err(DatasetError::File {
+            path: meta.to_owned(),
+            problem: format!(
+                "{what} `{name}` is not a path inside the dataset folder (empty, absolute, or \
+                 with `..`)"
+            ),
+        });
+    }
+    Ok(relative)
+}
+
 /// Reads a JSON file into `T`, naming the file on failure.
 pub(crate) fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, DatasetError> {
     let text = std::fs::read_to_string(path).map_err(|e| DatasetError::File {
@@ -294,4 +314,21 @@ pub(crate) fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T
         path: path.to_owned(),
         problem: format!("invalid JSON: {e}"),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metadata_names_stay_inside_the_dataset() {
+        let meta = Path::new("d/meta.json");
+        let inside = |name| inside_dataset(meta, "image", name);
+        assert_eq!(inside("./a/./b.png").unwrap(), Path::new("a/b.png"));
+        for name in ["", ".", "/etc/passwd", "../x.png", "a/../../x.png", "a/.."] {
+            let message = inside(name).unwrap_err().to_string();
+            let expected = format!("d/meta.json: image `{name}` is not a path inside");
+            assert!(message.starts_with(&expected), "{message}");
+        }
+    }
 }

@@ -11,7 +11,8 @@
 //! `transforms.json` holds out every eighth camera.
 
 use super::{
-    every_eighth_held_out, read_json, Dataset, DatasetError, Format, Frame, MaskSource, View,
+    every_eighth_held_out, inside_dataset, read_json, Dataset, DatasetError, Format, Frame,
+    MaskSource, View,
 };
 use crate::camera::Camera;
 use crate::io::image::image_size;
@@ -114,7 +115,8 @@ fn parse_frame(
         .get("file_path")
         .and_then(Value::as_str)
         .ok_or_else(|| bad("has no `file_path`".into()))?;
-    let mut image = path.parent().unwrap_or(dir).join(file.trim_start_matches("./"));
+    let relative = inside_dataset(path, &format!("frame {i}: file_path"), file)?;
+    let mut image = path.parent().unwrap_or(dir).join(relative);
     if image.extension().is_none() {
         image.set_extension("png");
     }

@@ -10,7 +10,7 @@
 //! Ground truth, when present, sits beside it: `meshes/<t>.ply`, `bindings.csv`,
 //! `trajectories.csv` (see `synth::generate`).
 
-use super::{read_json, Dataset, DatasetError, Format, Frame, MaskSource, View};
+use super::{inside_dataset, read_json, Dataset, DatasetError, Format, Frame, MaskSource, View};
 use crate::camera::Camera;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -64,12 +64,12 @@ pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
         return Err(bad("lists no cameras".into()));
     }
     for (i, name) in meta.cameras.iter().enumerate() {
-        if name.is_empty()
-            || name.contains(['/', '\\'])
-            || name.starts_with('.')
-            || meta.cameras[..i].contains(name)
-        {
-            return Err(bad(format!("camera name `{name}` is empty, a path, or repeated")));
+        inside_dataset(&meta_path, "camera name", name)?;
+        // Each name is one folder under images/ and masks/, on any platform.
+        if name.contains(['/', '\\']) || name.starts_with('.') || meta.cameras[..i].contains(name) {
+            return Err(bad(format!(
+                "camera name `{name}` is not one folder name, is hidden, or is repeated"
+            )));
         }
     }
     let mut cameras = Vec::with_capacity(meta.cameras.len());

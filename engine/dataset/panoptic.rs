@@ -7,12 +7,12 @@
 //! so cx and cy gain +0.5 to put pixel centres at i + 0.5 (CONVENTIONS.md). Cameras are a
 //! static rig: a camera's k and w2c must be the same in every frame.
 
-use super::{read_json, Dataset, DatasetError, Format, Frame, MaskSource, View};
+use super::{inside_dataset, read_json, Dataset, DatasetError, Format, Frame, MaskSource, View};
 use crate::camera::Camera;
 use glam::DMat4;
 use serde::Deserialize;
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 pub const TRAIN_META: &str = "train_meta.json";
 pub const TEST_META: &str = "test_meta.json";
@@ -33,7 +33,7 @@ type Rig = BTreeMap<i64, (Camera, bool)>;
 
 pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
     let mut rig: Rig = BTreeMap::new();
-    let mut per_frame: Vec<Vec<(i64, String)>> = Vec::new();
+    let mut per_frame: Vec<Vec<(i64, PathBuf)>> = Vec::new();
     let train_path = dir.join(TRAIN_META);
     for (name, test) in [(TRAIN_META, false), (TEST_META, true)] {
         let path = dir.join(name);
@@ -71,7 +71,7 @@ fn read_meta(
     meta: &Meta,
     test: bool,
     rig: &mut Rig,
-    per_frame: &mut Vec<Vec<(i64, String)>>,
+    per_frame: &mut Vec<Vec<(i64, PathBuf)>>,
 ) -> Result<(), DatasetError> {
     let bad = |problem: String| DatasetError::File { path: path.to_owned(), problem };
     let t_count = meta.cam_id.len();
@@ -129,13 +129,8 @@ fn read_meta(
                     }
                 }
             }
-            let file = &meta.files[t][c];
-            if Path::new(file).is_absolute() || file.split(['/', '\\']).any(|p| p == "..") {
-                return Err(bad(format!(
-                    "frame {t}: image name `{file}` leaves the dataset folder"
-                )));
-            }
-            per_frame[t].push((id, file.clone()));
+            let file = inside_dataset(path, &format!("frame {t}: image name"), &meta.files[t][c])?;
+            per_frame[t].push((id, file));
         }
     }
     Ok(())

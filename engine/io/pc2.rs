@@ -39,8 +39,8 @@ pub fn read_pc2(path: &Path) -> Result<PointCache, Pc2Error> {
 }
 
 /// Parses PC2 bytes; `path` only names the source in errors. Errors: a short header, a wrong
-/// signature or version, negative counts, a body shorter or longer than the header promises,
-/// a non-finite coordinate.
+/// signature or version, negative counts, samples of no points, a body shorter or longer than
+/// the header promises (checked before anything is allocated), a non-finite coordinate.
 pub fn parse_pc2(path: &Path, bytes: &[u8]) -> Result<PointCache, Pc2Error> {
     if bytes.len() < HEADER_BYTES {
         return Err(error(
@@ -63,19 +63,28 @@ pub fn parse_pc2(path: &Path, bytes: &[u8]) -> Result<PointCache, Pc2Error> {
     let (Ok(points), Ok(samples)) = (usize::try_from(points), usize::try_from(samples)) else {
         return Err(error(path, format!("negative count ({points} points, {samples} samples)")));
     };
-    let expected = (points as u128) * (samples as u128) * 12 + HEADER_BYTES as u128;
-    if (bytes.len() as u128) < expected {
-        return Err(error(path, format!(
-            "truncated: {} bytes, the header promises {points} points x {samples} samples x 12 + {HEADER_BYTES} = {expected}",
-            bytes.len()
-        )));
+    // Samples of no points take no bytes, so the file size cannot bound how many there are.
+    if points == 0 && samples > 0 {
+        return Err(error(path, format!("{samples} samples of 0 points: no positions to read")));
     }
-    if (bytes.len() as u128) > expected {
+    // Checked, so that the size every allocation below is bounded by cannot wrap.
+    let expected = points
+        .checked_mul(samples)
+        .and_then(|n| n.checked_mul(12))
+        .and_then(|n| n.checked_add(HEADER_BYTES))
+        .filter(|&n| n <= bytes.len())
+        .ok_or_else(|| {
+            error(path, format!(
+                "truncated: {} bytes, the header promises {points} points x {samples} samples x 12 + {HEADER_BYTES}",
+                bytes.len()
+            ))
+        })?;
+    if bytes.len() > expected {
         return Err(error(
             path,
             format!(
                 "{} bytes after the {points} points x {samples} samples the header promises",
-                bytes.len() as u128 - expected
+                bytes.len() - expected
             ),
         ));
     }
@@ -103,7 +112,8 @@ pub fn parse_pc2(path: &Path, bytes: &[u8]) -> Result<PointCache, Pc2Error> {
     Ok(PointCache { start_frame, sample_rate, samples: out })
 }
 
-/// Writes a PC2 file, atomically. Errors: samples of different lengths, counts beyond i32.
+/// Writes a PC2 file, atomically. Errors: samples of different lengths or of no points, counts
+/// beyond i32.
 pub fn write_pc2(path: &Path, cache: &PointCache) -> Result<(), Pc2Error> {
     let points = cache.samples.first().map_or(0, Vec::len);
     if let Some(s) = cache.samples.iter().position(|s| s.len() != points) {
@@ -114,6 +124,9 @@ pub fn write_pc2(path: &Path, cache: &PointCache) -> Result<(), Pc2Error> {
                 cache.samples[s].len()
             ),
         ));
+    }
+    if points == 0 && !cache.samples.is_empty() {
+        return Err(error(path, "cannot write: samples of 0 points (the reader refuses them)"));
     }
     let (Ok(n), Ok(count)) = (i32::try_from(points), i32::try_from(cache.samples.len())) else {
         return Err(error(path, "cannot write: more points or samples than PC2's i32 counts hold"));
@@ -179,11 +192,19 @@ mod tests {
             b[at..at + 4].copy_from_slice(&value);
             b
         };
+        let header = |points: i32, samples: i32| {
+            let counts = [&points.to_le_bytes()[..], &good[20..28], &samples.to_le_bytes()];
+            [&good[..16], &counts.concat()].concat()
+        };
         for (bytes, needle) in [
             (
                 good[..good.len() - 1].to_vec(),
-                "truncated: 79 bytes, the header promises 2 points x 2 samples x 12 + 32 = 80",
+                "truncated: 79 bytes, the header promises 2 points x 2 samples x 12 + 32",
             ),
+            // Refused from the header alone, before anything is allocated.
+            (header(2, i32::MAX), "32 bytes, the header promises 2 points x 2147483647 samples"),
+            (header(i32::MAX, i32::MAX), "32 bytes, the header promises 2147483647 points x"),
+            (header(0, i32::MAX), "2147483647 samples of 0 points: no positions to read"),
             (good[..20].to_vec(), "truncated: 20 bytes"),
             ([good.as_slice(), &[0]].concat(), "1 bytes after"),
             (with(0, *b"PONT"), "no POINTCACHE2 signature"),
@@ -199,5 +220,10 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("sample 1 has 1 points"));
+        let no_points = PointCache { samples: vec![Vec::new(); 3], ..cache() };
+        assert!(write_pc2(&path, &no_points)
+            .unwrap_err()
+            .to_string()
+            .contains("samples of 0 points"));
     }
 }

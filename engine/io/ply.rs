@@ -77,6 +77,16 @@ pub enum PropertyKind {
     List { count: ScalarType, item: ScalarType },
 }
 
+impl PropertyKind {
+    /// The fewest bytes one row of this property takes in a binary body (an empty list is its
+    /// count alone).
+    fn minimum_bytes(&self) -> usize {
+        match self {
+            Self::Scalar(ty) | Self::List { count: ty, .. } => ty.size(),
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Property {
     pub name: String,
@@ -324,6 +334,17 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, PlyError> {
                     elements.last_mut().ok_or_else(|| at("property before any element".into()))?;
                 let property =
                     parse_property(&words).ok_or_else(|| at(format!("cannot parse '{line}'")))?;
+                if let PropertyKind::List {
+                    count: count @ (ScalarType::F32 | ScalarType::F64),
+                    ..
+                } = property.kind
+                {
+                    return Err(at(format!(
+                        "list property '{}' has a {} count, counts must be integers",
+                        property.name,
+                        count.name()
+                    )));
+                }
                 let starts = matches!(property.kind, PropertyKind::List { .. }).then(|| vec![0]);
                 let item = match property.kind {
                     PropertyKind::Scalar(t) | PropertyKind::List { item: t, .. } => t,
@@ -357,8 +378,13 @@ fn parse_property(words: &[&str]) -> Option<Property> {
 
 fn read_ascii_body(path: &Path, body: &[u8], elements: &mut [PlyElement]) -> Result<(), PlyError> {
     let text = std::str::from_utf8(body).map_err(|_| error(path, "ascii body is not text"))?;
+    // Counted first, so that each element's row count is checked against the values left
+    // before any of its rows is read.
+    let mut left = text.split_ascii_whitespace().count();
     let mut tokens = text.split_ascii_whitespace();
     for element in elements {
+        // Every property takes at least one value per row (a list its count).
+        check_fits(path, element, element.properties.len(), left, "values")?;
         for row in 0..element.len {
             let mut next = |ty: ScalarType| -> Result<Value, PlyError> {
                 let token = tokens.next().ok_or_else(|| {
@@ -370,6 +396,7 @@ fn read_ascii_body(path: &Path, body: &[u8], elements: &mut [PlyElement]) -> Res
                         ),
                     )
                 })?;
+                left -= 1;
                 parse_ascii_value(token, ty).ok_or_else(|| {
                     error(
                         path,
@@ -417,16 +444,8 @@ fn read_binary_body(
 ) -> Result<(), PlyError> {
     let mut at = 0usize;
     for element in elements {
-        // A row needs at least one byte per property: refuse absurd counts before allocating.
-        if element.len.saturating_mul(element.properties.len()) > body.len().saturating_sub(at) {
-            return Err(error(
-                path,
-                format!(
-                    "truncated: element '{}' claims {} rows, the file is too short",
-                    element.name, element.len
-                ),
-            ));
-        }
+        let row_bytes = element.properties.iter().map(|p| p.kind.minimum_bytes()).sum();
+        check_fits(path, element, row_bytes, body.len() - at, "bytes")?;
         for row in 0..element.len {
             let mut next = |ty: ScalarType| -> Result<Value, PlyError> {
                 let bytes = body.get(at..at + ty.size()).ok_or_else(|| {
@@ -443,6 +462,33 @@ fn read_binary_body(
             };
             read_row(&element.properties, &mut element.data, &mut next)?;
         }
+    }
+    Ok(())
+}
+
+/// Refuses an element whose rows cannot fit in the `left` units (bytes or ascii values) of the
+/// body, each row taking at least `row` units, before any row is read or allocated: a header
+/// could otherwise claim a trillion rows and make the reader loop or allocate for them. Rows of
+/// no properties take nothing, so any count of them is refused.
+fn check_fits(
+    path: &Path,
+    element: &PlyElement,
+    row: usize,
+    left: usize,
+    unit: &str,
+) -> Result<(), PlyError> {
+    let (name, rows) = (&element.name, element.len);
+    if row == 0 && rows > 0 {
+        return Err(error(path, format!("element '{name}' has {rows} rows but no properties")));
+    }
+    if rows.checked_mul(row).is_none_or(|needed| needed > left) {
+        return Err(error(
+            path,
+            format!(
+                "truncated: element '{name}' claims {rows} rows of at least {row} {unit}, \
+                 {left} {unit} are left"
+            ),
+        ));
     }
     Ok(())
 }
@@ -476,7 +522,7 @@ fn read_row(
             PropertyKind::Scalar(ty) => data.values.push(next(ty)?),
             PropertyKind::List { count, item } => {
                 let Value::Int(n) = next(count)? else {
-                    unreachable!("list counts have an integer type");
+                    unreachable!("parse_header refuses list counts of a float type");
                 };
                 for _ in 0..n.max(0) {
                     data.values.push(next(item)?);
@@ -648,6 +694,58 @@ mod tests {
         );
         let Column::Int(ids) = v.scalar("id").unwrap() else { panic!("uint is an integer column") };
         assert_eq!(ids, &vec![0, u32::MAX as i64, 5]);
+    }
+
+    #[test]
+    fn list_counts_must_be_integers() {
+        let bytes = b"ply\nformat ascii 1.0\nelement face 1\nproperty list float int vertex_indices\nend_header\n3 0 1 2\n";
+        let message = Ply::parse(Path::new("m.ply"), bytes).unwrap_err().to_string();
+        assert!(
+            message.starts_with("m.ply: header line 4: ")
+                && message.contains("'vertex_indices'")
+                && message.contains("float"),
+            "{message}"
+        );
+    }
+
+    /// Counts the body cannot hold are refused before any row is read: neither a spin over
+    /// rows of nothing nor a loop over rows of a short file.
+    #[test]
+    fn row_counts_the_file_cannot_hold_are_refused_at_once() {
+        let empty_rows = "element vertex 1000000000000\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+        for format in ["ascii", "binary_little_endian"] {
+            let bytes = format!("ply\nformat {format} 1.0\n{empty_rows}3 0 1 2\n");
+            let message = Ply::parse(Path::new("m.ply"), bytes.as_bytes()).unwrap_err().to_string();
+            assert!(
+                message.starts_with("m.ply: ")
+                    && message.contains("'vertex' has 1000000000000 rows but no properties"),
+                "{message}"
+            );
+        }
+        let doubles =
+            b"ply\nformat binary_big_endian 1.0\nelement v 3\nproperty double d\nend_header\n";
+        let message = Ply::parse(Path::new("d.ply"), &[&doubles[..], &[0; 20]].concat())
+            .unwrap_err()
+            .to_string();
+        let expected =
+            "truncated: element 'v' claims 3 rows of at least 8 bytes, 20 bytes are left";
+        assert!(message == format!("d.ply: {expected}"), "{message}");
+        // A list row takes at least its count; the face follows 3 vertex rows of 4 bytes.
+        let faces = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nelement face 5\nproperty list ushort int vertex_indices\nend_header\n";
+        let message = Ply::parse(Path::new("f.ply"), &[&faces[..], &[0; 12 + 9]].concat())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("'face' claims 5 rows of at least 2 bytes, 9 bytes are left"),
+            "{message}"
+        );
+        // An ascii row takes at least one value per property.
+        let ascii = b"ply\nformat ascii 1.0\nelement v 4\nproperty float x\nproperty float y\nend_header\n1 2\n";
+        let message = Ply::parse(Path::new("a.ply"), ascii).unwrap_err().to_string();
+        assert!(
+            message.contains("'v' claims 4 rows of at least 2 values, 2 values are left"),
+            "{message}"
+        );
     }
 
     #[test]

@@ -15,6 +15,7 @@
 
 use super::MeshSequence;
 use serde::{Deserialize, Serialize};
+use std::cell::Cell;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -29,8 +30,14 @@ const FLOAT: u32 = 5126;
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const TRIANGLES: u32 = 4;
-/// Largest accessor (in components) the reader expands, a guard against absurd counts.
-const MAX_COMPONENTS: usize = 1 << 26;
+/// What the reader may materialize, in bytes: at least [`BUDGET_FLOOR`], and
+/// [`BUDGET_PER_FILE_BYTE`] per byte of the file. Accessors without a buffer view, morph
+/// targets without POSITION and keyframes × vertices take memory no byte of the file stands
+/// for, so without a budget a small file could claim gigabytes. The factor leaves room for a
+/// file's own data as f64 (8 bytes per u8 component at most), for keyframes blending few
+/// targets, and for the dense frames × frames weight table of the files [`write_glb`] writes.
+const BUDGET_FLOOR: usize = 256 << 20;
+const BUDGET_PER_FILE_BYTE: usize = 64;
 
 /// An error that names the GLB file and what is wrong with it.
 #[derive(Debug, thiserror::Error)]
@@ -444,7 +451,8 @@ pub fn parse_glb(path: &Path, bytes: &[u8]) -> Result<MeshSequence, GlbError> {
     let (json, bin) = read_container(path, bytes)?;
     let doc: Document =
         serde_json::from_slice(json).map_err(|e| error(path, format!("invalid glTF JSON: {e}")))?;
-    let reader = Reader { path, doc: &doc, bin };
+    let budget = bytes.len().saturating_mul(BUDGET_PER_FILE_BYTE).max(BUDGET_FLOOR);
+    let reader = Reader { path, doc: &doc, bin, budget, spent: Cell::new(0) };
     let sequence = reader.sequence()?;
     match sequence.problem() {
         Some(problem) => Err(error(path, problem)),
@@ -478,29 +486,55 @@ fn read_container<'a>(path: &Path, bytes: &'a [u8]) -> Result<(&'a [u8], &'a [u8
         let (Some(length), Some(kind)) = (word(at), word(at + 4)) else {
             return Err(error(path, format!("chunk header at byte {at} is cut off")));
         };
-        let data = bytes
-            .get(at + 8..at + 8 + length as usize)
+        let end = (length as usize).checked_add(at + 8);
+        let data = end
+            .and_then(|end| bytes.get(at + 8..end))
             .ok_or_else(|| error(path, format!("chunk at byte {at} runs past the end")))?;
         match kind {
             CHUNK_JSON if json.is_none() => json = Some(data),
             CHUNK_BIN if bin.is_empty() => bin = data,
             _ => {}
         }
-        at += 8 + length as usize;
+        at += 8 + data.len();
     }
     Ok((json.ok_or_else(|| error(path, "no JSON chunk"))?, bin))
 }
 
-/// Reads accessors of one document against its BIN chunk.
+/// Reads accessors of one document against its BIN chunk, within a memory budget.
 struct Reader<'a> {
     path: &'a Path,
     doc: &'a Document,
     bin: &'a [u8],
+    /// Bytes the reader may materialize (see [`BUDGET_FLOOR`]), and has so far.
+    budget: usize,
+    spent: Cell<usize>,
 }
 
 impl Reader<'_> {
     fn error(&self, problem: impl Into<String>) -> GlbError {
         error(self.path, problem)
+    }
+
+    /// Counts `count` items (None: more than a usize holds) of `bytes` each against the
+    /// budget, before they are allocated; returns `count`.
+    fn charge(
+        &self,
+        count: Option<usize>,
+        bytes: usize,
+        what: impl FnOnce() -> String,
+    ) -> Result<usize, GlbError> {
+        let total = count.and_then(|n| n.checked_mul(bytes)?.checked_add(self.spent.get()));
+        match (count, total) {
+            (Some(count), Some(total)) if total <= self.budget => {
+                self.spent.set(total);
+                Ok(count)
+            }
+            _ => Err(self.error(format!(
+                "{} would take more than the {} MiB this file's size allows",
+                what(),
+                self.budget >> 20
+            ))),
+        }
     }
 
     /// The sequence of the animated mesh node (or the first mesh node, as one frame).
@@ -543,9 +577,15 @@ impl Reader<'_> {
         let targets = primitive
             .targets
             .iter()
-            .map(|t| match t.get("POSITION") {
+            .enumerate()
+            .map(|(k, t)| match t.get("POSITION") {
                 Some(&a) => self.vec3_f32(a, "morph target POSITION"),
-                None => Ok(vec![[0.0; 3]; base.len()]),
+                None => {
+                    self.charge(Some(base.len()), 12, || {
+                        format!("morph target {k} without POSITION")
+                    })?;
+                    Ok(vec![[0.0; 3]; base.len()])
+                }
             })
             .collect::<Result<Vec<_>, _>>()?;
         if let Some(t) = targets.iter().position(|t| t.len() != base.len()) {
@@ -561,10 +601,17 @@ impl Reader<'_> {
             }
             None => vec![mesh.weights.clone().unwrap_or_default()],
         };
+        let positions = self.charge(weights.len().checked_mul(base.len()), 12, || {
+            format!("{} frames of {} vertices", weights.len(), base.len())
+        })?;
         let frames: Vec<Vec<[f32; 3]>> =
             weights.iter().map(|w| morph(&base, &targets, w)).collect();
         let colors = match primitive.attributes.get("COLOR_0") {
-            Some(&a) => Some(vec![self.colors(a, base.len())?; frames.len()]),
+            Some(&a) => {
+                let colors = self.colors(a, base.len())?;
+                self.charge(Some(positions), 3, || format!("colours of {} frames", frames.len()))?;
+                Some(vec![colors; frames.len()])
+            }
             None => None,
         };
         Ok(MeshSequence { faces, frames, colors })
@@ -584,7 +631,8 @@ impl Reader<'_> {
         let keyframes = self.accessor(sampler.input)?.0.len();
         let (values, _) = self.accessor(sampler.output)?;
         let per_key = if sampler.interpolation.as_deref() == Some("CUBICSPLINE") { 3 } else { 1 };
-        if targets == 0 || values.len() != keyframes * targets * per_key {
+        let expected = keyframes.checked_mul(targets * per_key);
+        if targets == 0 || expected != Some(values.len()) {
             return Err(self.error(format!(
                 "{} morph weights for {keyframes} keyframes of {targets} targets",
                 values.len()
@@ -672,9 +720,8 @@ impl Reader<'_> {
                 return Err(self.error(format!("accessor {index} has unsupported type {other}")))
             }
         };
-        let total = a.count.checked_mul(components).filter(|&n| n <= MAX_COMPONENTS);
-        let total = total.ok_or_else(|| {
-            self.error(format!("accessor {index} is too large ({} elements)", a.count))
+        let total = self.charge(a.count.checked_mul(components), 8, || {
+            format!("accessor {index} ({} elements of {})", a.count, a.kind)
         })?;
         let mut values = match a.buffer_view {
             Some(view) => {
@@ -745,20 +792,29 @@ impl Reader<'_> {
         if v.buffer != 0 || self.doc.buffers.first().is_some_and(|b| b.uri.is_some()) {
             return Err(err("data outside the GLB's binary chunk is not read".into()));
         }
-        let data = self
-            .bin
-            .get(v.byte_offset..v.byte_offset.saturating_add(v.byte_length))
+        let data = v
+            .byte_offset
+            .checked_add(v.byte_length)
+            .and_then(|end| self.bin.get(v.byte_offset..end))
             .ok_or_else(|| err(format!("buffer view {view} runs past the binary chunk")))?;
-        let stride = v.byte_stride.unwrap_or(size * components);
-        if stride < size * components {
+        let element = size * components;
+        let stride = v.byte_stride.unwrap_or(element);
+        if stride < element {
             return Err(err(format!(
                 "buffer view {view} has a byte stride of {stride}, smaller than one element"
             )));
         }
-        let needed = if count == 0 { 0 } else { offset + (count - 1) * stride + size * components };
-        if needed > data.len() {
+        // Offset, count and stride come from the file: their sum is checked, not trusted.
+        let needed = match count.checked_sub(1) {
+            None => Some(0),
+            Some(last) => {
+                last.checked_mul(stride).and_then(|n| n.checked_add(offset)?.checked_add(element))
+            }
+        };
+        if needed.is_none_or(|needed| needed > data.len()) {
             return Err(err(format!(
-                "needs {needed} bytes of buffer view {view}, which has {}",
+                "{count} elements of {element} bytes, {stride} apart from byte {offset}, do \
+                 not fit buffer view {view} ({} bytes)",
                 data.len()
             )));
         }
@@ -803,6 +859,69 @@ mod tests {
         for c in 0..=255u8 {
             assert_eq!(linear_to_srgb(srgb_to_linear(c) as f64), c);
         }
+    }
+
+    /// A GLB of a triangle moving over two frames, its document changed by `edit` first.
+    fn edited_glb(edit: impl FnOnce(&mut Document)) -> Vec<u8> {
+        let triangle = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let moved = triangle.iter().map(|p| [p[0], p[1], 1.0]).collect();
+        let sequence =
+            MeshSequence { faces: vec![[0, 1, 2]], frames: vec![triangle, moved], colors: None };
+        let mut body = Body::default();
+        let mut doc = document(&sequence, 30.0, &mut body);
+        edit(&mut doc);
+        let mut bytes = Vec::new();
+        write_container(&mut bytes, &serde_json::to_vec(&doc).unwrap(), &body.bytes).unwrap();
+        bytes
+    }
+
+    /// The base POSITION accessor of the edited document, without a buffer view: zeros.
+    fn zero_positions(doc: &mut Document, count: usize) -> &mut Primitive {
+        let position = doc.meshes[0].primitives[0].attributes["POSITION"];
+        (doc.accessors[position].buffer_view, doc.accessors[position].count) = (None, count);
+        &mut doc.meshes[0].primitives[0]
+    }
+
+    fn glb_error(edit: impl FnOnce(&mut Document)) -> String {
+        let message = parse_glb(Path::new("a.glb"), &edited_glb(edit)).unwrap_err().to_string();
+        assert!(message.starts_with("a.glb: "), "{message}");
+        message
+    }
+
+    /// Counts no bytes of the file stand for are charged to a budget (the floor, for a file
+    /// this small) before anything is allocated, cumulatively.
+    #[test]
+    fn counts_the_file_cannot_justify_are_refused_before_allocating() {
+        assert_eq!(parse_glb(Path::new("a.glb"), &edited_glb(|_| {})).unwrap().frames.len(), 2);
+        let e = glb_error(|doc| _ = zero_positions(doc, 1 << 28));
+        let expected = "accessor 1 (268435456 elements of VEC3) would take more than the 256 MiB";
+        assert!(e.contains(expected), "{e}");
+        // 5 million zero vertices (120 MB as f64) fit, and two targets without POSITION
+        // (60 MB each), but a third does not.
+        let e = glb_error(|doc| zero_positions(doc, 5_000_000).targets = vec![BTreeMap::new(); 9]);
+        assert!(e.contains("morph target 2 without POSITION would take more than"), "{e}");
+        let e = glb_error(|doc| zero_positions(doc, 5_000_000).targets = vec![BTreeMap::new(); 2]);
+        assert!(e.contains("2 frames of 5000000 vertices would take more than"), "{e}");
+        let e = glb_error(|doc| _ = zero_positions(doc, usize::MAX / 2));
+        assert!(e.contains("accessor 1 (9223372036854775807 elements of VEC3) would"), "{e}");
+    }
+
+    /// Offsets, strides and lengths from the file are added and multiplied with checks: an
+    /// error, not an overflow.
+    #[test]
+    fn huge_offsets_and_strides_are_refused() {
+        /// The base POSITION's buffer view, and the accessor's offset into it.
+        fn view(doc: &mut Document) -> (&mut BufferView, &mut usize) {
+            let position = doc.meshes[0].primitives[0].attributes["POSITION"];
+            let view = doc.accessors[position].buffer_view.unwrap();
+            (&mut doc.buffer_views[view], &mut doc.accessors[position].byte_offset)
+        }
+        let e = glb_error(|doc| view(doc).0.byte_stride = Some(usize::MAX / 2));
+        assert!(e.contains("3 elements of 12 bytes, 9223372036854775807 apart from byte 0, do not fit buffer view 1 (36 bytes)"), "{e}");
+        let e = glb_error(|doc| *view(doc).1 = usize::MAX);
+        assert!(e.contains("do not fit buffer view 1"), "{e}");
+        let e = glb_error(|doc| view(doc).0.byte_offset = usize::MAX);
+        assert!(e.contains("buffer view 1 runs past the binary chunk"), "{e}");
     }
 
     #[test]
