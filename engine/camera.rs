@@ -174,6 +174,12 @@ impl Camera {
         rigid_inverse(self.world_to_camera).w_axis.truncate()
     }
 
+    /// The camera's "up" in world coordinates (unit): image rows grow along camera +y, so up
+    /// is −y of the camera frame.
+    pub fn world_up(&self) -> DVec3 {
+        -rigid_inverse(self.world_to_camera).y_axis.truncate().normalize()
+    }
+
     /// The world ray through pixel coordinates (u, v): the camera centre and a unit direction.
     pub fn pixel_ray(&self, u: f64, v: f64) -> (DVec3, DVec3) {
         let camera_to_world = rigid_inverse(self.world_to_camera);
@@ -197,6 +203,12 @@ fn rigid_inverse(m: DMat4) -> DMat4 {
     )
 }
 
+/// The mean of the cameras' up vectors ([`Camera::world_up`]): a capture rig's idea of "up".
+/// Zero for no cameras.
+pub fn mean_up(cameras: &[Camera]) -> DVec3 {
+    cameras.iter().map(Camera::world_up).sum::<DVec3>() / cameras.len().max(1) as f64
+}
+
 /// The point with the least summed squared distance to every ray (origin, unit direction):
 /// where an inward-looking rig's rays meet. None for fewer than two rays, or rays within about
 /// a degree of parallel.
@@ -217,6 +229,26 @@ pub fn nearest_point_to_rays(rays: impl IntoIterator<Item = (DVec3, DVec3)>) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_rig_up_is_the_look_at_up() {
+        let ring = |up: DVec3, side: DVec3| -> Vec<Camera> {
+            (0..6)
+                .map(|k| {
+                    let a = k as f64 * 1.047;
+                    let eye = (side * a.cos() + up.cross(side) * a.sin()) * 3.0 + up * 0.5;
+                    Camera::look_at(64, 64, 50.0, 50.0, 32.0, 32.0, eye, DVec3::ZERO, up).unwrap()
+                })
+                .collect()
+        };
+        // Slightly above the subject, looking down: each camera's up tilts, the mean stays.
+        for up in [DVec3::Z, DVec3::Y, DVec3::NEG_Y] {
+            let side = if up.x.abs() < 0.5 && up.z.abs() < 0.5 { DVec3::X } else { DVec3::Y };
+            let mean = mean_up(&ring(up, side));
+            assert!(mean.normalize().dot(up) > 0.98, "{mean} for {up}");
+        }
+        assert_eq!(mean_up(&[]), DVec3::ZERO);
+    }
 
     fn look_from_minus_z() -> Camera {
         // Camera at (0, 0, -4) looking along +z: world_to_camera is a translation by +4 in z.

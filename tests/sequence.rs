@@ -232,6 +232,47 @@ fn cli_converts_between_every_layout() {
     let back = MeshSequence::read(&dir.join("d")).unwrap();
     assert_eq!(back.faces, seq.faces);
     assert!(max_difference(&back, &seq) < 1e-6);
+    // USD from convert, and from track with the tracked points (vertices 0 and 5 of frame 0).
+    convert("a", "e.usda", &["--up", "z", "--fps", "12"]);
+    let points = [0, 5].map(|v| {
+        format!("v{v},{},{},{}", seq.frames[0][v][0], seq.frames[0][v][1], seq.frames[0][v][2])
+    });
+    std::fs::write(dir.join("points.csv"), format!("id,x,y,z\n{}\n", points.join("\n"))).unwrap();
+    let tracked = Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+        .args(["track", "--sequence"])
+        .arg(dir.join("a"))
+        .arg("--points")
+        .arg(dir.join("points.csv"))
+        .arg("--out")
+        .arg(dir.join("tracks.csv"))
+        .arg("--usd")
+        .arg(dir.join("tracks.usda"))
+        .output()
+        .unwrap();
+    assert!(tracked.status.success(), "{}", String::from_utf8_lossy(&tracked.stderr));
+    if let Some(usd) = read_with_pxr(&dir.join("e.usda")) {
+        assert_eq!(
+            (usd["up_axis"].as_str(), usd["time_codes_per_second"].as_f64()),
+            (Some("Z"), Some(12.0))
+        );
+        let frames: Vec<Vec<[f32; 3]>> = triples(&usd["points"])
+            .iter()
+            .map(|f| f.iter().map(|p| p.map(|v| v as f32)).collect())
+            .collect();
+        assert_eq!(frames, seq.frames);
+        let usd = read_with_pxr(&dir.join("tracks.usda")).unwrap();
+        assert_eq!(usd["track_ids"], serde_json::json!(["v0", "v5"]));
+        for (t, frame) in triples(&usd["tracks"]).iter().enumerate() {
+            let expected = [0, 5].map(|v| seq.frames[t][v]);
+            let read: Vec<[f32; 3]> = frame.iter().map(|p| p.map(|v| v as f32)).collect();
+            let off = read
+                .iter()
+                .zip(&expected)
+                .flat_map(|(a, b)| (0..3).map(move |k| (a[k] - b[k]).abs()))
+                .fold(0.0, f32::max);
+            assert!(off < 1e-5, "frame {t}: {read:?} against {expected:?}");
+        }
+    }
     let out = Command::new(env!("CARGO_BIN_EXE_tagsplat"))
         .args(["convert", "--sequence"])
         .arg(dir.join("missing"))

@@ -4,6 +4,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use tagsplat::camera::Camera;
+use tagsplat::sequence::usd::{write_usda, UpAxis, UsdTracks};
 use tagsplat::sequence::{FrameFormat, MeshSequence};
 use tagsplat::track::bench::{bench_track, TrackBenchReport};
 use tagsplat::track::output::{write_report_json, write_tracks_csv, write_unbound_csv};
@@ -32,6 +33,14 @@ pub struct TrackArgs {
     /// Also write a JSON report: bindings (face, barycentric, distance) and trajectories.
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Also write the sequence with the tracked points as USD (time-sampled mesh and points).
+    #[arg(long)]
+    usd: Option<PathBuf>,
+    /// Frames per second and up axis of the --usd file.
+    #[arg(long, default_value_t = 24.0)]
+    fps: f64,
+    #[arg(long, value_enum, default_value = "y")]
+    up: UpArg,
     /// Also draw the trajectories into a PNG (left: projected on the two axes of largest
     /// spread; right: distance from the frame-0 position against the frame).
     #[arg(long)]
@@ -69,6 +78,12 @@ pub fn track(args: TrackArgs) -> Result<()> {
     write_tracks_csv(&args.out, &report.points)?;
     if let Some(json) = &args.json {
         write_report_json(json, &report)?;
+    }
+    if let Some(usd) = &args.usd {
+        let ids: Vec<String> = report.points.iter().map(|p| p.id.clone()).collect();
+        let trajectories: Vec<_> = report.points.iter().map(|p| p.trajectory.clone()).collect();
+        let tracks = UsdTracks { ids: &ids, trajectories: &trajectories };
+        write_usda(usd, &sequence, args.fps, args.up.into(), Some(&tracks))?;
     }
     if let Some(plot) = &args.plot {
         let paths: Vec<Vec<glam::DVec3>> = report
@@ -137,16 +152,34 @@ pub struct ConvertArgs {
     /// The sequence to read: a folder of .ply/.obj frames, a .pc2 (with its .obj) or a .glb.
     #[arg(long)]
     sequence: PathBuf,
-    /// Where to write: FILE.pc2 (plus FILE.obj), FILE.glb, or a folder (created; must hold no
-    /// frame files yet).
+    /// Where to write: FILE.pc2 (plus FILE.obj), FILE.glb, FILE.usda, or a folder (created;
+    /// must hold no frame files yet).
     #[arg(long)]
     to: PathBuf,
     /// Frame file format when writing a folder.
     #[arg(long, value_enum, default_value = "ply")]
     frame_format: FrameFormatArg,
-    /// Frames per second of the .glb animation.
+    /// Frames per second of the .glb or .usda animation.
     #[arg(long, default_value_t = 24.0)]
     fps: f64,
+    /// The up axis a .usda declares (positions are written unchanged).
+    #[arg(long, value_enum, default_value = "y")]
+    up: UpArg,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum UpArg {
+    Y,
+    Z,
+}
+
+impl From<UpArg> for UpAxis {
+    fn from(up: UpArg) -> Self {
+        match up {
+            UpArg::Y => UpAxis::Y,
+            UpArg::Z => UpAxis::Z,
+        }
+    }
 }
 
 pub fn convert(args: ConvertArgs) -> Result<()> {
@@ -155,7 +188,11 @@ pub fn convert(args: ConvertArgs) -> Result<()> {
         FrameFormatArg::Ply => FrameFormat::Ply,
         FrameFormatArg::Obj => FrameFormat::Obj,
     };
-    sequence.write(&args.to, format, args.fps).context("cannot write the sequence")?;
+    if args.to.extension().is_some_and(|e| e.eq_ignore_ascii_case("usda")) {
+        write_usda(&args.to, &sequence, args.fps, args.up.into(), None)?;
+    } else {
+        sequence.write(&args.to, format, args.fps).context("cannot write the sequence")?;
+    }
     println!(
         "{} frames, {} vertices, {} faces -> {}",
         sequence.frames.len(),

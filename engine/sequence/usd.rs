@@ -20,6 +20,26 @@ pub enum UpAxis {
     Z,
 }
 
+impl UpAxis {
+    /// The axis of Y and Z nearer to `up` (e.g. the mean of the capture cameras' up vectors,
+    /// [`crate::camera::Camera::world_up`]), and whether `up` points along it (true) or
+    /// against it (false: the metadata cannot say "down", the caller should report it).
+    pub fn nearest(up: [f64; 3]) -> (UpAxis, bool) {
+        if up[2].abs() > up[1].abs() {
+            (UpAxis::Z, up[2] > 0.0)
+        } else {
+            (UpAxis::Y, up[1] >= 0.0)
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            UpAxis::Y => "Y",
+            UpAxis::Z => "Z",
+        }
+    }
+}
+
 /// Tracked points to add: an id and a position per frame (scene units), each trajectory as
 /// long as the sequence.
 pub struct UsdTracks<'a> {
@@ -84,10 +104,7 @@ fn write_stage(
     tracks: Option<&UsdTracks>,
 ) -> std::io::Result<()> {
     let last = sequence.frames.len() - 1;
-    let up = match up {
-        UpAxis::Y => "Y",
-        UpAxis::Z => "Z",
-    };
+    let up = up.name();
     writeln!(w, "#usda 1.0\n(\n    defaultPrim = \"Sequence\"\n    metersPerUnit = 1")?;
     writeln!(w, "    startTimeCode = 0\n    endTimeCode = {last}")?;
     writeln!(
@@ -189,4 +206,41 @@ fn extent(points: impl Iterator<Item = [f64; 3]>) -> [[f64; 3]; 2] {
         }
     }
     bounds.unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_nearer_of_y_and_z_is_up_and_a_downward_up_is_said() {
+        assert_eq!(UpAxis::nearest([0.1, 0.2, 0.9]), (UpAxis::Z, true));
+        assert_eq!(UpAxis::nearest([0.3, 0.9, -0.2]), (UpAxis::Y, true));
+        assert_eq!(UpAxis::nearest([0.0, -0.95, 0.1]), (UpAxis::Y, false));
+        assert_eq!(UpAxis::nearest([0.0, 0.1, -0.7]), (UpAxis::Z, false));
+    }
+
+    #[test]
+    fn unusable_input_is_refused_naming_the_file() {
+        let path = Path::new("out/s.usda");
+        let sequence = MeshSequence {
+            faces: vec![[0, 1, 2]],
+            frames: vec![vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]; 2],
+            colors: None,
+        };
+        let error = |fps, tracks: Option<&UsdTracks>| {
+            write_usda(path, &sequence, fps, UpAxis::Y, tracks).unwrap_err().to_string()
+        };
+        assert!(error(0.0, None).starts_with("out/s.usda: cannot write: frame rate 0"));
+        assert!(error(f64::NAN, None).contains("frame rate NaN"));
+        let ids = ["a".to_string()];
+        let short = [vec![[0.0; 3]]];
+        let tracks = UsdTracks { ids: &ids, trajectories: &short };
+        assert!(
+            error(24.0, Some(&tracks)).contains("point a has 1 positions, the sequence 2 frames")
+        );
+        let empty = MeshSequence::default();
+        let message = write_usda(path, &empty, 24.0, UpAxis::Y, None).unwrap_err().to_string();
+        assert!(message.contains("no frames"), "{message}");
+    }
 }

@@ -6,6 +6,7 @@
 use super::TrainError;
 use crate::dataset::own::frame_name;
 use crate::mesh::TriMesh;
+use crate::sequence::usd::{write_usda, UpAxis};
 use crate::sequence::{FrameFormat, MeshSequence};
 use crate::splat::GaussianScene;
 use std::path::{Path, PathBuf};
@@ -78,12 +79,14 @@ impl SequenceOutput {
         Ok((mesh, scene))
     }
 
-    /// Writes `sequence.obj` + `sequence.pc2` and `sequence.glb` (`fps` frames per second)
-    /// from the meshes of `frames`; returns the paths.
+    /// Writes `sequence.obj` + `sequence.pc2`, `sequence.glb` and `sequence.usda` (`fps`
+    /// frames per second, `up` in the USD metadata) from the meshes of `frames`; returns the
+    /// paths.
     pub fn export(
         &self,
         frames: std::ops::Range<usize>,
         fps: f64,
+        up: UpAxis,
     ) -> Result<Vec<PathBuf>, TrainError> {
         let mut sequence = MeshSequence::default();
         for t in frames {
@@ -109,7 +112,9 @@ impl SequenceOutput {
                 .write(path, FrameFormat::Ply, fps)
                 .map_err(|e| TrainError::Input(e.to_string()))?;
         }
-        Ok(vec![self.root.join("sequence.obj"), pc2, glb])
+        let usd = self.root.join("sequence.usda");
+        write_usda(&usd, &sequence, fps, up, None).map_err(|e| TrainError::Input(e.to_string()))?;
+        Ok(vec![self.root.join("sequence.obj"), pc2, glb, usd])
     }
 }
 
@@ -154,7 +159,7 @@ mod tests {
             assert_eq!((back.faces, back_scene), (faces.clone(), scene));
             assert_eq!(back.colors.unwrap()[0], [51, 102, 153]);
         }
-        let written = out.export(0..2, 10.0).unwrap();
+        let written = out.export(0..2, 10.0, UpAxis::Y).unwrap();
         assert!(written.iter().all(|p| p.is_file()));
         assert_eq!(MeshSequence::read(&root.join("sequence.glb")).unwrap().frames.len(), 2);
         std::fs::remove_file(out.mesh_path(1)).unwrap();

@@ -4,11 +4,13 @@
 
 use super::config::TrainConfig;
 use super::frame::{optimize_frame, FrameReport, FrameTask};
+use crate::camera::mean_up;
 use crate::dataset::Dataset;
 use crate::gpu::GpuContext;
 use crate::init::{init_mesh, InitOptions};
 use crate::io::write_atomically;
 use crate::mesh::TriMesh;
+use crate::sequence::usd::UpAxis;
 use crate::splat::GaussianScene;
 use crate::topology::{gaussians_from_mesh, import, InitConfig, ManifoldMesh};
 use crate::train::output::{dc_vertex_colors, SequenceOutput};
@@ -54,6 +56,8 @@ pub struct TrainReport {
     pub faces: usize,
     /// The files written: per-frame folders and the sequence exports.
     pub outputs: Vec<PathBuf>,
+    /// The USD export's up axis, chosen from the cameras' mean up vector, and how.
+    pub up_axis: String,
 }
 
 /// Runs (or resumes) `job`; `OUT/report.json` is rewritten after every frame.
@@ -98,7 +102,9 @@ pub fn run_train(
         vertices: 0,
         faces: 0,
         outputs: vec![job.out.join("meshes"), job.out.join("gaussians")],
+        up_axis: String::new(),
     };
+    let up = up_axis(&dataset, &mut report.up_axis);
     report.frames = earlier_frame_reports(&job.out, &report.resumed_frames);
     let (mut mesh, mut previous) =
         canonical_start(ctx, &dataset, job, &out, &mut report, progress)?;
@@ -161,7 +167,7 @@ pub fn run_train(
         finish_report(&mut report, &mesh, started, &job.out)?;
     }
     if (0..dataset.frames.len()).all(|t| out.is_complete(t)) {
-        report.outputs.extend(out.export(0..dataset.frames.len(), fps(&dataset))?);
+        report.outputs.extend(out.export(0..dataset.frames.len(), fps(&dataset), up)?);
     }
     finish_report(&mut report, &mesh, started, &job.out)?;
     Ok(report)
@@ -300,6 +306,19 @@ fn finish_report(
         serde_json::to_writer_pretty(w, report).map_err(std::io::Error::other)
     })
     .map_err(|error| TrainError::Io { path, error })
+}
+
+/// The axis of Y and Z nearest the cameras' mean up vector, and a sentence saying so.
+fn up_axis(dataset: &Dataset, said: &mut String) -> UpAxis {
+    let mean = mean_up(&dataset.cameras);
+    let (axis, along) = UpAxis::nearest(mean.to_array());
+    let name = axis.name();
+    *said = if along {
+        format!("{name} (the cameras' mean up is {mean:.3})")
+    } else {
+        format!("{name}, but the cameras' mean up {mean:.3} points along -{name}: the USD export is upside down")
+    };
+    axis
 }
 
 /// Frames per second of the dataset's clock (10 when it has none).
