@@ -32,7 +32,7 @@ pub struct EvalArgs {
     /// Benchmark only: frames A..B to score (default: all of the ground truth's).
     #[arg(long, value_parser = crate::train::parse_range)]
     frames: Option<Range<usize>>,
-    /// Benchmark only: folder for eval.csv, eval.json and eval.png (default: --pred).
+    /// Benchmark only: folder for eval.csv, eval.json and eval.svg (default: --pred).
     #[arg(long)]
     out: Option<PathBuf>,
     #[arg(long)]

@@ -15,7 +15,7 @@ pub struct FitArgs {
     /// Frame index.
     #[arg(long, default_value_t = 0)]
     frame: usize,
-    /// Output folder: gaussians.ply, renders/, report.json, curve.csv, curve.png.
+    /// Output folder: gaussians.ply, renders/, report.json, curve.csv, curve.svg.
     #[arg(long, required_unless_present = "print_config")]
     out: Option<PathBuf>,
     /// Iterations (overrides the config's).

@@ -41,8 +41,8 @@ pub struct TrackArgs {
     fps: f64,
     #[arg(long, value_enum, default_value = "y")]
     up: UpArg,
-    /// Also draw the trajectories into a PNG (left: projected on the two axes of largest
-    /// spread; right: distance from the frame-0 position against the frame).
+    /// Also plot the trajectories as SVG (left: projected on the two axes of largest spread;
+    /// right: distance from the frame-0 position against the frame; ids in the legend).
     #[arg(long)]
     plot: Option<PathBuf>,
     /// Largest distance from a point to the frame-0 surface, as a fraction of the frame-0
@@ -91,7 +91,8 @@ pub fn track(args: TrackArgs) -> Result<()> {
             .iter()
             .map(|p| p.trajectory.iter().map(|&x| glam::DVec3::from(x)).collect())
             .collect();
-        write_plot(plot, &paths)?;
+        let ids: Vec<String> = report.points.iter().map(|p| p.id.clone()).collect();
+        write_plot(plot, &ids, &paths)?;
     }
     println!(
         "tracked {} of {} points through {} frames ({} vertices, {} faces) -> {}",

@@ -1,7 +1,7 @@
 //! `tagsplat bench sequence`: a training run on a hard-motion benchmark dataset
 //! ([`run_train`], resuming when the output folder holds frames already), then its scores
 //! against the dataset's ground truth ([`evaluate_sequence`]), with the machine it ran on and
-//! the time per frame. The evaluation files (`eval.csv`, `eval.json`, `eval.png`) go into the
+//! the time per frame. The evaluation files (`eval.csv`, `eval.json`, `eval.svg`) go into the
 //! output folder.
 
 use crate::gpu::GpuContext;

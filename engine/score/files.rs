@@ -1,13 +1,10 @@
 //! The files of a sequence evaluation: `eval.csv` (one row per scored frame), `eval.json`
-//! (frames and summary) and `eval.png`, a plot without text (see [`crate::io::plot`]): frame
-//! index to the right, fractions of `size` upwards from 0 (the green line); tracking RMSE in
-//! red, Chamfer in blue. The numbers are in the CSV beside it.
+//! (frames and summary) and `eval.svg`, tracking RMSE and Chamfer (fractions of `size`) against
+//! the frame, with labelled axes and a legend (see [`crate::io::plot`]).
 
 use super::{FrameScores, SequenceEval, SequenceEvalError};
-use crate::io::plot::{draw_panel, write_png_rgb, BACKGROUND, PANEL};
+use crate::io::plot::{svg, Panel, Series};
 use crate::io::write_atomically;
-use glam::DVec2;
-use image::RgbImage;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -24,15 +21,16 @@ pub fn write_sequence_eval(
         move |source| SequenceEvalError::Io { path, source }
     };
     std::fs::create_dir_all(dir).map_err(io(dir))?;
-    let (csv, json, png) = (dir.join("eval.csv"), dir.join("eval.json"), dir.join("eval.png"));
+    let (csv, json, plot) = (dir.join("eval.csv"), dir.join("eval.json"), dir.join("eval.svg"));
     write_atomically(&csv, |w| write_csv(w, &eval.frames)).map_err(io(&csv))?;
     write_atomically(&json, |w| {
         serde_json::to_writer_pretty(&mut *w, eval)?;
         writeln!(w)
     })
     .map_err(io(&json))?;
-    write_png_rgb(&png, &draw_scores(&eval.frames)).map_err(io(&png))?;
-    Ok(vec![csv, json, png])
+    let text = svg(&[score_panel(&eval.frames)]);
+    write_atomically(&plot, |w| w.write_all(text.as_bytes())).map_err(io(&plot))?;
+    Ok(vec![csv, json, plot])
 }
 
 /// The CSV rows; an absent value is an empty field.
@@ -73,22 +71,22 @@ fn quoted(text: &str) -> String {
     }
 }
 
-/// One panel: tracking RMSE / size and Chamfer / size against the frame, with a zero line.
-fn draw_scores(frames: &[FrameScores]) -> RgbImage {
-    // y grows downwards in the panel: negate the values.
-    let curve = |value: &dyn Fn(&FrameScores) -> Option<f64>| {
-        frames
-            .iter()
-            .filter_map(|f| Some(DVec2::new(f.frame as f64, -value(f)?)))
-            .collect::<Vec<_>>()
+/// Tracking RMSE / size and Chamfer / size against the frame (a frame without a value is a gap).
+fn score_panel(frames: &[FrameScores]) -> Panel {
+    let series = |name: &str, value: &dyn Fn(&FrameScores) -> Option<f64>| Series {
+        name: name.into(),
+        points: frames.iter().map(|f| [f.frame as f64, value(f).unwrap_or(f64::NAN)]).collect(),
     };
-    let span = |f: Option<&FrameScores>| f.map_or(0.0, |f| f.frame as f64);
-    let zero = vec![DVec2::new(span(frames.first()), 0.0), DVec2::new(span(frames.last()), 0.0)];
-    let curves =
-        [curve(&|f| f.tracking_rmse_over_size), curve(&|f| Some(f.chamfer_over_size)), zero];
-    let mut image = RgbImage::from_pixel(PANEL, PANEL, BACKGROUND);
-    draw_panel(&mut image, 0, &curves, false);
-    image
+    Panel {
+        title: "Error per frame".into(),
+        x_label: "frame".into(),
+        y_label: "fraction of the subject's size".into(),
+        series: vec![
+            series("tracking RMSE", &|f| f.tracking_rmse_over_size),
+            series("Chamfer (point to surface)", &|f| Some(f.chamfer_over_size)),
+        ],
+        equal_scale: false,
+    }
 }
 
 #[cfg(test)]
@@ -125,9 +123,10 @@ mod tests {
     }
 
     #[test]
-    fn plot_survives_one_frame_and_no_frames() {
+    fn plot_names_its_series_and_survives_one_frame_and_no_frames() {
         for frames in [vec![], vec![row(0, None)], vec![row(0, None), row(3, None)]] {
-            assert_eq!(draw_scores(&frames).dimensions(), (PANEL, PANEL));
+            let text = svg(&[score_panel(&frames)]);
+            assert!(text.contains("tracking RMSE") && text.contains(">frame<"), "{text}");
         }
     }
 }

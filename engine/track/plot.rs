@@ -1,36 +1,48 @@
-//! A PNG of trajectories, drawn without text (no font is needed anywhere).
+//! An SVG of trajectories, with labelled axes and the points' ids in the legend.
 //!
 //! Left panel: every trajectory projected on the two world axes along which the points spread
-//! most, equal scale on both, a square at each frame-0 position. Right panel: each point's
-//! distance from its frame-0 position against the frame index, from 0 (bottom) to the largest
-//! displacement (top). One colour per point, the same in both panels.
+//! most, equal scale on both. Right panel: each point's distance from its frame-0 position
+//! against the frame index. One colour per point, the same in both panels.
 
 use super::TrackError;
-use crate::io::plot::{draw_panel, write_png_rgb, BACKGROUND, PANEL};
-use glam::{DVec2, DVec3};
-use image::RgbImage;
+use crate::io::plot::{write_svg, Panel, Series};
+use glam::DVec3;
 use std::path::Path;
 
-/// Draws `trajectories[i][t]` (point i in frame t) into a 1200×600 image.
-pub fn draw_trajectories(trajectories: &[Vec<DVec3>]) -> RgbImage {
-    let mut image = RgbImage::from_pixel(2 * PANEL, PANEL, BACKGROUND);
+/// The two panels for `ids[i]` at `trajectories[i][t]` (point i in frame t).
+pub fn trajectory_panels(ids: &[String], trajectories: &[Vec<DVec3>]) -> [Panel; 2] {
     let (a, b) = spread_axes(trajectories);
-    let projected: Vec<Vec<DVec2>> =
-        trajectories.iter().map(|t| t.iter().map(|p| DVec2::new(p[a], -p[b])).collect()).collect();
-    let displacement: Vec<Vec<DVec2>> = trajectories
-        .iter()
-        .map(|t| {
-            t.iter().enumerate().map(|(f, p)| DVec2::new(f as f64, -p.distance(t[0]))).collect()
-        })
-        .collect();
-    draw_panel(&mut image, 0, &projected, true);
-    draw_panel(&mut image, PANEL, &displacement, false);
-    image
+    let series = |point: &dyn Fn(usize, &[DVec3]) -> Vec<[f64; 2]>| {
+        let named = ids.iter().zip(trajectories).enumerate();
+        named.map(|(i, (id, t))| Series { name: id.clone(), points: point(i, t) }).collect()
+    };
+    let axis = ["x", "y", "z"];
+    let projected = Panel {
+        title: format!("Trajectories on the {}{} plane", axis[a], axis[b]),
+        x_label: format!("{} (scene units)", axis[a]),
+        y_label: format!("{} (scene units)", axis[b]),
+        series: series(&|_, t| t.iter().map(|p| [p[a], p[b]]).collect()),
+        equal_scale: true,
+    };
+    let displacement = Panel {
+        title: "Distance from the frame-0 position".into(),
+        x_label: "frame".into(),
+        y_label: "distance (scene units)".into(),
+        series: series(&|_, t| {
+            t.iter().enumerate().map(|(f, p)| [f as f64, p.distance(t[0])]).collect()
+        }),
+        equal_scale: false,
+    };
+    [projected, displacement]
 }
 
-/// Draws the plot and writes it as a PNG, atomically.
-pub fn write_plot(path: &Path, trajectories: &[Vec<DVec3>]) -> Result<(), TrackError> {
-    write_png_rgb(path, &draw_trajectories(trajectories))
+/// Draws the plot and writes it as SVG, atomically.
+pub fn write_plot(
+    path: &Path,
+    ids: &[String],
+    trajectories: &[Vec<DVec3>],
+) -> Result<(), TrackError> {
+    write_svg(path, &trajectory_panels(ids, trajectories))
         .map_err(|error| TrackError::Io { path: path.to_owned(), error })
 }
 
@@ -53,20 +65,21 @@ fn spread_axes(trajectories: &[Vec<DVec3>]) -> (usize, usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::plot::{palette, FRAME};
-    use image::Rgb;
+    use crate::io::plot::svg;
 
     #[test]
-    fn draws_each_curve_in_its_colour_and_survives_degenerate_input() {
+    fn names_each_point_and_survives_degenerate_input() {
         let moving = vec![DVec3::ZERO, DVec3::new(1.0, 0.0, 0.0), DVec3::new(1.0, 1.0, 0.0)];
         let still = vec![DVec3::new(0.5, 0.5, 0.0); 3];
-        let image = draw_trajectories(&[moving, still]);
-        let count = |c: Rgb<u8>| image.pixels().filter(|&&p| p == c).count();
-        assert!(count(palette(0)) > 500, "the moving point's path is drawn in both panels");
-        assert!(count(palette(1)) > 0, "the still point is marked");
-        // Nothing, one frame, NaN: no panic, and the frame is still drawn.
+        let ids = ["nose".to_string(), "tail".to_string()];
+        let text = svg(&trajectory_panels(&ids, &[moving, still]));
+        assert!(text.contains("xy plane") && text.contains(">nose<") && text.contains(">tail<"));
+        assert_eq!(text.matches("<polyline").count(), 4, "each point in both panels");
+        // Nothing, one frame, NaN: no panic, and the axes are still drawn.
+        let one = ["a".to_string()];
         for t in [vec![], vec![vec![DVec3::ONE]], vec![vec![DVec3::NAN, DVec3::ONE]]] {
-            assert!(draw_trajectories(&t).pixels().any(|&p| p == FRAME));
+            let text = svg(&trajectory_panels(&one[..t.len()], &t));
+            assert!(text.contains(">frame<") && !text.contains("NaN"), "{text}");
         }
     }
 }

@@ -111,7 +111,7 @@ fn read_points(path: &Path) -> Result<PointsAndColors, TrainError> {
 }
 
 /// Writes `OUT/gaussians.ply`, `OUT/renders/<camera>.png`, `OUT/report.json`,
-/// `OUT/curve.csv` and `OUT/curve.png`, each atomically; returns the paths written.
+/// `OUT/curve.csv` and `OUT/curve.svg`, each atomically; returns the paths written.
 pub fn write_fit_outputs(out: &Path, outcome: &FitOutcome) -> Result<Vec<PathBuf>, TrainError> {
     let io = |path: &Path| {
         let path = path.to_owned();
@@ -132,7 +132,7 @@ pub fn write_fit_outputs(out: &Path, outcome: &FitOutcome) -> Result<Vec<PathBuf
     outcome.report.write_json(&report)?;
     let csv = out.join("curve.csv");
     write_curve_csv(&csv, &outcome.report.curve)?;
-    let plot = out.join("curve.png");
+    let plot = out.join("curve.svg");
     write_curve_plot(&plot, &outcome.report.curve)?;
     written.extend([report, csv, plot]);
     Ok(written)

@@ -3,6 +3,7 @@
 
 use super::densify::DensifyCounts;
 use super::TrainError;
+use crate::io::plot::{write_svg, Panel, Series};
 use crate::io::write_atomically;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -84,11 +85,16 @@ pub fn write_curve_csv(path: &Path, curve: &[CurvePoint]) -> Result<(), TrainErr
     .map_err(|error| TrainError::Io { path: path.to_owned(), error })
 }
 
-/// PSNR (up) against training seconds (right), drawn without text like every plot here; the
-/// CSV beside it carries the numbers.
+/// PSNR against training seconds as an SVG plot; the CSV beside it carries every number.
 pub fn write_curve_plot(path: &Path, curve: &[CurvePoint]) -> Result<(), TrainError> {
-    let points: Vec<glam::DVec2> =
-        curve.iter().map(|p| glam::DVec2::new(p.wall_s, -p.psnr)).collect();
-    crate::io::plot::write_line_plot(path, &[points])
-        .map_err(|error| TrainError::Io { path: path.to_owned(), error })
+    let psnr =
+        Series { name: "PSNR".into(), points: curve.iter().map(|p| [p.wall_s, p.psnr]).collect() };
+    let panel = Panel {
+        title: "Training curve".into(),
+        x_label: "training time (s)".into(),
+        y_label: "PSNR (dB)".into(),
+        series: vec![psnr],
+        equal_scale: false,
+    };
+    write_svg(path, &[panel]).map_err(|error| TrainError::Io { path: path.to_owned(), error })
 }
