@@ -4,7 +4,8 @@
 use glam::{DMat4, DVec3, DVec4};
 use serde_json::json;
 use std::path::{Path, PathBuf};
-use tagsplat::dataset::{Dataset, DatasetError, Format};
+use std::process::Command;
+use tagsplat::dataset::{Dataset, DatasetError, Format, LoadOptions, PixelCenters};
 use tagsplat::io::image::{write_png, Image};
 
 fn temp(name: &str) -> PathBuf {
@@ -26,6 +27,13 @@ fn png(path: &Path, w: u32, h: u32, channels: u8, value: f32) {
         },
     )
     .unwrap();
+}
+
+/// A baseline JPEG of one grey `level`, as the published Dynamic 3D Gaussians `ims/` hold.
+fn jpeg(path: &Path, w: u32, h: u32, level: u8) {
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    let pixels = image::RgbImage::from_pixel(w, h, image::Rgb([level; 3]));
+    pixels.save_with_format(path, image::ImageFormat::Jpeg).unwrap();
 }
 
 /// A rigid world-to-camera: rotation about y by `angle`, then a translation.
@@ -54,7 +62,7 @@ fn panoptic(dir: &Path, file: &str, frames: usize, ids: &[i64]) {
         f.push(ids.iter().map(|&id| json!(format!("{id}/{t:06}.jpg"))).collect::<Vec<_>>());
         c.push(ids.to_vec());
         for &id in ids {
-            png(&dir.join(format!("ims/{id}/{t:06}.jpg")), 8, 6, 3, 0.5);
+            jpeg(&dir.join(format!("ims/{id}/{t:06}.jpg")), 8, 6, 128);
             png(&dir.join(format!("seg/{id}/{t:06}.png")), 8, 6, 1, 1.0);
         }
     }
@@ -85,6 +93,30 @@ fn panoptic_cameras_project_known_points() {
     assert!((p.x - u).abs() < 1e-12 && (p.y - v).abs() < 1e-12, "{p} vs ({u}, {v})");
     assert_eq!(d.mask(1, 2).unwrap(), vec![1.0; 48]);
     assert!(d.check().is_empty());
+    // The JPEG decodes to its grey level (baseline JPEG of a flat image: exact to a step).
+    let image = d.image(1, 0).unwrap();
+    assert_eq!((image.width, image.height, image.channels), (8, 6, 3));
+    assert!(
+        image.data.iter().all(|&v| (v - 128.0 / 255.0).abs() <= 1.0 / 255.0),
+        "{:?}",
+        &image.data[..3]
+    );
+    // Said otherwise, the intrinsics are read as half-integer centres: cx, cy as written.
+    let half = LoadOptions { pixel_centers: Some(PixelCenters::HalfInteger) };
+    let as_written = Dataset::load_with(&dir, &half).unwrap();
+    assert_eq!(
+        (d.pixel_centers, as_written.pixel_centers),
+        (PixelCenters::Integer, PixelCenters::HalfInteger)
+    );
+    let q = as_written.cameras[1].project(x).unwrap();
+    assert!((q.x - (u - 0.5)).abs() < 1e-12 && (q.y - (v - 0.5)).abs() < 1e-12, "{q}");
+    let info = Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+        .args(["dataset", "info", "--json", "--data"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let info: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    assert_eq!(info["pixel_centers"], "integer");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

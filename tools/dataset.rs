@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use std::path::PathBuf;
-use tagsplat::dataset::Dataset;
+use tagsplat::dataset::{Dataset, LoadOptions, PixelCenters};
 
 #[derive(clap::Subcommand)]
 pub enum DatasetCommand {
@@ -15,12 +15,34 @@ pub enum DatasetCommand {
         check: bool,
         #[arg(long)]
         json: bool,
+        /// Where the layout's intrinsics put pixel centres (default: the layout's own, integer
+        /// for Panoptic K matrices, half-integer for nerfstudio and this project's layout).
+        #[arg(long, value_enum)]
+        pixel_centers: Option<PixelCentersArg>,
     },
 }
 
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum PixelCentersArg {
+    /// Centre of pixel (i, j) at (i, j), as OpenCV calibrations.
+    Integer,
+    /// Centre of pixel (i, j) at (i + 0.5, j + 0.5).
+    HalfInteger,
+}
+
+impl From<PixelCentersArg> for PixelCenters {
+    fn from(arg: PixelCentersArg) -> Self {
+        match arg {
+            PixelCentersArg::Integer => PixelCenters::Integer,
+            PixelCentersArg::HalfInteger => PixelCenters::HalfInteger,
+        }
+    }
+}
+
 pub fn run(command: DatasetCommand) -> Result<()> {
-    let DatasetCommand::Info { data, check, json } = command;
-    let d = Dataset::load(&data)
+    let DatasetCommand::Info { data, check, json, pixel_centers } = command;
+    let options = LoadOptions { pixel_centers: pixel_centers.map(Into::into) };
+    let d = Dataset::load_with(&data, &options)
         .with_context(|| format!("cannot load the dataset in {}", data.display()))?;
     let missing: Vec<String> = d.missing_files().iter().map(|p| p.display().to_string()).collect();
     let problems: Vec<String> =
@@ -38,12 +60,17 @@ pub fn run(command: DatasetCommand) -> Result<()> {
         .collect();
     let views: usize = d.frames.iter().map(|f| f.views.len()).sum();
     if json {
-        let out = serde_json::json!({ "root": d.root, "format": d.format, "cameras": cameras, "frames": d.frames.len(), "views": views,
+        let out = serde_json::json!({ "root": d.root, "format": d.format, "pixel_centers": d.pixel_centers, "cameras": cameras, "frames": d.frames.len(), "views": views,
             "times": [d.frames.first().map(|f| f.time), d.frames.last().map(|f| f.time)], "missing": missing, "problems": problems });
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
     println!("dataset   {} ({:?})", d.root.display(), d.format);
+    let centres = match d.pixel_centers {
+        PixelCenters::Integer => "integer (OpenCV): cx and cy shifted by +0.5",
+        PixelCenters::HalfInteger => "half-integer: cx and cy as written",
+    };
+    println!("pixels    centres of the intrinsics at {centres}");
     println!(
         "frames    {} (time {:.4} .. {:.4}), {} images",
         d.frames.len(),

@@ -61,6 +61,44 @@ pub enum Format {
     Nerfstudio,
 }
 
+/// Where a layout's intrinsics put the centre of pixel (i, j). The engine's cameras use
+/// `HalfInteger` (docs/conventions.md); intrinsics in the other convention are shifted by +0.5
+/// in cx and cy at load time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PixelCenters {
+    /// At (i, j): OpenCV calibrations, so the default for K matrices (Panoptic).
+    Integer,
+    /// At (i + 0.5, j + 0.5): nerfstudio, and this project's own `cam.json`.
+    HalfInteger,
+}
+
+impl PixelCenters {
+    /// What to add to cx and cy to reach the engine's convention.
+    pub fn shift(self) -> f64 {
+        match self {
+            PixelCenters::Integer => 0.5,
+            PixelCenters::HalfInteger => 0.0,
+        }
+    }
+
+    /// The convention a layout's intrinsics follow unless told otherwise.
+    pub fn default_for(format: Format) -> PixelCenters {
+        match format {
+            Format::Panoptic => PixelCenters::Integer,
+            Format::Own | Format::Nerfstudio => PixelCenters::HalfInteger,
+        }
+    }
+}
+
+/// How to read a dataset where its files do not say.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LoadOptions {
+    /// The pixel-centre convention of the layout's intrinsics; None takes the layout's default
+    /// ([`PixelCenters::default_for`]).
+    pub pixel_centers: Option<PixelCenters>,
+}
+
 /// Where a view's mask comes from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MaskSource {
@@ -89,6 +127,8 @@ pub struct Frame {
 pub struct Dataset {
     pub root: PathBuf,
     pub format: Format,
+    /// The convention the intrinsics were read in (the cameras are converted from it).
+    pub pixel_centers: PixelCenters,
     pub camera_names: Vec<String>,
     pub cameras: Vec<Camera>,
     /// In time order.
@@ -103,7 +143,12 @@ impl Dataset {
     /// Detects the layout of `dir` and loads it: `dataset.json` (own), `train_meta.json`
     /// (Panoptic), `transforms*.json` (nerfstudio / D-NeRF).
     pub fn load(dir: &Path) -> Result<Self, DatasetError> {
-        if dir.join(own::META).is_file() {
+        Self::load_with(dir, &LoadOptions::default())
+    }
+
+    /// [`Dataset::load`] with `options` for what the files leave open.
+    pub fn load_with(dir: &Path, options: &LoadOptions) -> Result<Self, DatasetError> {
+        let mut dataset = if dir.join(own::META).is_file() {
             own::load(dir)
         } else if dir.join(panoptic::TRAIN_META).is_file() {
             panoptic::load(dir)
@@ -111,7 +156,16 @@ impl Dataset {
             nerfstudio::load(dir)
         } else {
             Err(DatasetError::Unknown(dir.to_owned()))
+        }?;
+        // Loaders keep the intrinsics as written; the one conversion happens here.
+        dataset.pixel_centers =
+            options.pixel_centers.unwrap_or(PixelCenters::default_for(dataset.format));
+        let shift = dataset.pixel_centers.shift();
+        for camera in &mut dataset.cameras {
+            camera.cx += shift;
+            camera.cy += shift;
         }
+        Ok(dataset)
     }
 
     /// Assembles a dataset, sorting frames by time and checking that every frame has the
@@ -158,6 +212,7 @@ impl Dataset {
         Ok(Self {
             root: root.to_owned(),
             format,
+            pixel_centers: PixelCenters::default_for(format),
             camera_names,
             cameras,
             frames,

@@ -3,9 +3,10 @@
 //! `fn[t][c]` (image path under `ims/`), `cam_id[t][c]`; masks under `seg/` with the same
 //! relative name and a `.png` extension.
 //!
-//! Conversion: the intrinsics are OpenCV calibrations (pixel centres at integer coordinates),
-//! so cx and cy gain +0.5 to put pixel centres at i + 0.5 (CONVENTIONS.md). Cameras are a
-//! static rig: a camera's k and w2c must be the same in every frame.
+//! The intrinsics are kept as written: they are OpenCV calibrations (pixel centres at integer
+//! coordinates) unless the caller says otherwise, and [`super::Dataset::load_with`] converts
+//! them ([`super::PixelCenters`]). Cameras are a static rig: a camera's k and w2c must be the
+//! same in every frame.
 
 use super::{inside_dataset, read_json, Dataset, DatasetError, Format, Frame, MaskSource, View};
 use crate::camera::Camera;
@@ -108,9 +109,8 @@ fn read_meta(
                 )));
             }
             let w2c = DMat4::from_cols_array_2d(&meta.w2c[t][c]).transpose();
-            let camera =
-                Camera::new(meta.w, meta.h, k[0][0], k[1][1], k[0][2] + 0.5, k[1][2] + 0.5, w2c)
-                    .map_err(|e| camera_error(e.to_string()))?;
+            let camera = Camera::new(meta.w, meta.h, k[0][0], k[1][1], k[0][2], k[1][2], w2c)
+                .map_err(|e| camera_error(e.to_string()))?;
             match rig.get(&id) {
                 None => {
                     rig.insert(id, (camera, test));
