@@ -340,6 +340,44 @@ fn cli_tracks_points_of_a_folder_sequence_into_csv_json_and_png() {
     assert!(json["points"][0]["face"].as_u64().unwrap() < seq.faces.len() as u64);
     let plot = std::fs::read_to_string(dir.join("tracks.svg")).unwrap();
     assert!(plot.starts_with("<svg") && plot.contains(">frame<"), "{plot}");
+    // Through a camera: pixel coordinates are the camera's projection; visible is what a
+    // brute-force ray cast over every triangle of the frame says.
+    let eye = DVec3::new(0.3, -0.2, -6.0);
+    let camera =
+        Camera::look_at(80, 60, 70.0, 70.0, 40.0, 30.0, eye, DVec3::ZERO, DVec3::NEG_Y).unwrap();
+    camera.save_json(&dir.join("cam.json")).unwrap();
+    let by_z = |a: &&[f32; 3], b: &&[f32; 3]| a[2].total_cmp(&b[2]);
+    let (near, far) =
+        (seq.frames[0].iter().min_by(by_z).unwrap(), seq.frames[0].iter().max_by(by_z).unwrap());
+    let vertex = |p: &[f32; 3]| seq.frames[0].iter().position(|q| q == p).unwrap();
+    let row = |p: &[f32; 3]| {
+        format!("vertex{},{},{},{}\n", vertex(p), p[0] as f64, p[1] as f64, p[2] as f64)
+    };
+    std::fs::write(dir.join("points.csv"), format!("id,x,y,z\n{}{}", row(near), row(far))).unwrap();
+    let cam = dir.join("cam.json");
+    assert!(run(&["--camera", cam.to_str().unwrap()]).status.success());
+    let image_rows = std::fs::read_to_string(dir.join("tracks.2d.csv")).unwrap();
+    let mut lines = image_rows.lines();
+    assert_eq!(lines.next(), Some("id,frame,u,v,visible"));
+    let (mut seen, mut hidden) = (0, 0);
+    for row in lines.map(|l| l.split(',').collect::<Vec<_>>()) {
+        let v: usize = row[0].trim_start_matches("vertex").parse().unwrap();
+        let t: usize = row[1].parse().unwrap();
+        let p = DVec3::from(seq.frames[t][v].map(f64::from));
+        let uv = camera.project(p).unwrap();
+        assert_eq!((row[2].parse::<f64>().unwrap(), row[3].parse::<f64>().unwrap()), (uv.x, uv.y));
+        let corners = brute::corners_f64(&triangles(&seq.frames[t], &seq.faces).unwrap());
+        let to = p - eye;
+        let first = brute::ray_cast(&corners, eye, to.normalize()).unwrap().distance;
+        let visible = first > to.length() * (1.0 - 1e-4);
+        assert_eq!(row[4] == "1", visible, "vertex {v} frame {t}");
+        if visible {
+            seen += 1
+        } else {
+            hidden += 1
+        }
+    }
+    assert!(seen > 0 && hidden > 0, "{seen} visible, {hidden} hidden: both cases covered");
     // A point far away is listed (stderr, tracks.unbound.csv, the JSON) and the others tracked;
     // --strict refuses the run instead.
     std::fs::write(dir.join("points.csv"), "id,x,y,z\nok,1,0,0\nmoon,50,0,0\n").unwrap();

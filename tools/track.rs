@@ -7,10 +7,12 @@ use tagsplat::camera::Camera;
 use tagsplat::sequence::usd::{write_usda, UpAxis, UsdTracks};
 use tagsplat::sequence::{FrameFormat, MeshSequence};
 use tagsplat::track::bench::{bench_track, TrackBenchReport};
-use tagsplat::track::output::{write_report_json, write_tracks_csv, write_unbound_csv};
+use tagsplat::track::output::{
+    write_image_tracks_csv, write_report_json, write_tracks_csv, write_unbound_csv,
+};
 use tagsplat::track::plot::write_plot;
 use tagsplat::track::queries::{read_pixels, read_points};
-use tagsplat::track::{track as track_sequence, Queries, TrackReport};
+use tagsplat::track::{project_tracks, track as track_sequence, Queries, TrackReport};
 
 #[derive(Args)]
 pub struct TrackArgs {
@@ -24,7 +26,9 @@ pub struct TrackArgs {
     /// ray-cast onto frame 0 through --camera.
     #[arg(long, requires = "camera")]
     pixels: Option<PathBuf>,
-    /// Camera of --pixels (cam.json: width, height, fx, fy, cx, cy, world_to_camera).
+    /// A camera (cam.json: width, height, fx, fy, cx, cy, world_to_camera): the one --pixels
+    /// are in, and the one every point is projected into, per frame, with its visibility
+    /// (OUT's `.2d.csv`: id, frame, u, v, visible).
     #[arg(long)]
     camera: Option<PathBuf>,
     /// Trajectories out: CSV `id,frame,x,y,z`.
@@ -60,10 +64,11 @@ pub fn track(args: TrackArgs) -> Result<()> {
         bail!("--max-distance {} must be a finite non-negative fraction", args.max_distance);
     }
     let sequence = MeshSequence::read(&args.sequence).context("cannot read the sequence")?;
-    let queries = match (&args.points, &args.pixels, &args.camera) {
+    let camera = args.camera.as_deref().map(Camera::load_json).transpose()?;
+    let queries = match (&args.points, &args.pixels, &camera) {
         (Some(points), _, _) => Queries::Points(read_points(points)?),
         (None, Some(pixels), Some(camera)) => {
-            Queries::Pixels { camera: Camera::load_json(camera)?, pixels: read_pixels(pixels)? }
+            Queries::Pixels { camera: *camera, pixels: read_pixels(pixels)? }
         }
         _ => bail!("give --points, or --pixels with --camera"),
     };
@@ -78,6 +83,10 @@ pub fn track(args: TrackArgs) -> Result<()> {
     write_tracks_csv(&args.out, &report.points)?;
     if let Some(json) = &args.json {
         write_report_json(json, &report)?;
+    }
+    if let Some(camera) = &camera {
+        let seen = project_tracks(&sequence.faces, &sequence.frames, &report.points, camera)?;
+        write_image_tracks_csv(&args.out.with_extension("2d.csv"), &seen)?;
     }
     if let Some(usd) = &args.usd {
         let ids: Vec<String> = report.points.iter().map(|p| p.id.clone()).collect();

@@ -7,7 +7,7 @@
 //! - [`bind`]: query points → bindings, refusing points too far from the surface.
 //! - [`trajectory`]: bindings → positions in every frame.
 //! - [`queries`]: `points.csv` / `pixels.csv` readers; [`output`]: `tracks.csv` / JSON writers.
-//! - [`plot`]: a PNG of the trajectories.
+//! - [`plot`]: an SVG of the trajectories; [`project`]: tracks seen through a camera.
 //! - [`run`]: one tracking run from queries to report.
 //! - [`bench`]: the `bench track` measurement.
 
@@ -15,12 +15,14 @@ pub mod bench;
 pub mod bind;
 pub mod output;
 pub mod plot;
+pub mod project;
 pub mod queries;
 pub mod run;
 pub mod trajectory;
 
 pub use bind::{bind_point, bind_ray, Binding, Unbound};
 pub use output::{TrackReport, TrackedPoint, UnboundPoint};
+pub use project::{project_tracks, ImagePoint};
 pub use run::{track, Queries};
 pub use trajectory::trajectories;
 

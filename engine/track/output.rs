@@ -2,6 +2,7 @@
 //! report that adds each point's binding and the points that could not be bound.
 
 use super::bind::Binding;
+use super::project::ImagePoint;
 use super::TrackError;
 use crate::io::trajectories::{write_trajectories_csv, TrackPoint};
 use crate::io::write_atomically;
@@ -72,6 +73,21 @@ pub fn write_unbound_csv(path: &Path, report: &TrackReport) -> Result<(), TrackE
                 report.max_distance,
                 u.reason.replace(',', ";")
             )?;
+        }
+        Ok(())
+    })
+    .map_err(|error| TrackError::Io { path: path.to_owned(), error })
+}
+
+/// Writes `id,frame,u,v,visible` (pixel coordinates, visible 1 or 0; u, v empty behind the
+/// camera), one row per point per frame, atomically.
+pub fn write_image_tracks_csv(path: &Path, rows: &[ImagePoint]) -> Result<(), TrackError> {
+    write_atomically(path, |w| {
+        writeln!(w, "id,frame,u,v,visible")?;
+        for r in rows {
+            let coordinate = |c: f64| if c.is_finite() { c.to_string() } else { String::new() };
+            let (u, v, seen) = (coordinate(r.u), coordinate(r.v), u8::from(r.visible));
+            writeln!(w, "{},{},{u},{v},{seen}", r.id, r.frame)?;
         }
         Ok(())
     })
