@@ -12,23 +12,23 @@ use std::path::Path;
 /// The two panels for `ids[i]` at `trajectories[i][t]` (point i in frame t).
 pub fn trajectory_panels(ids: &[String], trajectories: &[Vec<DVec3>]) -> [Panel; 2] {
     let (a, b) = spread_axes(trajectories);
-    let series = |point: &dyn Fn(usize, &[DVec3]) -> Vec<[f64; 2]>| {
-        let named = ids.iter().zip(trajectories).enumerate();
-        named.map(|(i, (id, t))| Series { name: id.clone(), points: point(i, t) }).collect()
+    let series = |point: &dyn Fn(&[DVec3]) -> Vec<[f64; 2]>| {
+        let named = ids.iter().zip(trajectories);
+        named.map(|(id, t)| Series { name: id.clone(), points: point(t) }).collect()
     };
     let axis = ["x", "y", "z"];
     let projected = Panel {
         title: format!("Trajectories on the {}{} plane", axis[a], axis[b]),
         x_label: format!("{} (scene units)", axis[a]),
         y_label: format!("{} (scene units)", axis[b]),
-        series: series(&|_, t| t.iter().map(|p| [p[a], p[b]]).collect()),
+        series: series(&|t| t.iter().map(|p| [p[a], p[b]]).collect()),
         equal_scale: true,
     };
     let displacement = Panel {
         title: "Distance from the frame-0 position".into(),
         x_label: "frame".into(),
         y_label: "distance (scene units)".into(),
-        series: series(&|_, t| {
+        series: series(&|t| {
             t.iter().enumerate().map(|(f, p)| [f as f64, p.distance(t[0])]).collect()
         }),
         equal_scale: false,

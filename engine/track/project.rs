@@ -94,7 +94,7 @@ mod tests {
             point("far", vec![at(far); 2]),
             point("outside", vec![[40.0, 0.0, 0.0], [0.0, 0.0, -1.5]]),
         ];
-        let frames = vec![positions.clone(), positions];
+        let frames = vec![positions.clone(); 2];
         let seen = project_tracks(&faces, &frames, &points, &camera).unwrap();
         assert_eq!(seen.len(), 6);
         let visible: Vec<bool> = seen.iter().map(|s| s.visible).collect();
