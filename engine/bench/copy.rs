@@ -3,7 +3,8 @@
 //! Bandwidth counts bytes copied, each read once and written once.
 
 use crate::gpu::{
-    ComputePipeline, GpuBuffer, GpuContext, GpuResult, PassTimes, PipelineDesc, Recorder,
+    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuResult, PassTimes, PipelineDesc,
+    Recorder,
 };
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
@@ -13,12 +14,14 @@ const WORKGROUP_SIZE: u32 = 256;
 const COMPUTE_PASS: &str = "compute copy";
 const TRANSFER_PASS: &str = "transfer copy";
 
+/// Push constants of copy.comp.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct CopyParams {
     len: u32,
     total_threads: u32,
 }
+push_layout!(CopyParams: [BENCH_COPY], [len, total_threads]);
 
 /// Copy bandwidths in bytes copied per second: the fastest of the timed copies, since the
 /// bound is what the device can do (lavapipe copies on a shared host vary by up to 3x).
@@ -42,9 +45,7 @@ impl CopyProbe {
         let len = (bytes / 16) as usize;
         let desc = PipelineDesc {
             name: "copy",
-            spirv: shaders::BENCH_COPY,
-            bindings: 2,
-            push_constant_bytes: size_of::<CopyParams>() as u32,
+            shader: &shaders::BENCH_COPY,
             specialization: &[WORKGROUP_SIZE],
         };
         let probe = Self {
@@ -67,7 +68,7 @@ impl CopyProbe {
         recorder.begin_pass(COMPUTE_PASS);
         recorder.dispatch_1d(
             &self.pipeline,
-            &[self.src.binding(), self.dst.binding()],
+            &[("src", self.src.binding()), ("dst", self.dst.binding())],
             &params,
             groups,
         )?;

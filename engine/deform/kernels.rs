@@ -4,7 +4,9 @@
 
 use super::graph::{DeformGraph, NODES_PER_VERTEX};
 use super::reference::NodeTransforms;
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder};
+use crate::gpu::{
+    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder,
+};
 use crate::optim::{Adam, AdamParams, LearningRates};
 use crate::shaders;
 use crate::splat::{GaussianBuffers, GaussianScene};
@@ -22,6 +24,7 @@ struct Push {
     arap_scale: f32,
     unused: u32,
 }
+push_layout!(Push: [DEFORM_BLEND, DEFORM_NODE_GRADIENTS], [vertices, nodes, arap_scale, unused]);
 
 /// Node k's vertices (the CSR inverse of the bindings) and their weights.
 struct Members {
@@ -88,17 +91,8 @@ impl GraphDeformer {
                 graph.bound_nodes.len()
             )));
         }
-        let pipeline = |name, spirv, bindings| {
-            ComputePipeline::new(
-                ctx,
-                &PipelineDesc {
-                    name,
-                    spirv,
-                    bindings,
-                    push_constant_bytes: size_of::<Push>() as u32,
-                    specialization: &[WORKGROUP],
-                },
-            )
+        let pipeline = |name, shader| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &[WORKGROUP] })
         };
         let node_scene = GaussianScene {
             positions: vec![[0.0; 3]; m],
@@ -126,8 +120,8 @@ impl GraphDeformer {
             })
             .collect();
         Ok(Self {
-            blend: pipeline("deform blend", shaders::DEFORM_BLEND, 9)?,
-            node_gradients: pipeline("deform node gradients", shaders::DEFORM_NODE_GRADIENTS, 13)?,
+            blend: pipeline("deform blend", &shaders::DEFORM_BLEND)?,
+            node_gradients: pipeline("deform node gradients", &shaders::DEFORM_NODE_GRADIENTS)?,
             rest_positions: GpuBuffer::from_slice(
                 ctx,
                 "deform rest positions",
@@ -174,15 +168,15 @@ impl GraphDeformer {
         target: &'a GaussianBuffers,
     ) -> GpuResult<()> {
         let buffers = [
-            self.rest_positions.binding(),
-            self.rest_rotations.binding(),
-            self.bound_nodes.binding(),
-            self.bound_weights.binding(),
-            self.node_rest.binding(),
-            self.nodes.positions.binding(),
-            self.nodes.rotations.binding(),
-            target.positions.binding(),
-            target.rotations.binding(),
+            ("rest_positions", self.rest_positions.binding()),
+            ("rest_rotations", self.rest_rotations.binding()),
+            ("bound_nodes", self.bound_nodes.binding()),
+            ("bound_weights", self.bound_weights.binding()),
+            ("node_rest", self.node_rest.binding()),
+            ("node_translations", self.nodes.positions.binding()),
+            ("node_rotations", self.nodes.rotations.binding()),
+            ("positions", target.positions.binding()),
+            ("rotations", target.rotations.binding()),
         ];
         rec.dispatch_1d(
             &self.blend,
@@ -201,19 +195,19 @@ impl GraphDeformer {
         grad_positions: &'a GpuBuffer<f32>,
     ) -> GpuResult<()> {
         let buffers = [
-            self.rest_positions.binding(),
-            self.node_rest.binding(),
-            self.nodes.positions.binding(),
-            self.nodes.rotations.binding(),
-            self.member_ranges.binding(),
-            self.members.binding(),
-            self.member_weights.binding(),
-            self.neighbour_ranges.binding(),
-            self.neighbours.binding(),
-            grad_positions.binding(),
-            self.node_grads.positions.binding(),
-            self.node_grads.rotations.binding(),
-            self.losses.binding(),
+            ("rest_positions", self.rest_positions.binding()),
+            ("node_rest", self.node_rest.binding()),
+            ("node_translations", self.nodes.positions.binding()),
+            ("node_rotations", self.nodes.rotations.binding()),
+            ("member_ranges", self.member_ranges.binding()),
+            ("members", self.members.binding()),
+            ("member_weights", self.member_weights.binding()),
+            ("neighbour_ranges", self.neighbour_ranges.binding()),
+            ("neighbours", self.neighbours.binding()),
+            ("grad_positions", grad_positions.binding()),
+            ("node_grad_translations", self.node_grads.positions.binding()),
+            ("node_grad_rotations", self.node_grads.rotations.binding()),
+            ("losses", self.losses.binding()),
         ];
         rec.dispatch_1d(
             &self.node_gradients,

@@ -8,6 +8,7 @@ mod features;
 mod pipeline;
 mod recorder;
 mod select;
+mod shader;
 mod timing;
 mod validation;
 
@@ -18,5 +19,7 @@ pub use features::DeviceCapabilities;
 pub use pipeline::{ComputePipeline, PipelineDesc};
 pub use recorder::Recorder;
 pub use select::{choose_device, DeviceInfo, DEVICE_ENV};
+pub(crate) use shader::push_layout;
+pub use shader::Shader;
 pub use timing::{PassTime, PassTimes};
 pub use validation::{ValidationLog, VALIDATION_ENV};

@@ -1,19 +1,27 @@
-//! Compute pipelines from embedded SPIR-V. Every pipeline binds `bindings` storage buffers
-//! (set 0, bindings 0..n, pushed per dispatch with VK_KHR_push_descriptor, so there are no
-//! descriptor pools to size) and one push-constant block. Specialization constant `i` takes
-//! `specialization[i]`; by convention constant 0 is the workgroup size.
+//! Compute pipelines from embedded shaders. A pipeline's layout comes from its shader's
+//! reflected interface ([`Shader`], built by build.rs), never from numbers written beside it:
+//! the storage buffers of set 0 at the bindings the shader declares (pushed per dispatch with
+//! VK_KHR_push_descriptor, so there are no descriptor pools to size), and a push-constant range
+//! of the shader's block size. This is the contract a kernel's Rust side keeps:
+//! - its push-constant struct is the shader's block, asserted at compile time by
+//!   `push_layout!` (engine/gpu/shader.rs), and the dispatch checks the size it pushes;
+//! - its dispatches name each buffer by the shader's name for that binding (the buffer block's
+//!   member, `keys_in` for `buffer KeysIn { uint keys_in[]; }`); a name the shader lacks, or a
+//!   binding left out or given twice, panics naming the shader and binding.
+//!
+//! Specialization constant `i` takes `specialization[i]`; by convention constant 0 is the
+//! workgroup size.
 
 use super::context::GpuContext;
 use super::error::{GpuError, GpuResult, VkContext};
+use super::shader::Shader;
 use ash::vk;
 use std::sync::Arc;
 
 /// What a compute pipeline is made of.
 pub struct PipelineDesc<'a> {
     pub name: &'static str,
-    pub spirv: &'a [u8],
-    pub bindings: u32,
-    pub push_constant_bytes: u32,
+    pub shader: &'static Shader,
     pub specialization: &'a [u32],
 }
 
@@ -23,20 +31,22 @@ pub struct ComputePipeline {
     pub(crate) layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
     pub(crate) name: &'static str,
-    pub(crate) bindings: u32,
-    pub(crate) push_constant_bytes: u32,
+    pub(crate) shader: &'static Shader,
 }
 
 impl ComputePipeline {
     pub fn new(ctx: &Arc<GpuContext>, desc: &PipelineDesc) -> GpuResult<Self> {
         let device = ctx.device();
-        let code = ash::util::read_spv(&mut std::io::Cursor::new(desc.spirv)).map_err(|_| {
+        let shader = desc.shader;
+        let code = ash::util::read_spv(&mut std::io::Cursor::new(shader.spirv)).map_err(|_| {
             GpuError::Vulkan {
                 call: "read_spv (corrupt embedded SPIR-V)",
                 result: vk::Result::ERROR_INVALID_SHADER_NV,
             }
         })?;
-        let bindings: Vec<_> = (0..desc.bindings)
+        let bindings: Vec<_> = shader
+            .binding_numbers()
+            .into_iter()
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
@@ -55,18 +65,17 @@ impl ComputePipeline {
             layout: vk::PipelineLayout::null(),
             set_layout: vk::DescriptorSetLayout::null(),
             name: desc.name,
-            bindings: desc.bindings,
-            push_constant_bytes: desc.push_constant_bytes,
+            shader,
         };
         pipeline.set_layout =
             unsafe { device.create_descriptor_set_layout(&set_layout_info, None) }
                 .during("vkCreateDescriptorSetLayout")?;
         let push_ranges = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            .size(desc.push_constant_bytes)];
+            .size(shader.push_size as u32)];
         let set_layouts = [pipeline.set_layout];
         let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-        if desc.push_constant_bytes > 0 {
+        if shader.push_size > 0 {
             layout_info = layout_info.push_constant_ranges(&push_ranges);
         }
         pipeline.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }

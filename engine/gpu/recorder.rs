@@ -67,26 +67,26 @@ impl<'a> Recorder<'a> {
         Ok(recorder)
     }
 
-    /// Records `pipeline` over `groups` workgroups with `buffers` at bindings 0.. and `push` as
-    /// push constants.
+    /// Records `pipeline` over `groups` workgroups with `push` as push constants and each of
+    /// `buffers` at the binding its name has in the shader. Panics, naming the shader and the
+    /// binding, unless the names are exactly the shader's bindings (one name per binding).
     pub fn dispatch<P: Pod>(
         &mut self,
         pipeline: &'a ComputePipeline,
-        buffers: &[BufferBinding<'a>],
+        buffers: &[(&str, BufferBinding<'a>)],
         push: &P,
         groups: [u32; 3],
     ) {
+        let shader = pipeline.shader;
+        let names: Vec<_> = buffers.iter().map(|&(name, _)| name).collect();
+        let slots =
+            shader.binding_slots(&names).unwrap_or_else(|e| panic!("{}: {e}", pipeline.name));
         assert_eq!(
-            buffers.len() as u32,
-            pipeline.bindings,
-            "{}: wrong number of buffers",
-            pipeline.name
-        );
-        assert_eq!(
-            size_of::<P>() as u32,
-            pipeline.push_constant_bytes,
-            "{}: wrong push-constant size",
-            pipeline.name
+            size_of::<P>(),
+            shader.push_size,
+            "{} ({}): wrong push-constant size",
+            pipeline.name,
+            shader.path
         );
         if groups.contains(&0) {
             return;
@@ -95,7 +95,7 @@ impl<'a> Recorder<'a> {
         let device = self.ctx.device();
         let infos: Vec<_> = buffers
             .iter()
-            .map(|b| vk::DescriptorBufferInfo {
+            .map(|(_, b)| vk::DescriptorBufferInfo {
                 buffer: b.buffer,
                 offset: b.offset,
                 range: b.range,
@@ -103,10 +103,10 @@ impl<'a> Recorder<'a> {
             .collect();
         let writes: Vec<_> = infos
             .iter()
-            .enumerate()
-            .map(|(i, info)| {
+            .zip(slots)
+            .map(|(info, slot)| {
                 vk::WriteDescriptorSet::default()
-                    .dst_binding(i as u32)
+                    .dst_binding(slot)
                     .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                     .buffer_info(std::slice::from_ref(info))
             })
@@ -142,7 +142,7 @@ impl<'a> Recorder<'a> {
     pub fn dispatch_1d<P: Pod>(
         &mut self,
         pipeline: &'a ComputePipeline,
-        buffers: &[BufferBinding<'a>],
+        buffers: &[(&str, BufferBinding<'a>)],
         push: &P,
         groups: u64,
     ) -> GpuResult<()> {

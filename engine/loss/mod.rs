@@ -94,25 +94,15 @@ fn scratch<const N: usize>(
 
 impl ImageLoss {
     pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
-        let bytes = size_of::<LossParams>() as u32;
-        let pipeline = |name, spirv, bindings| {
-            ComputePipeline::new(
-                ctx,
-                &PipelineDesc {
-                    name,
-                    spirv,
-                    bindings,
-                    push_constant_bytes: bytes,
-                    specialization: &[WORKGROUP],
-                },
-            )
+        let pipeline = |name, shader| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &[WORKGROUP] })
         };
         Ok(Self {
             ctx: ctx.clone(),
-            blur_moments: pipeline("loss blur moments", shaders::LOSS_BLUR_MOMENTS, 7)?,
-            ssim_forward: pipeline("loss ssim forward", shaders::LOSS_SSIM_FORWARD, 12)?,
-            blur_gradients: pipeline("loss blur gradients", shaders::LOSS_BLUR_GRADIENTS, 6)?,
-            ssim_backward: pipeline("loss ssim backward", shaders::LOSS_SSIM_BACKWARD, 7)?,
+            blur_moments: pipeline("loss blur moments", &shaders::LOSS_BLUR_MOMENTS)?,
+            ssim_forward: pipeline("loss ssim forward", &shaders::LOSS_SSIM_FORWARD)?,
+            blur_gradients: pipeline("loss blur gradients", &shaders::LOSS_BLUR_GRADIENTS)?,
+            ssim_backward: pipeline("loss ssim backward", &shaders::LOSS_SSIM_BACKWARD)?,
             moments: scratch(ctx, "loss moments", 0)?,
             derivatives: scratch(ctx, "loss moment derivatives", 0)?,
             filtered: scratch(ctx, "loss filtered derivatives", 0)?,
@@ -167,26 +157,23 @@ impl ImageLoss {
                 capacity: terms.len(),
             });
         }
-        let weight = weight.unwrap_or(&self.unit_weight);
+        let weight = ("weight", weight.unwrap_or(&self.unit_weight).binding());
         let groups = pixels.div_ceil(WORKGROUP as usize) as u64;
-        let [mx, my, mxx, myy, mxy] = &self.moments;
-        let [dx, dxx, dxy] = &self.derivatives;
-        let [fx, fxx, fxy] = &self.filtered;
-        let b = |buffers: &[&'a GpuBuffer<[f32; 4]>]| {
-            buffers.iter().map(|b| b.binding()).collect::<Vec<_>>()
-        };
-        let mut forward = b(&[render, target]);
-        forward.extend(b(&[mx, my, mxx, myy, mxy]));
-        rec.dispatch_1d(&self.blur_moments, &forward, params, groups)?;
-        let mut fused = b(&[render, target]);
-        fused.push(weight.binding());
-        fused.extend(b(&[mx, my, mxx, myy, mxy, dx, dxx, dxy]));
-        fused.push(terms.binding());
+        let [mx, my, mxx, myy, mxy] = self.moments.each_ref().map(|b| b.binding());
+        let [dx, dxx, dxy] = self.derivatives.each_ref().map(|b| b.binding());
+        let [fx, fxx, fxy] = self.filtered.each_ref().map(|b| b.binding());
+        let images = [("render", render.binding()), ("target", target.binding())];
+        let moments =
+            [("mean_x", mx), ("mean_y", my), ("mean_xx", mxx), ("mean_yy", myy), ("mean_xy", mxy)];
+        let derivatives = [("d_mean_x", dx), ("d_mean_xx", dxx), ("d_mean_xy", dxy)];
+        let filtered = [("blur_x", fx), ("blur_xx", fxx), ("blur_xy", fxy)];
+        rec.dispatch_1d(&self.blur_moments, &[&images[..], &moments].concat(), params, groups)?;
+        let terms = ("terms", terms.binding());
+        let fused = [&images[..], &[weight], &moments, &derivatives, &[terms]].concat();
         rec.dispatch_1d(&self.ssim_forward, &fused, params, groups)?;
-        rec.dispatch_1d(&self.blur_gradients, &b(&[dx, dxx, dxy, fx, fxx, fxy]), params, groups)?;
-        let mut backward = b(&[render, target]);
-        backward.push(weight.binding());
-        backward.extend(b(&[fx, fxx, fxy, gradient]));
+        rec.dispatch_1d(&self.blur_gradients, &[derivatives, filtered].concat(), params, groups)?;
+        let gradient = ("gradient", gradient.binding());
+        let backward = [&images[..], &[weight], &filtered, &[gradient]].concat();
         rec.dispatch_1d(&self.ssim_backward, &backward, params, groups)
     }
 }

@@ -3,7 +3,8 @@
 //! each parameter buffer; [`Adam::remap`] carries them through a change of the Gaussian set.
 
 use crate::gpu::{
-    ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder,
+    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc,
+    Recorder,
 };
 use crate::shaders;
 use crate::splat::{sh_coefficients, GaussianBuffers};
@@ -38,6 +39,7 @@ pub struct AdamParams {
     bias: [f32; 4],
     counts: [u32; 4],
 }
+push_layout!(AdamParams: [OPTIM_ADAM_STEP], [lr_a, lr_b, betas, bias, counts]);
 
 impl AdamParams {
     /// `step` counts from 1 (the bias corrections need it).
@@ -64,6 +66,7 @@ struct RemapParams {
     row_width: u32,
     unused: u32,
 }
+push_layout!(RemapParams: [OPTIM_REMAP_ROWS], [new_rows, old_rows, row_width, unused]);
 
 pub struct Adam {
     ctx: Arc<GpuContext>,
@@ -99,27 +102,13 @@ fn zero_moments(
 impl Adam {
     /// An optimizer for parameters shaped like `params`, moments at zero.
     pub fn new(ctx: &Arc<GpuContext>, params: &GaussianBuffers) -> GpuResult<Self> {
-        let pipeline = |name, spirv, bindings, bytes: usize| {
-            ComputePipeline::new(
-                ctx,
-                &PipelineDesc {
-                    name,
-                    spirv,
-                    bindings,
-                    push_constant_bytes: bytes as u32,
-                    specialization: &[WORKGROUP],
-                },
-            )
+        let pipeline = |name, shader| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &[WORKGROUP] })
         };
         let adam = Self {
             ctx: ctx.clone(),
-            step: pipeline("adam step", shaders::OPTIM_ADAM_STEP, 15, size_of::<AdamParams>())?,
-            remap_rows: pipeline(
-                "adam remap rows",
-                shaders::OPTIM_REMAP_ROWS,
-                3,
-                size_of::<RemapParams>(),
-            )?,
+            step: pipeline("adam step", &shaders::OPTIM_ADAM_STEP)?,
+            remap_rows: pipeline("adam remap rows", &shaders::OPTIM_REMAP_ROWS)?,
             moments: zero_moments(ctx, params.len(), params.sh_degree())?,
             gaussians: params.len(),
             sh_degree: params.sh_degree(),
@@ -156,11 +145,19 @@ impl Adam {
                 });
             }
         }
+        // Names of adam_step.comp: parameters, their gradients (g_) and moments (m_).
+        let moments = ["m_positions", "m_log_scales", "m_rotations", "m_opacity_logits", "m_sh"];
         let bindings: Vec<_> = params
-            .bindings()
+            .bindings(["positions", "log_scales", "rotations", "opacity_logits", "sh"])
             .into_iter()
-            .chain(grads.bindings())
-            .chain(self.moments.iter().map(|m| m.binding()))
+            .chain(grads.bindings([
+                "g_positions",
+                "g_log_scales",
+                "g_rotations",
+                "g_opacity_logits",
+                "g_sh",
+            ]))
+            .chain(moments.into_iter().zip(&self.moments).map(|(name, m)| (name, m.binding())))
             .collect();
         // One invocation per four floats of each buffer (see adam_step.comp).
         let chunks: usize =
@@ -189,7 +186,11 @@ impl Adam {
             let groups = (old_of_new.len() * width).div_ceil(WORKGROUP as usize) as u64;
             rec.dispatch_1d(
                 &self.remap_rows,
-                &[old.binding(), remap.binding(), new.binding()],
+                &[
+                    ("old_rows", old.binding()),
+                    ("old_of_new", remap.binding()),
+                    ("new_rows", new.binding()),
+                ],
                 &params,
                 groups,
             )?;

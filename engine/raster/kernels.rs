@@ -2,8 +2,7 @@
 //! (with the small-triangle raster) → large-triangle raster → resolve → anti-aliasing
 //! crossings → anti-aliasing blend. Backward: anti-aliasing backward → interior backward.
 
-use super::params::RasterParams;
-use crate::gpu::{ComputePipeline, GpuContext, GpuResult, PipelineDesc};
+use crate::gpu::{ComputePipeline, GpuContext, GpuResult, PipelineDesc, Shader};
 use crate::shaders;
 use std::sync::Arc;
 
@@ -24,33 +23,23 @@ pub(crate) struct Kernels {
 
 impl Kernels {
     pub(crate) fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
-        let push = size_of::<RasterParams>() as u32;
         let linear = [LINEAR_WORKGROUP];
         // The per-pixel kernels fix their 16x16 workgroup in the shader.
-        let pipeline = |name, spirv, bindings, specialization: &[u32]| {
-            ComputePipeline::new(
-                ctx,
-                &PipelineDesc { name, spirv, bindings, push_constant_bytes: push, specialization },
-            )
+        let pipeline = |name, shader: &'static Shader, specialization: &[u32]| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization })
         };
         Ok(Self {
-            transform: pipeline("raster transform", shaders::RASTER_TRANSFORM, 2, &linear)?,
-            outline: pipeline("raster outline flags", shaders::RASTER_OUTLINE, 4, &linear)?,
-            setup: pipeline("raster setup", shaders::RASTER_SETUP, 9, &linear)?,
-            raster_large: pipeline("raster large triangles", shaders::RASTER_RASTER_LARGE, 7, &[])?,
-            resolve: pipeline("raster resolve", shaders::RASTER_RESOLVE, 9, &[])?,
-            aa_pairs: pipeline("raster antialias crossings", shaders::RASTER_AA_PAIRS, 6, &[])?,
-            aa_forward: pipeline("raster antialias", shaders::RASTER_AA_FORWARD, 4, &[])?,
-            aa_backward: pipeline(
-                "raster antialias backward",
-                shaders::RASTER_AA_BACKWARD,
-                8,
-                &[],
-            )?,
+            transform: pipeline("raster transform", &shaders::RASTER_TRANSFORM, &linear)?,
+            outline: pipeline("raster outline flags", &shaders::RASTER_OUTLINE, &linear)?,
+            setup: pipeline("raster setup", &shaders::RASTER_SETUP, &linear)?,
+            raster_large: pipeline("raster large triangles", &shaders::RASTER_RASTER_LARGE, &[])?,
+            resolve: pipeline("raster resolve", &shaders::RASTER_RESOLVE, &[])?,
+            aa_pairs: pipeline("raster antialias crossings", &shaders::RASTER_AA_PAIRS, &[])?,
+            aa_forward: pipeline("raster antialias", &shaders::RASTER_AA_FORWARD, &[])?,
+            aa_backward: pipeline("raster antialias backward", &shaders::RASTER_AA_BACKWARD, &[])?,
             interior_backward: pipeline(
                 "raster interior backward",
-                shaders::RASTER_INTERIOR_BACKWARD,
-                7,
+                &shaders::RASTER_INTERIOR_BACKWARD,
                 &[],
             )?,
         })

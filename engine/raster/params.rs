@@ -3,6 +3,7 @@
 
 use super::RasterError;
 use crate::camera::Camera;
+use crate::gpu::push_layout;
 use bytemuck::{Pod, Zeroable};
 
 /// Tile edge of the large-triangle raster and the per-pixel kernels' workgroups.
@@ -53,6 +54,20 @@ pub struct RasterParams {
     size: [u32; 4],
     counts: [u32; 4],
 }
+push_layout!(
+    RasterParams: [
+        RASTER_TRANSFORM,
+        RASTER_OUTLINE,
+        RASTER_SETUP,
+        RASTER_RASTER_LARGE,
+        RASTER_RESOLVE,
+        RASTER_AA_PAIRS,
+        RASTER_AA_FORWARD,
+        RASTER_AA_BACKWARD,
+        RASTER_INTERIOR_BACKWARD,
+    ],
+    [view_rows, intrinsics, clip, size, counts]
+);
 
 impl RasterParams {
     pub fn new(

@@ -60,43 +60,46 @@ impl MeshRasterizer {
         rec.begin_pass("raster transform");
         rec.dispatch_1d(
             &k.transform,
-            &[positions.binding(), m.camera_positions.binding()],
+            &[
+                ("positions", positions.binding()),
+                ("camera_positions", m.camera_positions.binding()),
+            ],
             params,
             linear_groups(self.vertices),
         )?;
         rec.end_pass();
         rec.begin_pass("raster outline");
         let outline = [
-            m.faces.binding(),
-            m.camera_positions.binding(),
-            m.adjacency.binding(),
-            m.outline_flags.binding(),
+            ("faces", m.faces.binding()),
+            ("camera_positions", m.camera_positions.binding()),
+            ("adjacency", m.adjacency.binding()),
+            ("outline_flags", m.outline_flags.binding()),
         ];
         rec.dispatch_1d(&k.outline, &outline, params, linear_groups(self.triangles))?;
         rec.end_pass();
         rec.begin_pass("raster setup + small");
         let setup = [
-            m.faces.binding(),
-            m.camera_positions.binding(),
-            m.subs.binding(),
-            im.visibility.binding(),
-            m.large.binding(),
-            m.counters.binding(),
-            im.write_counts.binding(),
-            im.tile_counts.binding(),
-            im.tile_lists.binding(),
+            ("faces", m.faces.binding()),
+            ("camera_positions", m.camera_positions.binding()),
+            ("subs", m.subs.binding()),
+            ("visibility", im.visibility.binding()),
+            ("large_list", m.large.binding()),
+            ("counters", m.counters.binding()),
+            ("write_counts", im.write_counts.binding()),
+            ("tile_counts", im.tile_counts.binding()),
+            ("tile_lists", im.tile_lists.binding()),
         ];
         rec.dispatch_1d(&k.setup, &setup, params, linear_groups(self.triangles))?;
         rec.end_pass();
         rec.begin_pass("raster large");
         let large = [
-            m.subs.binding(),
-            im.visibility.binding(),
-            m.large.binding(),
-            m.counters.binding(),
-            im.write_counts.binding(),
-            im.tile_counts.binding(),
-            im.tile_lists.binding(),
+            ("subs", m.subs.binding()),
+            ("visibility", im.visibility.binding()),
+            ("large_list", m.large.binding()),
+            ("counters", m.counters.binding()),
+            ("write_counts", im.write_counts.binding()),
+            ("tile_counts", im.tile_counts.binding()),
+            ("tile_lists", im.tile_lists.binding()),
         ];
         rec.dispatch(&k.raster_large, &large, params, params.tiles());
         rec.end_pass();
@@ -108,29 +111,34 @@ impl MeshRasterizer {
         let (m, im, k) = (&self.mesh, &self.image, &self.kernels);
         rec.begin_pass("raster resolve");
         let resolve = [
-            im.visibility.binding(),
-            m.faces.binding(),
-            m.camera_positions.binding(),
-            m.colors.binding(),
-            im.ids.binding(),
-            im.barycentrics.binding(),
-            im.rgba.binding(),
-            im.depth.binding(),
-            im.normals.binding(),
+            ("visibility", im.visibility.binding()),
+            ("faces", m.faces.binding()),
+            ("camera_positions", m.camera_positions.binding()),
+            ("colors", m.colors.binding()),
+            ("ids_out", im.ids.binding()),
+            ("barycentrics", im.barycentrics.binding()),
+            ("rgba", im.rgba.binding()),
+            ("depth", im.depth.binding()),
+            ("normals", im.normals.binding()),
         ];
         rec.dispatch(&k.resolve, &resolve, params, params.tiles());
         rec.end_pass();
         rec.begin_pass("raster antialias");
         let pairs = [
-            m.faces.binding(),
-            m.camera_positions.binding(),
-            m.outline_flags.binding(),
-            im.ids.binding(),
-            im.depth.binding(),
-            im.pairs.binding(),
+            ("faces", m.faces.binding()),
+            ("camera_positions", m.camera_positions.binding()),
+            ("outline_flags", m.outline_flags.binding()),
+            ("ids", im.ids.binding()),
+            ("depth", im.depth.binding()),
+            ("pairs", im.pairs.binding()),
         ];
         rec.dispatch(&k.aa_pairs, &pairs, params, params.tiles());
-        let aa = [im.pairs.binding(), im.rgba.binding(), im.color.binding(), im.mask.binding()];
+        let aa = [
+            ("pairs", im.pairs.binding()),
+            ("rgba", im.rgba.binding()),
+            ("color_out", im.color.binding()),
+            ("mask_out", im.mask.binding()),
+        ];
         rec.dispatch(&k.aa_forward, &aa, params, params.tiles());
         rec.end_pass();
     }
@@ -155,26 +163,26 @@ impl MeshRasterizer {
         let (m, im, k) = (&self.mesh, &self.image, &self.kernels);
         rec.begin_pass("raster antialias backward");
         let aa = [
-            m.faces.binding(),
-            m.camera_positions.binding(),
-            im.pairs.binding(),
-            im.rgba.binding(),
-            grad_color.binding(),
-            grad_mask.binding(),
-            im.grad_rgba.binding(),
-            grad_positions.binding(),
+            ("faces", m.faces.binding()),
+            ("camera_positions", m.camera_positions.binding()),
+            ("pairs", im.pairs.binding()),
+            ("rgba", im.rgba.binding()),
+            ("grad_color", grad_color.binding()),
+            ("grad_mask", grad_mask.binding()),
+            ("grad_rgba", im.grad_rgba.binding()),
+            ("grad_positions", grad_positions.binding()),
         ];
         rec.dispatch(&k.aa_backward, &aa, params, params.tiles());
         rec.end_pass();
         rec.begin_pass("raster interior backward");
         let interior = [
-            m.faces.binding(),
-            m.camera_positions.binding(),
-            m.colors.binding(),
-            im.ids.binding(),
-            im.grad_rgba.binding(),
-            grad_positions.binding(),
-            grad_colors.binding(),
+            ("faces", m.faces.binding()),
+            ("camera_positions", m.camera_positions.binding()),
+            ("colors", m.colors.binding()),
+            ("ids", im.ids.binding()),
+            ("grad_rgba", im.grad_rgba.binding()),
+            ("grad_positions", grad_positions.binding()),
+            ("grad_colors", grad_colors.binding()),
         ];
         rec.dispatch(&k.interior_backward, &interior, params, params.tiles());
         rec.end_pass();

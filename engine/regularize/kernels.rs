@@ -3,7 +3,9 @@
 //! lands on its rows, temporal terms), recorded into the caller's [`Recorder`].
 
 use super::{Losses, Neighbourhoods, RegularizeError, Weights, LOSS_SLOTS};
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder};
+use crate::gpu::{
+    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder,
+};
 use crate::shaders;
 use crate::splat::GaussianBuffers;
 use bytemuck::{Pod, Zeroable};
@@ -19,8 +21,28 @@ struct Push {
     temporal: u32,
     inv_count: f32,
     omega_scale: f32,
-    weights: [f32; 6],
+    w_scale_2d: f32,
+    w_laplacian: f32,
+    w_normal: f32,
+    w_edge_length: f32,
+    w_rigidity: f32,
+    w_rotation: f32,
 }
+push_layout!(
+    Push: [REGULARIZE_VERTEX, REGULARIZE_GATHER],
+    [
+        count,
+        temporal,
+        inv_count,
+        omega_scale,
+        w_scale_2d,
+        w_laplacian,
+        w_normal,
+        w_edge_length,
+        w_rigidity,
+        w_rotation,
+    ]
+);
 
 /// The previous frame's positions (3 floats per Gaussian) and rotations, for the temporal
 /// terms.
@@ -53,22 +75,13 @@ pub struct Regularizers {
 impl Regularizers {
     /// Pipelines and empty neighbourhoods; [`Self::upload`] before recording.
     pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
-        let pipeline = |name, spirv, bindings| {
-            ComputePipeline::new(
-                ctx,
-                &PipelineDesc {
-                    name,
-                    spirv,
-                    bindings,
-                    push_constant_bytes: size_of::<Push>() as u32,
-                    specialization: &[WORKGROUP],
-                },
-            )
+        let pipeline = |name, shader| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &[WORKGROUP] })
         };
         Ok(Self {
             ctx: ctx.clone(),
-            vertex: pipeline("regularize vertex", shaders::REGULARIZE_VERTEX, 10)?,
-            gather: pipeline("regularize gather", shaders::REGULARIZE_GATHER, 11)?,
+            vertex: pipeline("regularize vertex", &shaders::REGULARIZE_VERTEX)?,
+            gather: pipeline("regularize gather", &shaders::REGULARIZE_GATHER)?,
             ranges: GpuBuffer::new(ctx, "regularize ranges", 0)?,
             ring: GpuBuffer::new(ctx, "regularize ring", 0)?,
             deltas: GpuBuffer::new(ctx, "regularize deltas", 0)?,
@@ -107,45 +120,43 @@ impl Regularizers {
             temporal: previous.is_some() as u32,
             inv_count: 1.0 / self.count.max(1) as f32,
             omega_scale: weights.lambda_w / self.mean_edge_length,
-            weights: [
-                weights.scale_2d,
-                weights.laplacian,
-                weights.normal,
-                weights.edge_length,
-                weights.rigidity,
-                weights.rotation,
-            ],
+            w_scale_2d: weights.scale_2d,
+            w_laplacian: weights.laplacian,
+            w_normal: weights.normal,
+            w_edge_length: weights.edge_length,
+            w_rigidity: weights.rigidity,
+            w_rotation: weights.rotation,
         };
         let groups = self.count.div_ceil(WORKGROUP as usize) as u64;
         rec.fill_buffer(&self.losses, 0);
         let vertex = [
-            params.positions.binding(),
-            params.log_scales.binding(),
-            params.rotations.binding(),
-            self.ranges.binding(),
-            self.ring.binding(),
-            grads.log_scales.binding(),
-            grads.rotations.binding(),
-            self.deltas.binding(),
-            self.normal_grads.binding(),
-            self.losses.binding(),
+            ("positions", params.positions.binding()),
+            ("log_scales", params.log_scales.binding()),
+            ("rotations", params.rotations.binding()),
+            ("ranges", self.ranges.binding()),
+            ("ring", self.ring.binding()),
+            ("grad_log_scales", grads.log_scales.binding()),
+            ("grad_rotations", grads.rotations.binding()),
+            ("deltas", self.deltas.binding()),
+            ("normal_grads", self.normal_grads.binding()),
+            ("losses", self.losses.binding()),
         ];
         rec.dispatch_1d(&self.vertex, &vertex, &push, groups)?;
         // Without a previous frame the kernel never reads these; bind the current ones.
         let prev = previous
             .unwrap_or(Temporal { positions: &params.positions, rotations: &params.rotations });
         let gather = [
-            params.positions.binding(),
-            params.rotations.binding(),
-            prev.positions.binding(),
-            prev.rotations.binding(),
-            self.ranges.binding(),
-            self.ring.binding(),
-            self.deltas.binding(),
-            self.normal_grads.binding(),
-            grads.positions.binding(),
-            grads.rotations.binding(),
-            self.losses.binding(),
+            ("positions", params.positions.binding()),
+            ("rotations", params.rotations.binding()),
+            ("prev_positions", prev.positions.binding()),
+            ("prev_rotations", prev.rotations.binding()),
+            ("ranges", self.ranges.binding()),
+            ("ring", self.ring.binding()),
+            ("deltas", self.deltas.binding()),
+            ("normal_grads", self.normal_grads.binding()),
+            ("grad_positions", grads.positions.binding()),
+            ("grad_rotations", grads.rotations.binding()),
+            ("losses", self.losses.binding()),
         ];
         rec.dispatch_1d(&self.gather, &gather, &push, groups)?;
         Ok(())

@@ -13,8 +13,8 @@
 use super::scan::PrefixScan;
 use super::{RadixTuning, RadixVariant};
 use crate::gpu::{
-    BufferBinding, ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes,
-    PipelineDesc, Recorder,
+    push_layout, BufferBinding, ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult,
+    PassTimes, PipelineDesc, Recorder, Shader,
 };
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
@@ -68,6 +68,17 @@ struct RadixParams {
     max_bucket_len: u32,
     gate: u32,
 }
+push_layout!(
+    RadixParams: [
+        SORT_RADIX_HISTOGRAM,
+        SORT_RADIX_SCATTER,
+        SORT_RADIX_HISTOGRAM_LANES,
+        SORT_RADIX_SCATTER_LANES,
+        SORT_RADIX_PLAN_LANES,
+        SORT_RADIX_BUCKET_LANES,
+    ],
+    [len, word, shift, digit_bits, tile_count, bits, max_bucket_len, gate]
+);
 
 /// Which path of the CPU variant's sort a kernel belongs to (`GATE_*` in
 /// shaders/sort/radix_pair.glsl); the plan kernel chooses one on the device.
@@ -217,8 +228,7 @@ impl<K: RadixKey> RadixSort<K> {
         ctx: &Arc<GpuContext>,
         tuning: RadixTuning,
         name: &'static str,
-        spirv: &[u8],
-        bindings: u32,
+        shader: &'static Shader,
         records: [u32; 2],
     ) -> GpuResult<ComputePipeline> {
         let specialization = [
@@ -229,17 +239,7 @@ impl<K: RadixKey> RadixSort<K> {
             records[0],
             records[1],
         ];
-        let push_constant_bytes = size_of::<RadixParams>() as u32;
-        ComputePipeline::new(
-            ctx,
-            &PipelineDesc {
-                name,
-                spirv,
-                bindings,
-                push_constant_bytes,
-                specialization: &specialization,
-            },
-        )
+        ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &specialization })
     }
 
     fn subgroup_passes(
@@ -255,16 +255,14 @@ impl<K: RadixKey> RadixSort<K> {
                 ctx,
                 tuning,
                 "radix_histogram",
-                shaders::SORT_RADIX_HISTOGRAM,
-                2,
+                &shaders::SORT_RADIX_HISTOGRAM,
                 [0, 0],
             )?,
             scatter: Self::pipeline(
                 ctx,
                 tuning,
                 "radix_scatter",
-                shaders::SORT_RADIX_SCATTER,
-                5,
+                &shaders::SORT_RADIX_SCATTER,
                 [0, 0],
             )?,
             scratch_keys,
@@ -294,8 +292,7 @@ impl<K: RadixKey> RadixSort<K> {
                 ctx,
                 tuning,
                 "radix_histogram_lanes",
-                shaders::SORT_RADIX_HISTOGRAM_LANES,
-                5,
+                &shaders::SORT_RADIX_HISTOGRAM_LANES,
                 [records_in, 0],
             )
         };
@@ -304,8 +301,7 @@ impl<K: RadixKey> RadixSort<K> {
                 ctx,
                 tuning,
                 "radix_scatter_lanes",
-                shaders::SORT_RADIX_SCATTER_LANES,
-                7,
+                &shaders::SORT_RADIX_SCATTER_LANES,
                 [records_in, records_out],
             )
         };
@@ -316,16 +312,14 @@ impl<K: RadixKey> RadixSort<K> {
                 ctx,
                 tuning,
                 "radix_plan_lanes",
-                shaders::SORT_RADIX_PLAN_LANES,
-                2,
+                &shaders::SORT_RADIX_PLAN_LANES,
                 [0, 0],
             )?,
             buckets: Self::pipeline(
                 ctx,
                 tuning,
                 "radix_bucket_lanes",
-                shaders::SORT_RADIX_BUCKET_LANES,
-                6,
+                &shaders::SORT_RADIX_BUCKET_LANES,
                 [0, 0],
             )?,
             run_counts: GpuBuffer::new(ctx, "radix run counts", runs * RADIX)?,
@@ -420,8 +414,14 @@ impl<K: RadixKey> RadixSort<K> {
             let (input, output) =
                 (buffers[(pass % 2) as usize], buffers[((pass + 1) % 2) as usize]);
             let counts = self.tile_counts.binding();
-            let histogram_io = [input.0, counts];
-            let scatter_io = [input.0, input.1, counts, output.0, output.1];
+            let histogram_io = [("key_words", input.0), ("tile_counts", counts)];
+            let scatter_io = [
+                ("keys_in", input.0),
+                ("values_in", input.1),
+                ("tile_offsets", counts),
+                ("keys_out", output.0),
+                ("values_out", output.1),
+            ];
             self.record_pass(
                 recorder,
                 [(histogram, &histogram_io), (scatter, &scatter_io)],
@@ -476,8 +476,21 @@ impl<K: RadixKey> RadixSort<K> {
             } else {
                 [records[pass as usize % 2].binding(); 2]
             };
-            let histogram_io = [input[0], input[1], counts, runs, plan_io];
-            let scatter_io = [input[0], input[1], counts, runs, output[0], output[1], plan_io];
+            let histogram_io = [
+                ("wide_in", input[0]),
+                ("tile_counts", counts),
+                ("run_counts", runs),
+                ("plan", plan_io),
+            ];
+            let scatter_io = [
+                ("wide_in", input[0]),
+                ("value_words_in", input[1]),
+                ("tile_offsets", counts),
+                ("run_counts", runs),
+                ("keys_out", output[0]),
+                ("values_out", output[1]),
+                ("plan", plan_io),
+            ];
             let (histogram, scatter) = lanes_kernels(first, last);
             let params = base.lsd_pass(pass).gated(lsd_gate);
             self.record_pass(
@@ -503,26 +516,32 @@ impl<K: RadixKey> RadixSort<K> {
             kernels;
         let (counts, runs, plan_io) =
             (self.tile_counts.binding(), run_counts.binding(), plan_flag.binding());
-        let top_histogram_io = [keys.binding(), values.binding(), counts, runs, plan_io];
+        let top_histogram_io = [
+            ("wide_in", keys.binding()),
+            ("tile_counts", counts),
+            ("run_counts", runs),
+            ("plan", plan_io),
+        ];
         let top_scatter_io = [
-            keys.binding(),
-            values.binding(),
-            counts,
-            runs,
-            records[0].binding(),
-            records[0].binding(),
-            plan_io,
+            ("wide_in", keys.binding()),
+            ("value_words_in", values.binding()),
+            ("tile_offsets", counts),
+            ("run_counts", runs),
+            ("records_out", records[0].binding()),
+            // Writing records leaves the values binding unused, but it must be bound.
+            ("values_out", records[0].binding()),
+            ("plan", plan_io),
         ];
         let bucket_io = [
-            records[0].binding(),
-            records[1].binding(),
-            keys.binding(),
-            values.binding(),
-            counts,
-            plan_io,
+            ("records_a", records[0].binding()),
+            ("records_b", records[1].binding()),
+            ("keys_out", keys.binding()),
+            ("values_out", values.binding()),
+            ("tile_offsets", counts),
+            ("plan", plan_io),
         ];
         self.record_counts(recorder, &histograms[0], &top_histogram_io, top)?;
-        recorder.dispatch_1d(plan, &[counts, plan_io], top, 1)?;
+        recorder.dispatch_1d(plan, &[("tile_offsets", counts), ("plan", plan_io)], top, 1)?;
         self.record_scatter(recorder, &scatters[0], &top_scatter_io, &top.gated(Gate::BucketPath))?;
         recorder.begin_pass("radix buckets");
         let bucket_groups = RADIX.div_ceil(self.tuning.workgroup_size() as usize);
@@ -541,7 +560,7 @@ impl<K: RadixKey> RadixSort<K> {
     fn record_pass<'a>(
         &'a self,
         recorder: &mut Recorder<'a>,
-        [histogram, scatter]: [(&'a ComputePipeline, &[BufferBinding<'a>]); 2],
+        [histogram, scatter]: [(&'a ComputePipeline, &[(&str, BufferBinding<'a>)]); 2],
         params: &RadixParams,
     ) -> GpuResult<()> {
         self.record_counts(recorder, histogram.0, histogram.1, params)?;
@@ -553,7 +572,7 @@ impl<K: RadixKey> RadixSort<K> {
         &'a self,
         recorder: &mut Recorder<'a>,
         histogram: &'a ComputePipeline,
-        io: &[BufferBinding<'a>],
+        io: &[(&str, BufferBinding<'a>)],
         params: &RadixParams,
     ) -> GpuResult<()> {
         recorder.begin_pass("radix histogram");
@@ -570,7 +589,7 @@ impl<K: RadixKey> RadixSort<K> {
         &'a self,
         recorder: &mut Recorder<'a>,
         scatter: &'a ComputePipeline,
-        io: &[BufferBinding<'a>],
+        io: &[(&str, BufferBinding<'a>)],
         params: &RadixParams,
     ) -> GpuResult<()> {
         recorder.begin_pass("radix scatter");

@@ -3,7 +3,8 @@
 //! sized once for the capacity given at creation.
 
 use crate::gpu::{
-    ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder,
+    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc,
+    Recorder,
 };
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
@@ -18,6 +19,7 @@ struct ScanParams {
     len: u32,
     has_block_offsets: u32,
 }
+push_layout!(ScanParams: [SORT_SCAN_REDUCE, SORT_SCAN_DOWNSWEEP], [len, has_block_offsets]);
 
 pub struct PrefixScan {
     reduce: ComputePipeline,
@@ -34,15 +36,11 @@ impl PrefixScan {
         let workgroup_size =
             ctx.limits().subgroup_size.max(256).min(ctx.limits().max_workgroup_invocations);
         let specialization = [workgroup_size, ctx.limits().subgroup_size, ITEMS_PER_THREAD];
-        let pipeline = |name, spirv| {
-            let desc = PipelineDesc {
-                name,
-                spirv,
-                bindings: 2,
-                push_constant_bytes: size_of::<ScanParams>() as u32,
-                specialization: &specialization,
-            };
-            ComputePipeline::new(ctx, &desc)
+        let pipeline = |name, shader| {
+            ComputePipeline::new(
+                ctx,
+                &PipelineDesc { name, shader, specialization: &specialization },
+            )
         };
         let block_len = (workgroup_size * ITEMS_PER_THREAD) as usize;
         let mut levels = Vec::new();
@@ -50,8 +48,8 @@ impl PrefixScan {
             levels.push(GpuBuffer::new(ctx, &format!("scan block sums, level {depth}"), len)?);
         }
         Ok(Self {
-            reduce: pipeline("scan_reduce", shaders::SORT_SCAN_REDUCE)?,
-            downsweep: pipeline("scan_downsweep", shaders::SORT_SCAN_DOWNSWEEP)?,
+            reduce: pipeline("scan_reduce", &shaders::SORT_SCAN_REDUCE)?,
+            downsweep: pipeline("scan_downsweep", &shaders::SORT_SCAN_DOWNSWEEP)?,
             block_len,
             capacity,
             levels,
@@ -84,7 +82,8 @@ impl PrefixScan {
         recorder.begin_pass("scan");
         for level in 0..top {
             let params = ScanParams { len: lengths[level] as u32, has_block_offsets: 0 };
-            let bindings = [buffers[level].binding(), buffers[level + 1].binding()];
+            let bindings =
+                [("data", buffers[level].binding()), ("block_sums", buffers[level + 1].binding())];
             recorder.dispatch_1d(&self.reduce, &bindings, &params, lengths[level + 1] as u64)?;
         }
         for level in (0..=top).rev() {
@@ -92,7 +91,8 @@ impl PrefixScan {
                 ScanParams { len: lengths[level] as u32, has_block_offsets: (level < top) as u32 };
             // The top level is one block and reads no offsets; bind any buffer there.
             let offsets = buffers[(level + 1).min(top)];
-            let bindings = [buffers[level].binding(), offsets.binding()];
+            let bindings =
+                [("data", buffers[level].binding()), ("block_offsets", offsets.binding())];
             let blocks = lengths[level].div_ceil(self.block_len) as u64;
             recorder.dispatch_1d(&self.downsweep, &bindings, &params, blocks)?;
         }

@@ -84,14 +84,19 @@ impl GaussianBuffers {
         recorder.fill_buffer(&self.sh, 0);
     }
 
-    /// Bindings in kernel order: positions, log-scales, rotations, opacity logits, SH.
-    pub(crate) fn bindings(&self) -> [BufferBinding<'_>; 5] {
+    /// Bindings named by `names`, one per buffer in this order: positions, log-scales,
+    /// rotations, opacity logits, SH (each kernel names them its own way).
+    pub(crate) fn bindings(
+        &self,
+        names: [&'static str; 5],
+    ) -> [(&'static str, BufferBinding<'_>); 5] {
+        let [positions, log_scales, rotations, opacity_logits, sh] = names;
         [
-            self.positions.binding(),
-            self.log_scales.binding(),
-            self.rotations.binding(),
-            self.opacity_logits.binding(),
-            self.sh.binding(),
+            (positions, self.positions.binding()),
+            (log_scales, self.log_scales.binding()),
+            (rotations, self.rotations.binding()),
+            (opacity_logits, self.opacity_logits.binding()),
+            (sh, self.sh.binding()),
         ]
     }
 

@@ -3,6 +3,7 @@
 
 use super::{RenderSettings, TILE_SIZE};
 use crate::camera::Camera;
+use crate::gpu::push_layout;
 use bytemuck::{Pod, Zeroable};
 
 /// Gradient floats per Gaussian from the rasterizer backward: mean (2), conic (3), opacity,
@@ -20,6 +21,16 @@ pub struct FrameParams {
     size: [u32; 4],
     options: [u32; 4],
 }
+push_layout!(
+    FrameParams: [
+        SPLAT_PROJECT,
+        SPLAT_PROJECT_BACKWARD,
+        SPLAT_EMIT_INTERSECTIONS,
+        SPLAT_RASTERIZE,
+        SPLAT_RASTERIZE_BACKWARD,
+    ],
+    [view_rows, intrinsics, center_near, background_far, size, options]
+);
 
 impl FrameParams {
     /// `sh_stride` is the scene's SH coefficients per channel; the active degree is the

@@ -4,7 +4,9 @@
 
 use super::buffers::GaussianBuffers;
 use super::frame::{FrameParams, Splat};
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder};
+use crate::gpu::{
+    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder, Shader,
+};
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -21,6 +23,12 @@ struct RangeParams {
     intersections: u32,
     tile_count: u32,
 }
+push_layout!(RangeParams: [SPLAT_TILE_RANGES], [intersections, tile_count]);
+
+/// The scene's buffers as project.comp and project_backward.comp name them, and their gradients.
+const SCENE: [&str; 5] = ["positions", "log_scales", "rotations", "opacity_logits", "sh"];
+const GRADS: [&str; 5] =
+    ["grad_positions", "grad_log_scales", "grad_rotations", "grad_opacity_logits", "grad_sh"];
 
 pub(crate) struct Kernels {
     project: ComputePipeline,
@@ -37,62 +45,32 @@ fn groups(items: usize) -> u64 {
 
 impl Kernels {
     pub(crate) fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
-        let frame_bytes = size_of::<FrameParams>() as u32;
         // Constant 0 is the workgroup size, 1 the subgroup size (read by the rasterizers).
         let subgroup = ctx.limits().subgroup_size;
-        let pipeline = |name, spirv, bindings, push_constant_bytes, workgroup: u32| {
+        let pipeline = |name, shader: &'static Shader, workgroup: u32| {
             ComputePipeline::new(
                 ctx,
-                &PipelineDesc {
-                    name,
-                    spirv,
-                    bindings,
-                    push_constant_bytes,
-                    specialization: &[workgroup, subgroup],
-                },
+                &PipelineDesc { name, shader, specialization: &[workgroup, subgroup] },
             )
         };
+        let linear = LINEAR_WORKGROUP;
         Ok(Self {
-            project: pipeline(
-                "splat project",
-                shaders::SPLAT_PROJECT,
-                7,
-                frame_bytes,
-                LINEAR_WORKGROUP,
-            )?,
+            project: pipeline("splat project", &shaders::SPLAT_PROJECT, linear)?,
             project_backward: pipeline(
                 "splat project backward",
-                shaders::SPLAT_PROJECT_BACKWARD,
-                12,
-                frame_bytes,
-                LINEAR_WORKGROUP,
+                &shaders::SPLAT_PROJECT_BACKWARD,
+                linear,
             )?,
             emit_intersections: pipeline(
                 "splat emit intersections",
-                shaders::SPLAT_EMIT_INTERSECTIONS,
-                4,
-                frame_bytes,
-                LINEAR_WORKGROUP,
+                &shaders::SPLAT_EMIT_INTERSECTIONS,
+                linear,
             )?,
-            tile_ranges: pipeline(
-                "splat tile ranges",
-                shaders::SPLAT_TILE_RANGES,
-                2,
-                size_of::<RangeParams>() as u32,
-                LINEAR_WORKGROUP,
-            )?,
-            rasterize: pipeline(
-                "splat rasterize",
-                shaders::SPLAT_RASTERIZE,
-                6,
-                frame_bytes,
-                TILE_WORKGROUP,
-            )?,
+            tile_ranges: pipeline("splat tile ranges", &shaders::SPLAT_TILE_RANGES, linear)?,
+            rasterize: pipeline("splat rasterize", &shaders::SPLAT_RASTERIZE, TILE_WORKGROUP)?,
             rasterize_backward: pipeline(
                 "splat rasterize backward",
-                shaders::SPLAT_RASTERIZE_BACKWARD,
-                9,
-                frame_bytes,
+                &shaders::SPLAT_RASTERIZE_BACKWARD,
                 TILE_WORKGROUP,
             )?,
         })
@@ -107,8 +85,11 @@ impl Kernels {
         splats: &'a GpuBuffer<Splat>,
         tile_counts: &'a GpuBuffer<u32>,
     ) -> GpuResult<()> {
-        let bindings: Vec<_> =
-            scene.bindings().into_iter().chain([splats.binding(), tile_counts.binding()]).collect();
+        let bindings: Vec<_> = scene
+            .bindings(SCENE)
+            .into_iter()
+            .chain([("splats", splats.binding()), ("tile_counts", tile_counts.binding())])
+            .collect();
         rec.dispatch_1d(&self.project, &bindings, frame, groups(frame.gaussians()))
     }
 
@@ -124,11 +105,11 @@ impl Kernels {
         densify_stats: &'a GpuBuffer<[f32; 2]>,
     ) -> GpuResult<()> {
         let bindings: Vec<_> = scene
-            .bindings()
+            .bindings(SCENE)
             .into_iter()
-            .chain([grad2d.binding()])
-            .chain(grads.bindings())
-            .chain([densify_stats.binding()])
+            .chain([("grad2d", grad2d.binding())])
+            .chain(grads.bindings(GRADS))
+            .chain([("densify_stats", densify_stats.binding())])
             .collect();
         rec.dispatch_1d(&self.project_backward, &bindings, frame, groups(frame.gaussians()))
     }
@@ -143,7 +124,12 @@ impl Kernels {
         keys: &'a GpuBuffer<u64>,
         ids: &'a GpuBuffer<u32>,
     ) -> GpuResult<()> {
-        let bindings = [splats.binding(), offsets.binding(), keys.binding(), ids.binding()];
+        let bindings = [
+            ("splats", splats.binding()),
+            ("tile_offsets", offsets.binding()),
+            ("keys", keys.binding()),
+            ("gaussian_ids", ids.binding()),
+        ];
         rec.dispatch_1d(&self.emit_intersections, &bindings, frame, groups(frame.gaussians()))
     }
 
@@ -161,7 +147,7 @@ impl Kernels {
             RangeParams { intersections: keys.len() as u32, tile_count: tiles_x * tiles_y };
         rec.dispatch_1d(
             &self.tile_ranges,
-            &[keys.binding(), ranges.binding()],
+            &[("keys", keys.binding()), ("tile_ranges", ranges.binding())],
             &params,
             groups(keys.len()),
         )
@@ -175,12 +161,12 @@ impl Kernels {
         outputs: &RasterOutputs<'a>,
     ) {
         let bindings = [
-            inputs.splats.binding(),
-            inputs.ranges.binding(),
-            inputs.ids.binding(),
-            outputs.rgba.binding(),
-            outputs.depth.binding(),
-            outputs.pixel_state.binding(),
+            ("splats", inputs.splats.binding()),
+            ("tile_ranges", inputs.ranges.binding()),
+            ("gaussian_ids", inputs.ids.binding()),
+            ("out_rgba", outputs.rgba.binding()),
+            ("out_depth", outputs.depth.binding()),
+            ("pixel_state", outputs.pixel_state.binding()),
         ];
         let (tiles_x, tiles_y) = frame.tiles();
         rec.dispatch(&self.rasterize, &bindings, frame, [tiles_x, tiles_y, 1]);
@@ -197,15 +183,15 @@ impl Kernels {
         grad2d: &'a GpuBuffer<f32>,
     ) {
         let bindings = [
-            inputs.splats.binding(),
-            inputs.ranges.binding(),
-            inputs.ids.binding(),
-            outputs.rgba.binding(),
-            outputs.depth.binding(),
-            outputs.pixel_state.binding(),
-            grad_rgba.binding(),
-            grad_depth.binding(),
-            grad2d.binding(),
+            ("splats", inputs.splats.binding()),
+            ("tile_ranges", inputs.ranges.binding()),
+            ("gaussian_ids", inputs.ids.binding()),
+            ("rgba", outputs.rgba.binding()),
+            ("depth_out", outputs.depth.binding()),
+            ("pixel_state", outputs.pixel_state.binding()),
+            ("grad_rgba", grad_rgba.binding()),
+            ("grad_depth", grad_depth.binding()),
+            ("grad2d", grad2d.binding()),
         ];
         let (tiles_x, tiles_y) = frame.tiles();
         rec.dispatch(&self.rasterize_backward, &bindings, frame, [tiles_x, tiles_y, 1]);

@@ -6,7 +6,7 @@
 
 use super::TrainError;
 use crate::camera::Camera;
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, PipelineDesc, Recorder};
+use crate::gpu::{push_layout, ComputePipeline, GpuBuffer, GpuContext, PipelineDesc, Recorder};
 use crate::loss::{ImageLoss, LossParams, LossTerms};
 use crate::raster::{MeshRasterizer, RasterMesh, RasterSettings};
 use crate::shaders;
@@ -23,6 +23,15 @@ struct BridgeParams {
     background: [f32; 4],
     sizes: [u32; 4],
 }
+push_layout!(
+    BridgeParams: [
+        TRAIN_MESH_COLORS,
+        TRAIN_SH_DC_GRADIENT,
+        TRAIN_PACK_MESH_RENDER,
+        TRAIN_UNPACK_MESH_GRADIENT,
+    ],
+    [background, sizes]
+);
 
 pub struct MeshTerm {
     ctx: Arc<GpuContext>,
@@ -57,29 +66,21 @@ impl MeshTerm {
         let pixels = width as usize * height as usize;
         let mut loss = ImageLoss::new(ctx)?;
         loss.reserve(pixels)?;
-        let pipeline = |name, spirv, bindings| {
-            let desc = PipelineDesc {
-                name,
-                spirv,
-                bindings,
-                push_constant_bytes: size_of::<BridgeParams>() as u32,
-                specialization: &[WORKGROUP],
-            };
-            ComputePipeline::new(ctx, &desc)
+        let pipeline = |name, shader| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &[WORKGROUP] })
         };
         let term = Self {
             ctx: ctx.clone(),
             raster: MeshRasterizer::new(ctx, &mesh, width, height)?,
             settings: RasterSettings::scaled_to(positions),
             loss,
-            mesh_colors: pipeline("mesh colours from SH", shaders::TRAIN_MESH_COLORS, 2)?,
+            mesh_colors: pipeline("mesh colours from SH", &shaders::TRAIN_MESH_COLORS)?,
             sh_dc_gradient: pipeline(
                 "SH DC gradient from mesh colours",
-                shaders::TRAIN_SH_DC_GRADIENT,
-                2,
+                &shaders::TRAIN_SH_DC_GRADIENT,
             )?,
-            pack: pipeline("pack mesh render", shaders::TRAIN_PACK_MESH_RENDER, 3)?,
-            unpack: pipeline("unpack mesh gradient", shaders::TRAIN_UNPACK_MESH_GRADIENT, 3)?,
+            pack: pipeline("pack mesh render", &shaders::TRAIN_PACK_MESH_RENDER)?,
+            unpack: pipeline("unpack mesh gradient", &shaders::TRAIN_UNPACK_MESH_GRADIENT)?,
             packed: GpuBuffer::new(ctx, "mesh render rgba", pixels)?,
             packed_grad: GpuBuffer::new(ctx, "mesh render rgba gradient", pixels)?,
             color_grad: GpuBuffer::new(ctx, "mesh colour image gradient", 3 * pixels)?,
@@ -132,7 +133,7 @@ impl MeshTerm {
         let vertices = self.bridge(params.len(), params, background);
         rec.dispatch_1d(
             &self.mesh_colors,
-            &[params.sh.binding(), self.raster.colors().binding()],
+            &[("sh", params.sh.binding()), ("colors", self.raster.colors().binding())],
             &vertices,
             groups(params.len()),
         )?;
@@ -140,9 +141,9 @@ impl MeshTerm {
         self.raster.record_forward_from(rec, &raster, &params.positions)?;
         let pixels = self.packed_grad.len();
         let bindings = [
-            self.raster.color_image().binding(),
-            self.raster.mask_image().binding(),
-            self.packed.binding(),
+            ("color", self.raster.color_image().binding()),
+            ("mask", self.raster.mask_image().binding()),
+            ("packed", self.packed.binding()),
         ];
         rec.dispatch_1d(
             &self.pack,
@@ -174,8 +175,11 @@ impl MeshTerm {
         let loss = LossParams::new(camera.width, camera.height, lambda, false);
         self.loss.record(rec, &loss, &self.packed, target, None, &self.terms, &self.packed_grad)?;
         let pixels = self.packed_grad.len();
-        let unpack =
-            [self.packed_grad.binding(), self.color_grad.binding(), self.mask_grad.binding()];
+        let unpack = [
+            ("packed_grad", self.packed_grad.binding()),
+            ("color_grad", self.color_grad.binding()),
+            ("mask_grad", self.mask_grad.binding()),
+        ];
         rec.dispatch_1d(
             &self.unpack,
             &unpack,
@@ -191,7 +195,8 @@ impl MeshTerm {
             (&self.color_grad, &self.mask_grad),
             (&grads.positions, &self.vertex_color_grads),
         )?;
-        let dc = [self.vertex_color_grads.binding(), grads.sh.binding()];
+        let dc =
+            [("color_grads", self.vertex_color_grads.binding()), ("sh_grads", grads.sh.binding())];
         rec.dispatch_1d(
             &self.sh_dc_gradient,
             &dc,

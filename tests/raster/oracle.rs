@@ -211,8 +211,10 @@ fn pipeline(d: &ash::Device, owned: &mut Owned, (w, h): (u32, u32)) -> vk::Pipel
         unsafe { d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None) }
             .unwrap()
     };
-    let (vert, frag) =
-        (module(shaders::RASTER_ORACLE_IDS_VERT), module(shaders::RASTER_ORACLE_IDS_FRAG));
+    let (vert, frag) = (
+        module(shaders::RASTER_ORACLE_IDS_VERT.spirv),
+        module(shaders::RASTER_ORACLE_IDS_FRAG.spirv),
+    );
     owned.modules.extend([vert, frag]);
     let stages = [
         vk::PipelineShaderStageCreateInfo::default()

@@ -5,7 +5,9 @@
 //! vertex among the lowest-id vertex of each pixel within `radius` pixels (Chebyshev).
 
 use crate::camera::Camera;
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder};
+use crate::gpu::{
+    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder,
+};
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -25,6 +27,10 @@ struct Push {
     scale: f32,
     near: f32,
 }
+push_layout!(
+    Push: [LOSS_COVERAGE_SEED, LOSS_COVERAGE_PULL],
+    [world_to_camera, intrinsics, width, height, vertices, radius, scale, near]
+);
 
 pub struct CoverageTerm {
     seed: ComputePipeline,
@@ -43,21 +49,12 @@ impl CoverageTerm {
         pixels: usize,
         radius: u32,
     ) -> GpuResult<Self> {
-        let pipeline = |name, spirv, bindings| {
-            ComputePipeline::new(
-                ctx,
-                &PipelineDesc {
-                    name,
-                    spirv,
-                    bindings,
-                    push_constant_bytes: size_of::<Push>() as u32,
-                    specialization: &[WORKGROUP],
-                },
-            )
+        let pipeline = |name, shader| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &[WORKGROUP] })
         };
         Ok(Self {
-            seed: pipeline("coverage seed", shaders::LOSS_COVERAGE_SEED, 3)?,
-            pull: pipeline("coverage pull", shaders::LOSS_COVERAGE_PULL, 7)?,
+            seed: pipeline("coverage seed", &shaders::LOSS_COVERAGE_SEED)?,
+            pull: pipeline("coverage pull", &shaders::LOSS_COVERAGE_PULL)?,
             projected: GpuBuffer::new(ctx, "coverage projected vertices", vertices)?,
             seeds: GpuBuffer::new(ctx, "coverage seeds", pixels)?,
             losses: GpuBuffer::from_slice(ctx, "coverage loss", &[0.0])?,
@@ -111,18 +108,22 @@ impl CoverageTerm {
         rec.fill_buffer(&self.seeds, u32::MAX);
         rec.dispatch_1d(
             &self.seed,
-            &[positions.binding(), self.projected.binding(), self.seeds.binding()],
+            &[
+                ("positions", positions.binding()),
+                ("projected", self.projected.binding()),
+                ("seeds", self.seeds.binding()),
+            ],
             &push,
             (vertices as u64).div_ceil(WORKGROUP as u64),
         )?;
         let pull = [
-            positions.binding(),
-            self.projected.binding(),
-            self.seeds.binding(),
-            target.binding(),
-            render.binding(),
-            grad_positions.binding(),
-            self.losses.binding(),
+            ("positions", positions.binding()),
+            ("projected", self.projected.binding()),
+            ("seeds", self.seeds.binding()),
+            ("target", target.binding()),
+            ("render", render.binding()),
+            ("grad_positions", grad_positions.binding()),
+            ("losses", self.losses.binding()),
         ];
         rec.dispatch_1d(&self.pull, &pull, &push, (pixels as u64).div_ceil(WORKGROUP as u64))
     }

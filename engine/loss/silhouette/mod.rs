@@ -14,7 +14,9 @@ pub use coverage::CoverageTerm;
 pub use distance::mask_distance;
 
 use crate::camera::Camera;
-use crate::gpu::{ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder};
+use crate::gpu::{
+    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder,
+};
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -30,6 +32,7 @@ struct Push {
     scale: f32,
     near: f32,
 }
+push_layout!(Push: [LOSS_SILHOUETTE], [vertices, views, scale, near]);
 
 /// One view as the kernel reads it (silhouette.comp `View`).
 #[repr(C)]
@@ -90,9 +93,7 @@ impl SilhouetteTerm {
                 ctx,
                 &PipelineDesc {
                     name: "silhouette",
-                    spirv: shaders::LOSS_SILHOUETTE,
-                    bindings: 5,
-                    push_constant_bytes: size_of::<Push>() as u32,
+                    shader: &shaders::LOSS_SILHOUETTE,
                     specialization: &[WORKGROUP],
                 },
             )?,
@@ -132,11 +133,11 @@ impl SilhouetteTerm {
             near,
         };
         let buffers = [
-            positions.binding(),
-            self.views.binding(),
-            self.fields.binding(),
-            grad_positions.binding(),
-            self.losses.binding(),
+            ("positions", positions.binding()),
+            ("views", self.views.binding()),
+            ("fields", self.fields.binding()),
+            ("grad_positions", grad_positions.binding()),
+            ("losses", self.losses.binding()),
         ];
         rec.dispatch_1d(
             &self.pipeline,
