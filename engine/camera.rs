@@ -1,4 +1,4 @@
-//! The one camera model of the project (CONVENTIONS.md): a pinhole with OpenCV axes (x right,
+//! The one camera model of the project (docs/conventions.md): a pinhole with OpenCV axes (x right,
 //! y down, z forward), a rigid `world_to_camera`, intrinsics in pixels, and pixel (i, j)
 //! centred at (i + 0.5, j + 0.5). Other conventions are converted on the way in, here.
 //!

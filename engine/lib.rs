@@ -1,7 +1,7 @@
 //! tagsplat: topology-consistent mesh sequences from multi-view video, on Vulkan compute.
 //!
 //! The engine is a library first; the `tagsplat` command-line program is a thin layer over it.
-//! Modules follow the pipeline stages (see `ARCHITECTURE.md`); a module uses only modules below
+//! Modules follow the pipeline stages (see docs/architecture.md); a module uses only modules below
 //! it (`tests/layers.rs` fails on a cycle):
 //! - [`gpu`]: Vulkan context, buffers, compute pipelines, command recording, timestamps,
 //!   validation.

@@ -116,3 +116,30 @@ fn a_cycle_is_found_and_comments_do_not_count() {
     graph.get_mut("c").unwrap().insert("a".into(), BTreeSet::new());
     assert_eq!(find_cycle(&graph).unwrap(), ["a", "b", "c", "a"]);
 }
+
+/// Every `docs/NAME.md` that the code or the README cites is in the repository.
+#[test]
+fn cited_documents_exist() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = vec![root.join("README.md")];
+    rust_files(&root.join("engine"), &mut files);
+    rust_files(&root.join("tools"), &mut files);
+    let mut cited = BTreeSet::new();
+    for file in &files {
+        let text = std::fs::read_to_string(file).unwrap();
+        for (at, _) in text.match_indices("docs/") {
+            let name: String = text[at..]
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || "/_.-".contains(*c))
+                .collect();
+            if let Some(name) =
+                name.strip_suffix('.').or(Some(&name)).filter(|n| n.ends_with(".md"))
+            {
+                cited.insert((name.to_owned(), file.clone()));
+            }
+        }
+    }
+    assert!(cited.iter().any(|(name, _)| name == "docs/conventions.md"), "{cited:?}");
+    let missing: Vec<_> = cited.iter().filter(|(name, _)| !root.join(name).is_file()).collect();
+    assert!(missing.is_empty(), "cited but not in the repository: {missing:?}");
+}

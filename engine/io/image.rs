@@ -1,4 +1,4 @@
-//! Image files as float arrays (CONVENTIONS.md): 8- and 16-bit PNG read as values in [0, 1]
+//! Image files as float arrays (docs/conventions.md): 8- and 16-bit PNG read as values in [0, 1]
 //! without gamma conversion, EXR read as linear float; PNG written 8-bit, EXR written as
 //! 32-bit float. Every error names the file.
 

@@ -1,4 +1,4 @@
-//! The topology regularizers (seed §3.2–3.3, MISSION.md "Losses") as GPU kernels with
+//! The topology regularizers (the paper's §3.2–3.3) as GPU kernels with
 //! analytic gradients, and their f64 CPU [`mod@reference`].
 //!
 //! # The terms (n Gaussians, N(i) the 1-ring of i with m_i members, primes: frame t − 1)
@@ -24,7 +24,7 @@ pub mod reference;
 pub use kernels::{Regularizers, Temporal};
 pub use neighbourhoods::{Neighbourhoods, BOUNDARY_BIT};
 
-/// Loss weights (defaults: MISSION.md table) and the temporal weight falloff λ_w.
+/// Loss weights (defaults 1, 5, 1, 4, 4, 20 in field order) and the temporal weight falloff λ_w.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Weights {
     pub scale_2d: f32,

@@ -1,4 +1,4 @@
-//! A Gaussian scene on the host: parameters as stored for optimisation (CONVENTIONS.md), one
+//! A Gaussian scene on the host: parameters as stored for optimisation (docs/conventions.md), one
 //! row per Gaussian, and its de-facto 3DGS PLY form.
 
 use super::{sh_coefficients, MAX_SH_DEGREE};

@@ -1,5 +1,5 @@
-//! Mesh → Gaussians: one Gaussian per vertex, lying in the surface (MISSION.md,
-//! "Initialisation"), and the per-vertex quantities the topology policies read back.
+//! Mesh → Gaussians: one Gaussian per vertex, lying in the surface (docs/conventions.md,
+//! "Meshes"), and the per-vertex quantities the topology policies read back.
 
 use super::geometry::{area_vector, vec};
 use super::ManifoldMesh;

@@ -1,12 +1,12 @@
 //! Gaussian topology: the Gaussians are the vertices of a manifold triangle mesh, and every
-//! change of the Gaussian set keeps that mesh manifold (MISSION.md, "Gaussian topology").
+//! change of the Gaussian set keeps that mesh manifold (docs/architecture.md).
 //!
 //! # The structure
 //! [`ManifoldMesh`] keeps `positions: Vec<[f32; 3]>` (public, one row per vertex index) beside
 //! an implicit half-edge connectivity: face `f` owns half-edges `3f..3f + 3`, half-edge `3f + k`
 //! runs from corner `k` to corner `k + 1`; [`next`]/[`prev`] are arithmetic, twins are stored
 //! ([`NONE`] on the boundary), and every vertex stores one outgoing half-edge. Faces are
-//! counter-clockwise seen from outside (CONVENTIONS.md).
+//! counter-clockwise seen from outside (docs/conventions.md).
 //!
 //! - Build: [`ManifoldMesh::new`]`(positions, faces)` for consistently oriented faces, with a
 //!   [`TopologyError`] naming the first non-manifold edge or vertex; [`orient_faces`] makes the

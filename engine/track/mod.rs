@@ -2,7 +2,7 @@
 //!
 //! A query point is bound once, on frame 0, to (face, barycentric) — by the closest surface point
 //! for a 3D point, by the first hit of the pixel's ray for a 2D point — and followed through
-//! every frame as Σ bₖ·vₖ(t) (`CONVENTIONS.md`, "Tracking"). The surface queries are
+//! every frame as Σ bₖ·vₖ(t) (docs/conventions.md, "Tracking"). The surface queries are
 //! [`crate::geometry`]'s.
 //! - [`bind`]: query points → bindings, refusing points too far from the surface.
 //! - [`trajectory`]: bindings → positions in every frame.
