@@ -14,6 +14,7 @@ use tagsplat::synth::{generate, SubjectSource, SynthOptions};
 use tagsplat::track::queries::read_points;
 use tagsplat::track::{track, Queries};
 use tagsplat::train::pipeline::{run_train, TrainConfig, TrainJob};
+use tagsplat::train::TrainError;
 
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("tagsplat-pipeline-{name}-{}", std::process::id()));
@@ -213,9 +214,10 @@ fn a_non_finite_frame_stops_the_run_and_keeps_finished_frames() {
     let mut wild = quick_config();
     wild.learning_rates.positions = 1e30;
     wild.learning_rates.positions_final = 1e30;
-    let error = run_train(g.ctx(), &job(&dir.join("data"), &out, wild, None), &mut |_| {})
-        .unwrap_err()
-        .to_string();
+    let error =
+        run_train(g.ctx(), &job(&dir.join("data"), &out, wild, None), &mut |_| {}).unwrap_err();
+    assert!(matches!(error, TrainError::NonFinite { frame: Some(1), .. }), "{error:?}");
+    let error = error.to_string();
     assert!(error.contains("frame 1") && error.contains("non-finite"), "{error}");
     assert!(out.join("meshes/000000.ply").is_file() && !out.join("meshes/000001.ply").exists());
     let _ = std::fs::remove_dir_all(&dir);
@@ -226,23 +228,17 @@ fn bad_inputs_are_named() {
     let g = gpu();
     let dir = temp("bad");
     sequence(&dir.join("data"));
-    // A frame range whose predecessor is missing.
-    let error = run_train(
-        g.ctx(),
-        &job(&dir.join("data"), &dir.join("out"), quick_config(), Some(1..2)),
-        &mut |_| {},
-    )
-    .unwrap_err()
-    .to_string();
-    assert!(error.contains("need frame 0"), "{error}");
-    let error = run_train(
-        g.ctx(),
-        &job(&dir.join("data"), &dir.join("out"), quick_config(), Some(0..9)),
-        &mut |_| {},
-    )
-    .unwrap_err()
-    .to_string();
-    assert!(error.contains("0..9"), "{error}");
+    // A frame range whose predecessor is missing, one past the data: typed, and named.
+    let run = |frames| {
+        let job = job(&dir.join("data"), &dir.join("out"), quick_config(), Some(frames));
+        run_train(g.ctx(), &job, &mut |_| {}).unwrap_err()
+    };
+    let error = run(1..2);
+    assert!(matches!(error, TrainError::MissingFrame { frame: 1, needs: 0, .. }), "{error:?}");
+    assert!(error.to_string().contains("needs frame 0"), "{error}");
+    let error = run(0..9);
+    assert!(matches!(error, TrainError::FrameRange { available: 3, .. }), "{error:?}");
+    assert!(error.to_string().contains("0..9"), "{error}");
     // A given mesh with an edge shared by three faces.
     let bad = dir.join("fin.obj");
     std::fs::write(

@@ -49,7 +49,7 @@ pub fn fit(
 ) -> Result<FitOutcome, TrainError> {
     config.check()?;
     if train.is_empty() {
-        return Err(TrainError::Input("no training views".into()));
+        return Err(TrainError::NoViews { frame: None, problem: "no training views" });
     }
     let started = Instant::now();
     let extent = scene_extent(&train.iter().map(|v| &v.camera).collect::<Vec<_>>());

@@ -81,7 +81,8 @@ pub fn points_inside_masks(
     let with_subject: Vec<usize> =
         (0..views.len()).filter(|&v| !foreground[v].is_empty()).collect();
     if with_subject.is_empty() {
-        return Err(TrainError::Input("no view has a non-empty mask to initialise from".into()));
+        let problem = "no view has a non-empty mask to initialise from";
+        return Err(TrainError::NoViews { frame: None, problem });
     }
     let (centre, radius) = rig_sphere(views);
     let mut rng = SplitMix64::new(seed);
@@ -100,7 +101,7 @@ pub fn points_inside_masks(
         }
     }
     if points.len() < count {
-        return Err(TrainError::Input(format!(
+        return Err(TrainError::Init(format!(
             "only {} of {count} sample points fall inside every mask: do the masks intersect in space (cameras right, masks not empty)?",
             points.len()
         )));

@@ -79,7 +79,7 @@ type PointsAndColors = (Vec<[f32; 3]>, Option<Vec<[f32; 3]>>);
 
 /// Vertex positions (and colours when present) of a PLY point cloud or mesh, or an OBJ mesh.
 fn read_points(path: &Path) -> Result<PointsAndColors, TrainError> {
-    let bad = |problem: String| TrainError::Input(format!("{}: {problem}", path.display()));
+    let bad = |problem: String| TrainError::Invalid { path: path.to_owned(), problem };
     let is_obj = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     let (points, colors) = if is_obj {
         let mesh = TriMesh::read_obj(path).map_err(|e| bad(e.to_string()))?;
@@ -121,11 +121,11 @@ pub fn write_fit_outputs(out: &Path, outcome: &FitOutcome) -> Result<Vec<PathBuf
     std::fs::create_dir_all(&renders).map_err(io(&renders))?;
     let mut written = Vec::new();
     let splats = out.join("gaussians.ply");
-    outcome.scene.write_ply(&splats).map_err(|e| TrainError::Input(e.to_string()))?;
+    outcome.scene.write_ply(&splats)?;
     written.push(splats);
     for (name, image) in &outcome.renders {
         let path = renders.join(format!("{name}.png"));
-        write_png(&path, image).map_err(|e| TrainError::Input(e.to_string()))?;
+        write_png(&path, image)?;
         written.push(path);
     }
     let report = out.join("report.json");

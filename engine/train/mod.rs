@@ -43,8 +43,40 @@ pub enum TrainError {
     Regularize(#[from] crate::regularize::RegularizeError),
     #[error(transparent)]
     Topology(#[from] crate::topology::TopologyError),
-    #[error("{0}")]
-    Input(String),
+    #[error(transparent)]
+    Mesh(#[from] crate::mesh::MeshError),
+    #[error(transparent)]
+    Scene(#[from] crate::splat::SceneError),
+    #[error(transparent)]
+    Sequence(#[from] crate::sequence::SequenceError),
+    #[error(transparent)]
+    Usd(#[from] crate::sequence::usd::UsdError),
+    #[error(transparent)]
+    Image(#[from] crate::io::image::ImageError),
+    #[error(transparent)]
+    Ply(#[from] crate::io::ply::PlyError),
+    #[error(transparent)]
+    Deform(#[from] crate::deform::DeformError),
+    #[error("initial mesh from the masks: {0}")]
+    InitMesh(#[from] crate::init::InitError),
+    /// A loss went non-finite; `detail` names the iterations and the terms. The frames (or
+    /// Gaussians) finished before are kept.
+    #[error("{}{detail}", frame.map_or(String::new(), |t| format!("frame {t}: ")))]
+    NonFinite { frame: Option<usize>, detail: String },
+    /// Nothing to train on: no view, or no view whose mask holds the subject.
+    #[error("{}{problem}", frame.map_or(String::new(), |t| format!("frame {t}: ")))]
+    NoViews { frame: Option<usize>, problem: &'static str },
+    /// Initial Gaussians could not be placed (e.g. the masks do not meet in space).
+    #[error("initialisation: {0}")]
+    Init(String),
+    #[error("frames {}..{}: {} has frames 0..{available}", frames.start, frames.end, data.display())]
+    FrameRange { frames: std::ops::Range<usize>, data: PathBuf, available: usize },
+    /// A frame cannot start before the frame it continues from is complete in the output.
+    #[error("frame {frame} needs frame {needs} in {}; run from an earlier frame", out.display())]
+    MissingFrame { frame: usize, needs: usize, out: PathBuf },
+    /// A file that reads but does not fit: faces that differ between frames, a bad point cloud.
+    #[error("{}: {problem}", path.display())]
+    Invalid { path: PathBuf, problem: String },
     #[error("cannot write {}: {error}", path.display())]
     Io { path: PathBuf, error: std::io::Error },
 }

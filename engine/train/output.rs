@@ -57,16 +57,14 @@ impl SequenceOutput {
         mesh: &TriMesh,
         scene: &GaussianScene,
     ) -> Result<(), TrainError> {
-        scene.write_ply(&self.gaussians_path(t)).map_err(|e| TrainError::Input(e.to_string()))?;
-        mesh.write_ply(&self.mesh_path(t)).map_err(|e| TrainError::Input(e.to_string()))
+        scene.write_ply(&self.gaussians_path(t))?;
+        Ok(mesh.write_ply(&self.mesh_path(t))?)
     }
 
     /// A finished frame's mesh and Gaussians, as written.
     pub fn read_frame(&self, t: usize) -> Result<(TriMesh, GaussianScene), TrainError> {
-        let mesh =
-            TriMesh::read_ply(&self.mesh_path(t)).map_err(|e| TrainError::Input(e.to_string()))?;
-        let scene = GaussianScene::read_ply(&self.gaussians_path(t))
-            .map_err(|e| TrainError::Input(e.to_string()))?;
+        let mesh = TriMesh::read_ply(&self.mesh_path(t))?;
+        let scene = GaussianScene::read_ply(&self.gaussians_path(t))?;
         if mesh.positions.len() != scene.len() {
             let problem = format!(
                 "{} vertices but {} has {} Gaussians",
@@ -74,7 +72,7 @@ impl SequenceOutput {
                 self.gaussians_path(t).display(),
                 scene.len()
             );
-            return Err(TrainError::Input(format!("{}: {problem}", self.mesh_path(t).display())));
+            return Err(TrainError::Invalid { path: self.mesh_path(t), problem });
         }
         Ok((mesh, scene))
     }
@@ -90,16 +88,13 @@ impl SequenceOutput {
     ) -> Result<Vec<PathBuf>, TrainError> {
         let mut sequence = MeshSequence::default();
         for t in frames {
-            let mesh = TriMesh::read_ply(&self.mesh_path(t))
-                .map_err(|e| TrainError::Input(e.to_string()))?;
+            let mesh = TriMesh::read_ply(&self.mesh_path(t))?;
             if sequence.frames.is_empty() {
                 sequence.faces = mesh.faces.clone();
                 sequence.colors = mesh.colors.as_ref().map(|_| Vec::new());
             } else if mesh.faces != sequence.faces {
-                return Err(TrainError::Input(format!(
-                    "{}: its faces differ from the first frame's",
-                    self.mesh_path(t).display()
-                )));
+                let problem = "its faces differ from the first frame's".into();
+                return Err(TrainError::Invalid { path: self.mesh_path(t), problem });
             }
             if let (Some(all), Some(c)) = (sequence.colors.as_mut(), mesh.colors) {
                 all.push(c);
@@ -108,12 +103,10 @@ impl SequenceOutput {
         }
         let (pc2, glb) = (self.root.join("sequence.pc2"), self.root.join("sequence.glb"));
         for path in [&pc2, &glb] {
-            sequence
-                .write(path, FrameFormat::Ply, fps)
-                .map_err(|e| TrainError::Input(e.to_string()))?;
+            sequence.write(path, FrameFormat::Ply, fps)?;
         }
         let usd = self.root.join("sequence.usda");
-        write_usda(&usd, &sequence, fps, up, None).map_err(|e| TrainError::Input(e.to_string()))?;
+        write_usda(&usd, &sequence, fps, up, None)?;
         Ok(vec![self.root.join("sequence.obj"), pc2, glb, usd])
     }
 }

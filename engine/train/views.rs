@@ -74,10 +74,9 @@ pub fn load_targets(
         .frames
         .get(frame)
         .ok_or_else(|| {
-            TrainError::Input(format!(
-                "frame {frame} is past the dataset's {} frames",
-                dataset.frames.len()
-            ))
+            let (frames, data, available) =
+                (frame..frame + 1, dataset.root.clone(), dataset.frames.len());
+            TrainError::FrameRange { frames, data, available }
         })?
         .views;
     let mut targets = Vec::new();

@@ -96,7 +96,7 @@ pub fn optimize_frame(
     let first = task
         .train
         .first()
-        .ok_or_else(|| TrainError::Input(format!("frame {}: no training views", task.frame)))?;
+        .ok_or(TrainError::NoViews { frame: Some(task.frame), problem: "no training views" })?;
     let mut settings = RenderSettings {
         background: bg,
         near: (extent * 1e-3) as f32,
@@ -312,11 +312,11 @@ fn read_losses(
         && sil.is_finite()
         && regularizers.slots().iter().all(|v| v.is_finite()))
     {
-        return Err(TrainError::Input(format!(
-            "frame {}: the loss went non-finite between iterations {first} and {last} (Gaussian {gs}, mesh {mesh}, silhouette {sil}, regularizers {:?}); the finished frames are kept",
-            report.frame,
+        let detail = format!(
+            "the loss went non-finite between iterations {first} and {last} (Gaussian {gs}, mesh {mesh}, silhouette {sil}, regularizers {:?}); the finished frames are kept",
             regularizers.slots()
-        )));
+        );
+        return Err(TrainError::NonFinite { frame: Some(report.frame), detail });
     }
     (report.loss_gs, report.loss_mesh, report.loss_silhouette, report.regularizers) =
         (gs, mesh, sil, regularizers.slots());

@@ -69,8 +69,7 @@ pub fn solve_graph(
     let rest = g.rest.pick(input.start, input.frame0);
     let graph =
         build_graph(&rest.positions, |i| input.neighbourhoods.neighbours(i), g.nodes as usize);
-    let mut deformer = GraphDeformer::new(ctx, &graph, rest, g.arap)
-        .map_err(|e| TrainError::Input(format!("deformation graph: {e}")))?;
+    let mut deformer = GraphDeformer::new(ctx, &graph, rest, g.arap)?;
     if g.rest == ReferencePose::Frame0 {
         deformer.write_nodes(&fit_nodes(&rest.positions, &input.start.positions, &graph))?;
     }
@@ -160,7 +159,8 @@ pub fn solve_graph(
             if let Some(stop_reason) = plateau.check(it, pass_loss) {
                 let loss = pass_loss.unwrap_or(f64::NAN);
                 if !loss.is_finite() {
-                    return Err(TrainError::Input(format!("the deformation graph's loss went non-finite at level {factor}, iteration {it}")));
+                    let detail = format!("the deformation graph's loss went non-finite at level {factor}, iteration {it}");
+                    return Err(TrainError::NonFinite { frame: None, detail });
                 }
                 report.levels.push(LevelReport {
                     factor,

@@ -12,7 +12,7 @@ use crate::io::write_atomically;
 use crate::mesh::TriMesh;
 use crate::sequence::usd::UpAxis;
 use crate::splat::GaussianScene;
-use crate::topology::{gaussians_from_mesh, import, InitConfig, ManifoldMesh};
+use crate::topology::{gaussians_from_mesh, import, InitConfig, ManifoldMesh, TopologyError};
 use crate::train::output::{dc_vertex_colors, SequenceOutput};
 use crate::train::temporal::extrapolate;
 use crate::train::{load_targets, TrainError, ViewTarget};
@@ -71,13 +71,8 @@ pub fn run_train(
     let dataset = Dataset::load(&job.data)?;
     let frames = job.frames.clone().unwrap_or(0..dataset.frames.len());
     if frames.is_empty() || frames.end > dataset.frames.len() {
-        return Err(TrainError::Input(format!(
-            "frames {}..{}: {} has frames 0..{}",
-            frames.start,
-            frames.end,
-            job.data.display(),
-            dataset.frames.len()
-        )));
+        let (data, available) = (job.data.clone(), dataset.frames.len());
+        return Err(TrainError::FrameRange { frames, data, available });
     }
     let out = SequenceOutput::create(&job.out)?;
     // A range that starts later continues frames already on disk.
@@ -85,12 +80,8 @@ pub fn run_train(
         .into_iter()
         .find(|&t| t < frames.start && !out.is_complete(t))
     {
-        return Err(TrainError::Input(format!(
-            "frames {}..{} need frame {missing} in {}; run from an earlier frame",
-            frames.start,
-            frames.end,
-            job.out.display()
-        )));
+        let out = job.out.clone();
+        return Err(TrainError::MissingFrame { frame: frames.start, needs: missing, out });
     }
     let mut report = TrainReport {
         device: ctx.info().name.clone(),
@@ -124,11 +115,8 @@ pub fn run_train(
             before_previous = Some(out.read_frame(t - 2)?.1);
         }
         if !out.is_complete(t - 1) {
-            return Err(TrainError::Input(format!(
-                "frame {t} needs frame {} in {}",
-                t - 1,
-                job.out.display()
-            )));
+            let out = job.out.clone();
+            return Err(TrainError::MissingFrame { frame: t, needs: t - 1, out });
         }
         let (train, eval) = views(&dataset, t, &job.config)?;
         // A view whose mask is empty has lost the subject: it is left out of this frame, and
@@ -200,7 +188,7 @@ fn canonical_start(
     if out.is_complete(0) {
         let (mesh, scene) = out.read_frame(0)?;
         let topology = ManifoldMesh::new(mesh.positions, mesh.faces)
-            .map_err(|e| TrainError::Input(format!("{}: {e}", out.mesh_path(0).display())))?;
+            .map_err(|e| TopologyError::InFile { path: out.mesh_path(0), source: Box::new(e) })?;
         return Ok((topology, scene));
     }
     let (mut mesh, colors) = initial_mesh(dataset, job)?;
@@ -236,7 +224,7 @@ fn initial_mesh(
         Some(path) => {
             let is_obj = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
             let mesh = if is_obj { TriMesh::read_obj(path) } else { TriMesh::read_ply(path) };
-            (mesh.map_err(|e| TrainError::Input(e.to_string()))?, path.clone())
+            (mesh?, path.clone())
         }
         None => {
             let vertices =
@@ -246,12 +234,11 @@ fn initial_mesh(
                 edge_pixels: job.config.init.edge_pixels,
                 ..Default::default()
             };
-            let built = init_mesh(dataset, 0, &options)
-                .map_err(|e| TrainError::Input(format!("initial mesh from the masks: {e}")))?;
+            let built = init_mesh(dataset, 0, &options)?;
             (built.mesh, dataset.root.join("(mesh from masks)"))
         }
     };
-    let imported = import(&mesh, &path, true).map_err(|e| TrainError::Input(e.to_string()))?;
+    let imported = import(&mesh, &path, true)?;
     let colors = imported
         .old_of_new
         .iter()
