@@ -3,6 +3,7 @@
 use super::config::{FitConfig, LearningRateConfig};
 use super::densify::{densify_and_prune, DensifyRules};
 use super::report::{CurvePoint, DensifyEvent, FitReport};
+use super::schedule::{channel_weights, sh_degree_at, DensifyWindow, ViewCycle};
 use super::step::Trainer;
 use super::views::ViewTarget;
 use super::TrainError;
@@ -67,12 +68,9 @@ pub fn fit(
         &RenderSettings { sh_degree: config.sh_degree, ..settings },
         false,
     )?;
-    let lambda = {
-        let c = config.loss.color / 3.0;
-        [c, c, c, config.loss.mask]
-    };
+    let lambda = channel_weights(config.loss.color, config.loss.mask);
     let mut rng = SplitMix64::new(config.seed);
-    let mut order: Vec<usize> = Vec::new();
+    let mut views = ViewCycle::default();
     let mut passes: BTreeMap<String, f64> = BTreeMap::new();
     let (mut train_s, mut loss_log, mut curve, mut densify_log) =
         (0.0, Vec::new(), Vec::new(), Vec::new());
@@ -80,11 +78,8 @@ pub fn fit(
         (None, None, 1, 0, 0);
     for it in 1..=config.iterations {
         let step_start = Instant::now();
-        if order.is_empty() {
-            order = shuffled(train.len(), &mut rng);
-        }
-        let view = order.pop().unwrap_or(0);
-        settings.sh_degree = config.sh_degree.min((it - 1) / config.sh_increase_every);
+        let view = views.next(train.len(), &mut rng);
+        settings.sh_degree = sh_degree_at(config.sh_degree, config.sh_increase_every, it);
         let adam = AdamParams::new(
             &learning_rates(&config.learning_rates, extent, it, config.iterations),
             it,
@@ -109,12 +104,8 @@ pub fn fit(
             loss_log.push((it, mean));
         }
         let d = &config.densify;
-        // The last interval is left to settle what the last densification made.
-        if d.enabled
-            && it > d.from
-            && it <= d.until.min(config.iterations.saturating_sub(d.every))
-            && it % d.every == 0
-        {
+        let window = DensifyWindow { from: d.from, until: d.until, every: d.every };
+        if d.enabled && window.due(it, config.iterations) {
             let t = Instant::now();
             densify_log.push(densify(
                 &mut trainer,
@@ -254,14 +245,6 @@ pub(crate) fn evaluate(
     }
     let n = views.len().max(1) as f64;
     Ok((psnr_sum / n, ssim_sum / n, renders))
-}
-
-pub(crate) fn shuffled(n: usize, rng: &mut SplitMix64) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..n).collect();
-    for i in (1..n).rev() {
-        order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
-    }
-    order
 }
 
 pub(crate) fn add_times(total: &mut BTreeMap<String, f64>, times: &PassTimes) {

@@ -12,6 +12,7 @@ mod mesh_term;
 pub mod output;
 pub mod pipeline;
 pub mod report;
+pub mod schedule;
 mod step;
 pub mod temporal;
 mod views;

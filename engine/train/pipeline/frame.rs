@@ -16,8 +16,9 @@ use crate::splat::{GaussianBuffers, GaussianScene, RenderSettings};
 use crate::topology::{
     compose, densify, face_scores, prune, DensifyConfig, ManifoldMesh, PruneConfig,
 };
-use crate::train::fit::{self, add_times, learning_rates, scene_extent, shuffled};
+use crate::train::fit::{self, add_times, learning_rates, scene_extent};
 use crate::train::mesh_term::MeshTerm;
+use crate::train::schedule::{channel_weights, sh_degree_at, DensifyWindow, ViewCycle};
 use crate::train::{TrainError, Trainer, ViewTarget};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -84,13 +85,8 @@ pub fn optimize_frame(
     let (w, bg, t) = (&config.loss, config.background, &config.temporal);
     let iterations = if canonical { config.canonical.iterations } else { t.iterations };
     let weights = ImageWeights {
-        gaussians: [
-            w.gaussian_color / 3.0,
-            w.gaussian_color / 3.0,
-            w.gaussian_color / 3.0,
-            w.gaussian_mask,
-        ],
-        mesh: [w.mesh_color / 3.0, w.mesh_color / 3.0, w.mesh_color / 3.0, w.mesh_mask],
+        gaussians: channel_weights(w.gaussian_color, w.gaussian_mask),
+        mesh: channel_weights(w.mesh_color, w.mesh_mask),
     };
     let extent = scene_extent(&task.train.iter().map(|v| &v.camera).collect::<Vec<_>>());
     let first = task
@@ -174,16 +170,13 @@ pub fn optimize_frame(
     } else {
         Plateau::new(t.min_iterations, iterations, task.train.len(), t.tolerance)
     };
-    let (mut order, mut passes) = (Vec::new(), BTreeMap::new());
+    let (mut views, mut passes) = (ViewCycle::default(), BTreeMap::new());
     let (mut interval_start, mut done) = (1, 0);
     for it in 1..=iterations {
         let t0 = Instant::now();
-        if order.is_empty() {
-            order = shuffled(task.train.len(), &mut rng);
-        }
-        let view = order.pop().unwrap_or(0);
+        let view = views.next(task.train.len(), &mut rng);
         if canonical {
-            settings.sh_degree = config.sh_degree.min((it - 1) / config.sh_increase_every);
+            settings.sh_degree = sh_degree_at(config.sh_degree, config.sh_increase_every, it);
         }
         let rates = frame_rates(config, extent, it, iterations, canonical);
         let adam = AdamParams::new(&rates, it, trainer.gaussians(), trainer.sh_degree());
@@ -250,11 +243,9 @@ pub fn optimize_frame(
             None
         };
         let c = &config.canonical;
-        if canonical
-            && it > c.densify_from
-            && it <= c.densify_until.min(iterations.saturating_sub(c.densify_every))
-            && it % c.densify_every == 0
-        {
+        let window =
+            DensifyWindow { from: c.densify_from, until: c.densify_until, every: c.densify_every };
+        if canonical && window.due(it, iterations) {
             let t0 = Instant::now();
             let budget = if c.budget > 0 { c.budget as usize } else { covered_pixels(task.train) };
             report.topology_steps.push(topology_step(

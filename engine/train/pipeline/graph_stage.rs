@@ -13,8 +13,8 @@ use crate::mesh::bounding_diagonal;
 use crate::regularize::Neighbourhoods;
 use crate::rng::SplitMix64;
 use crate::splat::{GaussianScene, RenderSettings};
-use crate::train::fit::shuffled;
 use crate::train::mesh_term::MeshTerm;
+use crate::train::schedule::ViewCycle;
 use crate::train::{TrainError, Trainer, ViewTarget};
 use std::sync::Arc;
 use std::time::Instant;
@@ -95,12 +95,9 @@ pub fn solve_graph(
 
         let mut plateau =
             Plateau::new(g.min_iterations, g.iterations, views.len(), config.temporal.tolerance);
-        let (mut order, mut pass_start) = (Vec::new(), 1);
+        let (mut cycle, mut pass_start) = (ViewCycle::default(), 1);
         for it in 1.. {
-            if order.is_empty() {
-                order = shuffled(views.len(), rng);
-            }
-            let view = order.pop().unwrap_or(0);
+            let view = cycle.next(views.len(), rng);
             let frame = trainer.prepare_step(view, settings)?;
             let mut rec = Recorder::new(ctx)?;
             trainer.record_splat(&mut rec, view, &frame, weights.gaussians)?;
