@@ -28,6 +28,7 @@ pub fn temporal_ablations() -> Vec<Ablation> {
             apply: |c| c.temporal.regularizer_reference = ReferencePose::Frame0,
         },
         Ablation { name: "w/o coarse level", apply: |c| c.temporal.graph.levels = vec![1] },
+        Ablation { name: "w/o coarse graph", apply: |c| c.temporal.graph.coarse_nodes = 0 },
         Ablation { name: "w/o silhouette term", apply: |c| c.temporal.silhouette = 0.0 },
         Ablation { name: "w/o coverage term", apply: |c| c.temporal.coverage = 0.0 },
         Ablation {

@@ -83,6 +83,11 @@ pub struct TemporalConfig {
 pub struct GraphConfig {
     /// Graph nodes (0: no graph stage).
     pub nodes: u32,
+    /// Nodes of every level but the last (0: the same graph as the last). A coarser graph
+    /// first carries motion across regions the images cannot see move (a flank of one colour)
+    /// as a smooth blend of its few nodes, as a skeleton's bones would; the last level then
+    /// starts a graph of `nodes` on the pose it reached.
+    pub coarse_nodes: u32,
     /// Image downsampling factor of each level, coarse first (1: full resolution).
     pub levels: Vec<u32>,
     /// Most and fewest iterations per level.
@@ -98,6 +103,18 @@ pub struct GraphConfig {
     /// previous frame, nodes at identity) or `frame0` (frame 0's surface, each node started at
     /// the best rigid fit of its vertices to the extrapolated previous frame).
     pub rest: ReferencePose,
+}
+
+impl GraphConfig {
+    /// The node count of level `level` (an index into `levels`).
+    #[inline]
+    pub fn nodes_at(&self, level: usize) -> u32 {
+        if self.coarse_nodes > 0 && level + 1 < self.levels.len() {
+            self.coarse_nodes
+        } else {
+            self.nodes
+        }
+    }
 }
 
 /// The pose a later frame's graph or temporal regularizers compare against.
@@ -210,12 +227,13 @@ impl Default for GraphConfig {
     fn default() -> Self {
         Self {
             nodes: 200,
+            coarse_nodes: 24,
             levels: vec![2, 1],
             iterations: 150,
             min_iterations: 30,
             translation_lr: 2e-3,
             rotation_lr: 5e-3,
-            arap: 1.0,
+            arap: 0.5,
             rest: ReferencePose::Previous,
         }
     }
@@ -375,5 +393,20 @@ mod tests {
         assert!(unknown.contains("iters"), "{unknown}");
         let config: TrainConfig = toml::from_str("[loss]\nrigidity = -4\n").unwrap();
         assert!(config.check().unwrap_err().to_string().contains("loss.rigidity"));
+    }
+
+    #[test]
+    fn coarse_nodes_serve_every_level_but_the_last() {
+        let graph = GraphConfig {
+            nodes: 200,
+            coarse_nodes: 24,
+            levels: vec![4, 2, 1],
+            ..Default::default()
+        };
+        assert_eq!((0..3).map(|l| graph.nodes_at(l)).collect::<Vec<_>>(), [24, 24, 200]);
+        let single = GraphConfig { levels: vec![1], ..graph.clone() };
+        assert_eq!(single.nodes_at(0), 200);
+        let off = GraphConfig { coarse_nodes: 0, ..graph };
+        assert_eq!((0..3).map(|l| off.nodes_at(l)).collect::<Vec<_>>(), [200, 200, 200]);
     }
 }

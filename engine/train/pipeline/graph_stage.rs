@@ -24,6 +24,9 @@ use std::time::Instant;
 pub struct LevelReport {
     /// Image downsampling factor.
     pub factor: u32,
+    /// Graph nodes of the level.
+    #[serde(default)]
+    pub nodes: usize,
     pub iterations: u32,
     pub stop_reason: StopReason,
     pub wall_s: f64,
@@ -33,6 +36,7 @@ pub struct LevelReport {
 
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct GraphReport {
+    /// Nodes of the last level's graph.
     pub nodes: usize,
     pub levels: Vec<LevelReport>,
 }
@@ -66,26 +70,29 @@ pub fn solve_graph(
     rng: &mut SplitMix64,
 ) -> Result<(GaussianScene, GraphReport), TrainError> {
     let g = &config.temporal.graph;
-    let rest = g.rest.pick(input.start, input.frame0);
-    let graph =
-        build_graph(&rest.positions, |i| input.neighbourhoods.neighbours(i), g.nodes as usize);
-    let mut deformer = GraphDeformer::new(ctx, &graph, rest, g.arap)?;
-    if g.rest == ReferencePose::Frame0 {
-        deformer.write_nodes(&fit_nodes(&rest.positions, &input.start.positions, &graph))?;
-    }
     let diagonal = bounding_diagonal(&input.start.positions) as f32;
-    let mut report = GraphReport { nodes: deformer.nodes(), levels: Vec::new() };
+    let mut report = GraphReport { nodes: 0, levels: Vec::new() };
     let mut moved = input.start.clone();
+    // The graph in use and the node count it was built for.
+    let mut built: Option<(usize, GraphDeformer)> = None;
     let mut adam_step = 0;
-    for &factor in &g.levels {
+    for (level, &factor) in g.levels.iter().enumerate() {
         let t0 = Instant::now();
+        let wanted = g.nodes_at(level) as usize;
+        // A level with another node count starts its own graph on the pose reached so far.
+        if built.as_ref().map_or(true, |(nodes, _)| *nodes != wanted) {
+            built = Some((wanted, graph_on(ctx, input, &moved, wanted, config)?));
+            adam_step = 0;
+        }
+        let (_, deformer) = built.as_mut().expect("a graph was built just above");
+        report.nodes = deformer.nodes();
         let views: Vec<ViewTarget> = input.train.iter().map(|v| v.downsampled(factor)).collect();
-        let mut trainer = Trainer::new(ctx, input.start, &views)?;
+        let mut trainer = Trainer::new(ctx, &moved, &views)?;
         let (width, height) = (views[0].camera.width, views[0].camera.height);
-        let mesh_term = MeshTerm::new(ctx, &input.start.positions, input.faces, width, height)?;
+        let mesh_term = MeshTerm::new(ctx, &moved.positions, input.faces, width, height)?;
         let coverage = CoverageTerm::new(
             ctx,
-            input.start.len(),
+            moved.len(),
             (width * height) as usize,
             config.temporal.coverage_radius,
         )?;
@@ -161,6 +168,7 @@ pub fn solve_graph(
                 }
                 report.levels.push(LevelReport {
                     factor,
+                    nodes: deformer.nodes(),
                     iterations: it,
                     stop_reason,
                     wall_s: t0.elapsed().as_secs_f64(),
@@ -172,4 +180,23 @@ pub fn solve_graph(
         moved = trainer.scene()?;
     }
     Ok((moved, report))
+}
+
+/// A graph of `nodes` nodes over the configured rest pose (`pose`, the surface reached so far,
+/// or frame 0's), its nodes started where they carry the rest onto `pose`.
+fn graph_on(
+    ctx: &Arc<GpuContext>,
+    input: &GraphInput,
+    pose: &GaussianScene,
+    nodes: usize,
+    config: &TrainConfig,
+) -> Result<GraphDeformer, TrainError> {
+    let g = &config.temporal.graph;
+    let rest = g.rest.pick(pose, input.frame0);
+    let graph = build_graph(&rest.positions, |i| input.neighbourhoods.neighbours(i), nodes);
+    let mut deformer = GraphDeformer::new(ctx, &graph, rest, g.arap)?;
+    if g.rest == ReferencePose::Frame0 {
+        deformer.write_nodes(&fit_nodes(&rest.positions, &pose.positions, &graph))?;
+    }
+    Ok(deformer)
 }
