@@ -233,7 +233,7 @@ impl Default for GraphConfig {
             min_iterations: 30,
             translation_lr: 2e-3,
             rotation_lr: 5e-3,
-            arap: 0.5,
+            arap: 0.25,
             rest: ReferencePose::Previous,
         }
     }
