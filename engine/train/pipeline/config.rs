@@ -84,8 +84,8 @@ pub struct GraphConfig {
     /// Graph nodes (0: no graph stage).
     pub nodes: u32,
     /// Nodes of every level but the last (0: the same graph as the last). A coarser graph
-    /// first carries motion across regions the images cannot see move (a flank of one colour)
-    /// as a smooth blend of its few nodes, as a skeleton's bones would; the last level then
+    /// first carries motion into regions the images cannot see move (a leg's root, where it
+    /// overlaps the body and has its colour) as a smooth blend of its few nodes, as a skeleton's bones would; the last level then
     /// starts a graph of `nodes` on the pose it reached.
     pub coarse_nodes: u32,
     /// Image downsampling factor of each level, coarse first (1: full resolution).
