@@ -68,9 +68,12 @@ pub use dataset::{Dataset, DatasetError};
 pub use eval::psnr;
 pub use gpu::{ContextOptions, GpuContext, GpuError};
 pub use mesh::TriMesh;
-pub use score::{evaluate_sequence, GroundTruth, SequenceEval, SequenceEvalOptions};
+pub use score::{
+    evaluate_sequence, find_ground_truth, GroundTruth, SequenceEval, SequenceEvalOptions,
+};
 pub use sequence::{FrameFormat, MeshSequence, SequenceError};
 pub use splat::{GaussianBuffers, GaussianScene, RenderSettings, SplatError, Splatter};
+pub use track::queries::read_points;
 pub use track::{track, Queries, TrackError, TrackReport};
 pub use train::pipeline::{run_train, TrainConfig, TrainJob, TrainProgress, TrainReport};
 pub use train::TrainError;

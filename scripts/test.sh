@@ -33,4 +33,4 @@ if [[ "${VK_ICD_FILENAMES:-}" == *lvp_icd* ]]; then
 fi
 # The library builds without the command-line program's crates (how embedders take it).
 cargo check --lib --no-default-features
-cargo build --benches
+cargo build --benches --examples

@@ -103,6 +103,20 @@ fn a_sequence_is_reconstructed_then_resumed_with_one_face_list() {
         report["frames"].as_array().unwrap().iter().map(|f| f["frame"].as_u64()).collect();
     assert_eq!(reported, [Some(0), Some(1), Some(2)]);
     assert_eq!(report["frames"][0]["psnr_mesh"].as_f64(), Some(first.frames[0].psnr_mesh));
+    // run.log holds both runs, in order: each one's start, its frames, its end.
+    let log = std::fs::read_to_string(out.join("run.log")).unwrap();
+    let lines: Vec<&str> = log.lines().map(|l| l.split_once(' ').unwrap().1).collect();
+    let at = |prefix: &str| {
+        lines
+            .iter()
+            .position(|l| l.starts_with(prefix))
+            .unwrap_or_else(|| panic!("{prefix}: {log}"))
+    };
+    assert_eq!(lines.iter().filter(|l| l.starts_with("tagsplat ")).count(), 2, "{log}");
+    assert!(at("frame 0:") < at("frame 1:") && at("frame 1:") < at("resuming: frames [0, 1]"));
+    assert!(at("resuming") < at("frame 2:") && at("frame 2:") < at("exported"), "{log}");
+    assert!(lines.iter().any(|l| l.starts_with("config | ")), "{log}");
+    assert_eq!(lines.iter().filter(|l| l.starts_with("run finished: ")).count(), 2, "{log}");
     for (t, m) in meshes.iter().enumerate() {
         assert_eq!(closed_manifold_problem(m.positions.len(), &m.faces), None, "frame {t}");
     }
@@ -220,6 +234,9 @@ fn a_non_finite_frame_stops_the_run_and_keeps_finished_frames() {
     let error = error.to_string();
     assert!(error.contains("frame 1") && error.contains("non-finite"), "{error}");
     assert!(out.join("meshes/000000.ply").is_file() && !out.join("meshes/000001.ply").exists());
+    let log = std::fs::read_to_string(out.join("run.log")).unwrap();
+    let last = log.lines().last().unwrap();
+    assert!(last.contains("run failed: frame 1") && last.contains("non-finite"), "{log}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -311,6 +328,12 @@ fn frames_that_lose_the_subject_keep_going_and_say_where() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(json["frames"][3]["stop_reason"], "no_views");
+    let log = std::fs::read_to_string(out.join("run.log")).unwrap();
+    let warning = format!(
+        "warning: frame 2: views left out, their mask is empty: {}, {}",
+        train_cameras[0], train_cameras[2]
+    );
+    assert!(log.contains(&warning), "{log}");
 
     // Frame 3 is frame 2 extrapolated, with no optimisation: a range starting at 3 over a copy
     // of frames 0-2 must start from frame 2 (and 1), giving the same file byte for byte.

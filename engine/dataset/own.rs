@@ -1,4 +1,4 @@
-//! The project's own layout (written by `tagsplat synth`, documented in the README):
+//! The project's own layout (written by `tagsplat synth`, documented in docs/datasets.md):
 //!
 //! ```text
 //! DIR/dataset.json            {"format": "tagsplat-dataset", "version": 1, "frames": T,

@@ -51,7 +51,7 @@ pub enum SequenceEvalError {
 
 #[derive(Clone, Debug)]
 pub struct SequenceEvalOptions {
-    /// Area-uniform samples per mesh for Chamfer (the README's score: 5000).
+    /// Area-uniform samples per mesh for Chamfer (the benchmarks' score, docs/benchmarks.md: 5000).
     pub chamfer_samples: usize,
     pub seed: u64,
     /// Frames to score (default: every ground-truth frame).

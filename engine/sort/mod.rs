@@ -1,6 +1,6 @@
 //! Sorting building blocks for tile binning: an exclusive prefix scan over u32 and a stable
 //! LSD radix sort of u32 or u64 keys with a u32 payload. Both are correct for any subgroup
-//! size from 4 to 128 (lavapipe 8, NVIDIA 32, AMD 64) whose subgroups are full (see README).
+//! size from 4 to 128 (lavapipe 8, NVIDIA 32, AMD 64) whose subgroups are full (see docs/sort.md, "Known limits").
 
 mod radix;
 mod scan;

@@ -141,7 +141,7 @@ impl ReferencePose {
 /// Loss weights and the temporal falloff λ_w (per mean edge length). The regularizers' defaults
 /// (`regularize::Weights`), but the temporal terms at a tenth of them (edge length 0.4, rigidity 0.4, rotation 2): measured on
 /// the demo sequence, the table's 4/4/20 held the surface back (tracking RMSE 0.059 scene units),
-/// none at all let it drift (0.050), a tenth did best (0.043); see the README's ablation.
+/// none at all let it drift (0.050), a tenth did best (0.043); see docs/pipeline.md, "Defaults chosen by measurement".
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PipelineWeights {

@@ -9,6 +9,7 @@ mod frame;
 mod graph_stage;
 mod plateau;
 mod run;
+mod run_log;
 
 pub use config::{ReferencePose, TrainConfig};
 pub use frame::{optimize_frame, FrameReport, FrameTask};

@@ -4,6 +4,7 @@
 
 use super::config::TrainConfig;
 use super::frame::{optimize_frame, FrameReport, FrameTask};
+use super::run_log::RunLog;
 use crate::camera::mean_up;
 use crate::dataset::Dataset;
 use crate::gpu::GpuContext;
@@ -60,11 +61,34 @@ pub struct TrainReport {
     pub up_axis: String,
 }
 
-/// Runs (or resumes) `job`; `OUT/report.json` is rewritten after every frame.
+/// Runs (or resumes) `job`; `OUT/report.json` is rewritten after every frame, and `OUT/run.log`
+/// gains what the run did (its end or its error included).
 pub fn run_train(
     ctx: &Arc<GpuContext>,
     job: &TrainJob,
     progress: &mut dyn FnMut(TrainProgress),
+) -> Result<TrainReport, TrainError> {
+    let log = RunLog::open(&job.out)?;
+    log.line(&start_line(ctx, job))?;
+    match run_logged(ctx, job, progress, &log) {
+        Ok(report) => {
+            let frames = report.frames.len();
+            log.line(&format!("run finished: {frames} frames, {:.1} s", report.total_wall_s))?;
+            Ok(report)
+        }
+        Err(error) => {
+            // The run's own error matters more than a log line that cannot be written.
+            let _ = log.line(&format!("run failed: {error}"));
+            Err(error)
+        }
+    }
+}
+
+fn run_logged(
+    ctx: &Arc<GpuContext>,
+    job: &TrainJob,
+    progress: &mut dyn FnMut(TrainProgress),
+    log: &RunLog,
 ) -> Result<TrainReport, TrainError> {
     job.config.check()?;
     let started = Instant::now();
@@ -97,8 +121,16 @@ pub fn run_train(
     };
     let up = up_axis(&dataset, &mut report.up_axis);
     report.frames = earlier_frame_reports(&job.out, &report.resumed_frames);
+    if !report.resumed_frames.is_empty() {
+        log.line(&format!("resuming: frames {:?} are complete on disk", report.resumed_frames))?;
+    }
     let (mut mesh, mut previous) =
         canonical_start(ctx, &dataset, job, &out, &mut report, progress)?;
+    if let Some(first) =
+        report.frames.iter().find(|f| f.frame == 0 && !report.resumed_frames.contains(&0))
+    {
+        log.line(&frame_lines(first))?;
+    }
     let frame0 = previous.clone();
     // A range that starts after frame 1 continues from the frame before it (checked above).
     let first = 1.max(frames.start);
@@ -150,15 +182,64 @@ pub fn run_train(
             (scene, FrameReport { lost_views, ..report })
         };
         write_frame(&out, t, &mesh, &scene)?;
+        log.line(&frame_lines(&frame_report))?;
         before_previous = Some(std::mem::replace(&mut previous, scene));
         report.frames.push(frame_report);
         finish_report(&mut report, &mesh, started, &job.out)?;
     }
     if (0..dataset.frames.len()).all(|t| out.is_complete(t)) {
-        report.outputs.extend(out.export(0..dataset.frames.len(), fps(&dataset), up)?);
+        let exported = out.export(0..dataset.frames.len(), fps(&dataset), up)?;
+        let names: Vec<String> = exported.iter().map(|p| p.display().to_string()).collect();
+        log.line(&format!("exported (up axis {}): {}", report.up_axis, names.join(", ")))?;
+        report.outputs.extend(exported);
     }
     finish_report(&mut report, &mesh, started, &job.out)?;
     Ok(report)
+}
+
+/// The log's first lines: what runs where, on which frames, with which config.
+fn start_line(ctx: &GpuContext, job: &TrainJob) -> String {
+    let frames = job.frames.as_ref().map_or("all".into(), |f| format!("{}..{}", f.start, f.end));
+    let mesh = job.mesh.as_ref().map_or("built from the masks".into(), |m| m.display().to_string());
+    let config: String = job.config.to_toml().lines().map(|l| format!("\nconfig | {l}")).collect();
+    format!(
+        "tagsplat {} train: data {}, out {}, frames {frames}, frame-0 mesh {mesh}, device {}{config}",
+        env!("CARGO_PKG_VERSION"),
+        job.data.display(),
+        job.out.display(),
+        ctx.info().name,
+    )
+}
+
+/// A finished frame: what it ran and why it stopped, its scores, and its warnings.
+fn frame_lines(f: &FrameReport) -> String {
+    let graph = f.graph.as_ref().map_or(String::new(), |g| {
+        let levels: Vec<String> = g
+            .levels
+            .iter()
+            .map(|l| {
+                format!(
+                    "1/{} × {} nodes {} it {:?}",
+                    l.factor, l.nodes, l.iterations, l.stop_reason
+                )
+            })
+            .collect();
+        format!("graph [{}], ", levels.join("; "))
+    });
+    let mut text = format!(
+        "frame {}: {graph}{} iterations ({:?}), {:.1} s, {} Gaussians, PSNR {:.2} dB (Gaussians) {:.2} dB (mesh)",
+        f.frame, f.iterations, f.stop_reason, f.wall_s, f.gaussians, f.psnr_gs, f.psnr_mesh
+    );
+    if !f.lost_views.is_empty() {
+        let views = f.lost_views.join(", ");
+        text +=
+            &format!("\nwarning: frame {}: views left out, their mask is empty: {views}", f.frame);
+    }
+    if f.truncated_steps > 0 {
+        let n = f.truncated_steps;
+        text += &format!("\nwarning: frame {}: {n} steps outgrew the splatter's intersection buffers (rendered without the excess; the buffers grew)", f.frame);
+    }
+    text
 }
 
 /// The reports of `complete` frames from an earlier run's `report.json`, so the report keeps
