@@ -45,6 +45,35 @@ fn buffer_round_trip_and_partial_read() {
     assert!(empty.read().unwrap().is_empty());
 }
 
+/// The discrete-GPU path on any device: with staging forced, every write and read goes
+/// through the context's staging buffers, which grow to the largest transfer and are reused;
+/// ranges at an offset, `take` and the empty buffer behave as on the direct path.
+#[test]
+fn forced_staging_round_trips_at_every_size_and_offset() {
+    let options = tagsplat::gpu::ContextOptions {
+        validation: Some(true),
+        force_staging: Some(true),
+        ..Default::default()
+    };
+    let ctx = GpuContext::new(&options).unwrap();
+    assert!(ctx.forces_staging());
+    for n in [3usize, 100_000, 17, 300_000] {
+        let data: Vec<u32> = (0..n as u32).map(|i| i.wrapping_mul(2_654_435_761)).collect();
+        let mut buffer = GpuBuffer::<u32>::new(&ctx, "staged", n).unwrap();
+        buffer.write(&data).unwrap();
+        assert_eq!(buffer.read().unwrap(), data, "{n} elements");
+        let start = n / 3;
+        assert_eq!(buffer.read_range(start, n - start).unwrap(), &data[start..], "{n} elements");
+        assert_eq!(buffer.take().unwrap(), data);
+        assert!(buffer.read().unwrap().iter().all(|&x| x == 0), "take zeroes");
+    }
+    let empty = GpuBuffer::<u32>::new(&ctx, "empty", 0).unwrap();
+    assert!(empty.read().unwrap().is_empty());
+    let log = ctx.validation().clone();
+    drop((empty, ctx));
+    assert_eq!(log.error_count(), 0, "{:?}", log.messages());
+}
+
 #[test]
 fn copy_and_fill_are_ordered_by_barriers() {
     let gpu = common::gpu();
@@ -87,6 +116,7 @@ fn unknown_device_is_a_named_error() {
     let options = tagsplat::gpu::ContextOptions {
         device: Some("no such device 42".into()),
         validation: Some(false),
+        ..Default::default()
     };
     let err = GpuContext::new(&options).err().expect("must fail");
     assert!(err.to_string().contains("no such device 42"), "{err}");
@@ -97,7 +127,7 @@ fn unknown_device_is_a_named_error() {
 #[test]
 fn validation_layer_reports_a_leaked_object() {
     use ash::vk;
-    let options = tagsplat::gpu::ContextOptions { device: None, validation: Some(true) };
+    let options = tagsplat::gpu::ContextOptions { validation: Some(true), ..Default::default() };
     let ctx = GpuContext::new(&options).unwrap();
     let log = ctx.validation().clone();
     let info = vk::BufferCreateInfo::default().size(64).usage(vk::BufferUsageFlags::STORAGE_BUFFER);

@@ -200,6 +200,7 @@ fn run(cli: Cli) -> Result<()> {
     let gpu = Contexts::new(ContextOptions {
         device: cli.device.clone(),
         validation: cli.validation.then_some(true),
+        ..Default::default()
     });
     let outcome = run_command(cli.command, &gpu);
     outcome.and(gpu.check_validation())

@@ -1,10 +1,12 @@
 //! Typed storage buffers sized by the caller, with upload and readback. Memory the host can see
 //! coherently (every type on lavapipe, resizable BAR on GPUs) is written and read in place;
-//! otherwise the copy goes through a staging buffer.
+//! otherwise (or when the context forces it, to test that path on lavapipe) the copy goes
+//! through the context's staging buffers.
 
 use super::context::GpuContext;
 use super::error::{GpuError, GpuResult, VkContext};
 use super::recorder::Recorder;
+use super::staging::Direction;
 use ash::vk;
 use bytemuck::Pod;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
@@ -37,67 +39,22 @@ impl<T: Pod> GpuBuffer<T> {
     /// A device buffer of `len` elements (contents undefined). Refuses sizes over the device's
     /// `maxStorageBufferRange` or `maxMemoryAllocationSize` with an error naming the buffer.
     pub fn new(ctx: &Arc<GpuContext>, name: &str, len: usize) -> GpuResult<Self> {
-        Self::with_location(ctx, name, len, MemoryLocation::GpuOnly)
-    }
-
-    /// A device buffer holding a copy of `data`.
-    pub fn from_slice(ctx: &Arc<GpuContext>, name: &str, data: &[T]) -> GpuResult<Self> {
-        let mut buffer = Self::new(ctx, name, data.len())?;
-        buffer.write(data)?;
-        Ok(buffer)
-    }
-
-    fn with_location(
-        ctx: &Arc<GpuContext>,
-        name: &str,
-        len: usize,
-        location: MemoryLocation,
-    ) -> GpuResult<Self> {
         let bytes = checked_bytes::<T>(ctx, name, len)?;
-        let device = ctx.device();
-        // Vulkan forbids empty buffers; an empty one still gets a few bytes so it can be bound.
-        let info = vk::BufferCreateInfo::default()
-            .size(bytes.max(16))
-            .usage(
-                vk::BufferUsageFlags::STORAGE_BUFFER
-                    | vk::BufferUsageFlags::TRANSFER_SRC
-                    | vk::BufferUsageFlags::TRANSFER_DST,
-            )
-            .sharing_mode(vk::SharingMode::EXCLUSIVE);
-        let raw = unsafe { device.create_buffer(&info, None) }.during("vkCreateBuffer")?;
-        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
-        let allocated =
-            ctx.allocator().as_mut().expect("allocator lives as long as the context").allocate(
-                &AllocationCreateDesc {
-                    name,
-                    requirements,
-                    location,
-                    linear: true,
-                    allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-                },
-            );
-        let allocation = match allocated {
-            Ok(allocation) => allocation,
-            Err(e) => {
-                unsafe { device.destroy_buffer(raw, None) };
-                return Err(GpuError::OutOfMemory {
-                    name: name.into(),
-                    bytes,
-                    reason: e.to_string(),
-                });
-            }
-        };
-        let bound =
-            unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
-        let buffer = Self {
+        let (raw, allocation) = allocate(ctx, name, bytes, MemoryLocation::GpuOnly)?;
+        Ok(Self {
             ctx: ctx.clone(),
             raw,
             allocation: Some(allocation),
             len,
             name: name.into(),
             _element: PhantomData,
-        };
-        bound.during("vkBindBufferMemory")?;
+        })
+    }
+
+    /// A device buffer holding a copy of `data`.
+    pub fn from_slice(ctx: &Arc<GpuContext>, name: &str, data: &[T]) -> GpuResult<Self> {
+        let mut buffer = Self::new(ctx, name, data.len())?;
+        buffer.write(data)?;
         Ok(buffer)
     }
 
@@ -149,11 +106,12 @@ impl<T: Pod> GpuBuffer<T> {
             unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), mapped, bytes.len()) };
             return Ok(());
         }
-        let mut staging =
-            Self::with_location(&self.ctx, "staging upload", data.len(), MemoryLocation::CpuToGpu)?;
-        staging.write(data)?;
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let mut pool = self.ctx.staging();
+        let staging = pool.get(&self.ctx, Direction::Upload, bytes.len() as u64)?;
+        unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), staging.mapped(), bytes.len()) };
         let mut recorder = Recorder::new(&self.ctx)?;
-        recorder.copy_buffer(&staging, self, data.len());
+        recorder.copy_bytes((staging.raw(), 0), (self.raw, 0), bytes.len() as u64);
         recorder.submit_and_wait()?;
         Ok(())
     }
@@ -195,12 +153,19 @@ impl<T: Pod> GpuBuffer<T> {
             };
             return Ok(out);
         }
-        let staging =
-            Self::with_location(&self.ctx, "staging readback", len, MemoryLocation::GpuToCpu)?;
+        let element = size_of::<T>() as u64;
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
+        let mut pool = self.ctx.staging();
+        let staging = pool.get(&self.ctx, Direction::Readback, bytes.len() as u64)?;
         let mut recorder = Recorder::new(&self.ctx)?;
-        recorder.copy_buffer_range(self, start, &staging, len);
+        recorder.copy_bytes(
+            (self.raw, start as u64 * element),
+            (staging.raw(), 0),
+            bytes.len() as u64,
+        );
         recorder.submit_and_wait()?;
-        staging.read_prefix(len)
+        unsafe { std::ptr::copy_nonoverlapping(staging.mapped(), bytes.as_mut_ptr(), bytes.len()) };
+        Ok(out)
     }
 
     fn check_len(&self, what: &'static str, len: usize) -> GpuResult<()> {
@@ -215,26 +180,20 @@ impl<T: Pod> GpuBuffer<T> {
         Ok(())
     }
 
-    /// The host pointer, if this memory is mapped and coherent (no flush or invalidate needed).
+    /// The host pointer, if this memory is mapped and coherent (no flush or invalidate needed)
+    /// and the context does not force the staging path.
     fn coherent_mapping(&self) -> Option<*mut u8> {
-        let allocation = self.allocation.as_ref()?;
-        let coherent =
-            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
-        if !allocation.memory_properties().contains(coherent) {
+        if self.ctx.forces_staging() {
             return None;
         }
-        allocation.mapped_ptr().map(|p| p.as_ptr() as *mut u8)
+        coherent_pointer(self.allocation.as_ref()?)
     }
 }
 
 impl<T: Pod> Drop for GpuBuffer<T> {
     fn drop(&mut self) {
-        unsafe { self.ctx.device().destroy_buffer(self.raw, None) };
         if let Some(allocation) = self.allocation.take() {
-            if let Some(allocator) = self.ctx.allocator().as_mut() {
-                // Freeing only fails for an allocation of another allocator: a bug, not input.
-                allocator.free(allocation).expect("allocation belongs to this context");
-            }
+            free(&self.ctx, self.raw, allocation);
         }
     }
 }
@@ -258,4 +217,66 @@ fn checked_bytes<T>(ctx: &GpuContext, name: &str, len: usize) -> GpuResult<u64> 
         return Err(too_large(bytes, limits.max_memory_allocation_size, "maxMemoryAllocationSize"));
     }
     Ok(bytes)
+}
+
+/// A buffer of `bytes` bytes (at least 16: Vulkan forbids empty buffers, and an empty one must
+/// still bind) in memory at `location`, usable for storage and copies; errors name the buffer.
+pub(crate) fn allocate(
+    ctx: &GpuContext,
+    name: &str,
+    bytes: u64,
+    location: MemoryLocation,
+) -> GpuResult<(vk::Buffer, Allocation)> {
+    let device = ctx.device();
+    let info = vk::BufferCreateInfo::default()
+        .size(bytes.max(16))
+        .usage(
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_SRC
+                | vk::BufferUsageFlags::TRANSFER_DST,
+        )
+        .sharing_mode(vk::SharingMode::EXCLUSIVE);
+    let raw = unsafe { device.create_buffer(&info, None) }.during("vkCreateBuffer")?;
+    let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+    let allocated =
+        ctx.allocator().as_mut().expect("allocator lives as long as the context").allocate(
+            &AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            },
+        );
+    let allocation = match allocated {
+        Ok(allocation) => allocation,
+        Err(e) => {
+            unsafe { device.destroy_buffer(raw, None) };
+            return Err(GpuError::OutOfMemory { name: name.into(), bytes, reason: e.to_string() });
+        }
+    };
+    let bound = unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+    if let Err(e) = bound.during("vkBindBufferMemory") {
+        free(ctx, raw, allocation);
+        return Err(e);
+    }
+    Ok((raw, allocation))
+}
+
+/// Destroys a buffer made by [`allocate`] and frees its memory.
+pub(crate) fn free(ctx: &GpuContext, raw: vk::Buffer, allocation: Allocation) {
+    unsafe { ctx.device().destroy_buffer(raw, None) };
+    if let Some(allocator) = ctx.allocator().as_mut() {
+        // Freeing only fails for an allocation of another allocator: a bug, not input.
+        allocator.free(allocation).expect("allocation belongs to this context");
+    }
+}
+
+/// The host pointer of host-visible, coherent memory (no flush or invalidate needed).
+pub(crate) fn coherent_pointer(allocation: &Allocation) -> Option<*mut u8> {
+    let coherent = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+    if !allocation.memory_properties().contains(coherent) {
+        return None;
+    }
+    allocation.mapped_ptr().map(|p| p.as_ptr() as *mut u8)
 }

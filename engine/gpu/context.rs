@@ -5,17 +5,21 @@
 use super::error::{GpuError, GpuResult, VkContext};
 use super::features::{DeviceCapabilities, REQUIRED_EXTENSIONS};
 use super::select::{choose_device, DeviceInfo, DEVICE_ENV};
+use super::staging::StagingPool;
 use super::validation::{self, ValidationLog, VALIDATION_ENV, VALIDATION_LAYER};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-/// How to create a context. `None` fields fall back to the environment
-/// (`TAGSPLAT_DEVICE`, `TAGSPLAT_VALIDATION=1`) and then to the defaults (policy, off).
+/// How to create a context. `None` fields fall back to the environment (`TAGSPLAT_DEVICE`,
+/// `TAGSPLAT_VALIDATION=1`, `TAGSPLAT_FORCE_STAGING=1`) and then to the defaults (policy, off,
+/// off). Forced staging sends every upload and readback through staging buffers even where the
+/// device's memory is host-visible (lavapipe), so CI runs a discrete GPU's path.
 #[derive(Clone, Debug, Default)]
 pub struct ContextOptions {
     pub device: Option<String>,
     pub validation: Option<bool>,
+    pub force_staging: Option<bool>,
 }
 
 /// Device limits and properties the engine sizes its work by.
@@ -51,7 +55,12 @@ pub struct GpuContext {
     info: DeviceInfo,
     limits: DeviceLimits,
     validation_enabled: bool,
+    staging: Mutex<StagingPool>,
+    force_staging: bool,
 }
+
+/// Set to 1, forces the staging path (see [`ContextOptions`]).
+pub const FORCE_STAGING_ENV: &str = "TAGSPLAT_FORCE_STAGING";
 
 impl GpuContext {
     /// Creates a context on the device chosen by `options` (see [`choose_device`]).
@@ -144,6 +153,10 @@ impl GpuContext {
             info,
             limits,
             validation_enabled: validation,
+            staging: Mutex::default(),
+            force_staging: options
+                .force_staging
+                .unwrap_or_else(|| std::env::var(FORCE_STAGING_ENV).is_ok_and(|v| v == "1")),
         }))
     }
 
@@ -167,6 +180,16 @@ impl GpuContext {
     /// Whether the validation layer is on; [`Self::validation`] then counts its messages.
     pub fn validation_enabled(&self) -> bool {
         self.validation_enabled
+    }
+
+    /// Whether uploads and readbacks go through staging buffers even on host-visible memory.
+    pub fn forces_staging(&self) -> bool {
+        self.force_staging
+    }
+
+    /// The staging buffers (lock held from the host copy to the fence).
+    pub(crate) fn staging(&self) -> MutexGuard<'_, StagingPool> {
+        self.staging.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     pub fn validation(&self) -> &Arc<ValidationLog> {
@@ -206,6 +229,7 @@ impl Drop for GpuContext {
         unsafe {
             let _ = self.device.device_wait_idle();
             self.device.destroy_pipeline_cache(self.pipeline_cache, None);
+            self.staging().free_all(self);
             // The allocator frees its memory blocks, so it must go before the device.
             self.allocator().take();
             self.device.destroy_device(None);

@@ -9,11 +9,12 @@ mod pipeline;
 mod recorder;
 mod select;
 mod shader;
+mod staging;
 mod timing;
 mod validation;
 
 pub use buffer::{BufferBinding, GpuBuffer};
-pub use context::{ContextOptions, DeviceLimits, GpuContext};
+pub use context::{ContextOptions, DeviceLimits, GpuContext, FORCE_STAGING_ENV};
 pub use error::{GpuError, GpuResult};
 pub use features::DeviceCapabilities;
 pub use pipeline::{ComputePipeline, PipelineDesc};

@@ -184,14 +184,22 @@ impl<'a> Recorder<'a> {
         if len == 0 {
             return;
         }
-        self.barrier_if_needed();
         let element = size_of::<T>() as u64;
-        let region = vk::BufferCopy {
-            src_offset: src_start as u64 * element,
-            dst_offset: 0,
-            size: len as u64 * element,
-        };
-        unsafe { self.ctx.device().cmd_copy_buffer(self.cmd, src.raw(), dst.raw(), &[region]) };
+        let bytes = len as u64 * element;
+        self.copy_bytes((src.raw(), src_start as u64 * element), (dst.raw(), 0), bytes);
+    }
+
+    /// Copies `bytes` bytes between raw buffers given as (buffer, byte offset); the caller keeps
+    /// both alive until the submission completes (the staging path holds its pool's lock).
+    pub(crate) fn copy_bytes(
+        &mut self,
+        (src, src_offset): (vk::Buffer, u64),
+        (dst, dst_offset): (vk::Buffer, u64),
+        bytes: u64,
+    ) {
+        self.barrier_if_needed();
+        let region = vk::BufferCopy { src_offset, dst_offset, size: bytes };
+        unsafe { self.ctx.device().cmd_copy_buffer(self.cmd, src, dst, &[region]) };
         self.pending_writes = true;
     }
 

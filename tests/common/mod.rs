@@ -14,7 +14,7 @@ pub struct TestGpu {
 
 /// A validated context on the device the environment picks (lavapipe on CI).
 pub fn gpu() -> TestGpu {
-    let options = ContextOptions { device: None, validation: Some(true) };
+    let options = ContextOptions { validation: Some(true), ..Default::default() };
     let ctx =
         GpuContext::new(&options).unwrap_or_else(|e| panic!("cannot create a Vulkan context: {e}"));
     let log = ctx.validation().clone();
