@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Installs the system packages tagsplat needs on Debian 12 (Rust toolchain assumed present):
 # the Vulkan loader and headers, Mesa's drivers (lavapipe, the CPU device CI tests on), the
-# Khronos validation layer the tests use as an oracle, and the shader tools and shaderc
-# libraries build.rs compiles shaders/ with. Idempotent: packages already installed are
-# skipped, and when none is missing it touches neither the network nor apt's lists.
+# Khronos validation layer the tests use as an oracle, the shader tools and shaderc libraries
+# build.rs compiles shaders/ with, and Chromium, which renders OUT/report.html headless in
+# tests/report.rs. Idempotent: packages already installed are skipped, and when none is
+# missing it touches neither the network nor apt's lists.
 # Then, optionally, the Khronos glTF validator (npm `gltf-validator`) and Pixar's USD library
 # (PyPI `usd-core`), under .tools/, that the GLB and USD tests run: when npm, python3-venv or
 # the network is missing it warns and the tests say they skipped them.
@@ -21,6 +22,7 @@ packages=(
     glslang-dev
     spirv-tools
     vulkan-validationlayers
+    chromium
 )
 
 missing=()

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use tagsplat::bench::{bench_sequence, SequenceBenchReport};
 use tagsplat::gpu::GpuContext;
 use tagsplat::score::SequenceEvalOptions;
-use tagsplat::train::pipeline::{TrainConfig, TrainJob, TrainProgress};
+use tagsplat::train::pipeline::{write_html_report, TrainConfig, TrainJob, TrainProgress};
 
 #[derive(clap::Args)]
 pub struct BenchSequenceArgs {
@@ -50,9 +50,12 @@ pub fn run(context: impl FnOnce() -> Result<Arc<GpuContext>>, a: BenchSequenceAr
             );
         }
     };
-    let report = bench_sequence(&context()?, &job, &eval, &mut progress).with_context(|| {
-        format!("bench sequence --data {} --out {}", job.data.display(), job.out.display())
-    })?;
+    let what =
+        || format!("bench sequence --data {} --out {}", job.data.display(), job.out.display());
+    let ctx = context()?;
+    let mut report = bench_sequence(&ctx, &job, &eval, &mut progress).with_context(what)?;
+    // Rebuilt now that the output folder holds the scores.
+    report.files.push(write_html_report(&ctx, &job.out).with_context(what)?);
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {

@@ -5,11 +5,14 @@
 use anyhow::{Context, Result};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use tagsplat::eval::{evaluate_folders, FolderOptions};
+use tagsplat::gpu::GpuContext;
 use tagsplat::score::{
     evaluate_sequence, find_ground_truth, write_sequence_eval, FrameScores, FrameValue,
     GroundTruth, SequenceEvalOptions, SequenceSummary,
 };
+use tagsplat::train::pipeline::write_html_report;
 
 #[derive(clap::Args)]
 pub struct EvalArgs {
@@ -32,14 +35,15 @@ pub struct EvalArgs {
     /// Benchmark only: frames A..B to score (default: all of the ground truth's).
     #[arg(long, value_parser = crate::train::parse_range)]
     frames: Option<Range<usize>>,
-    /// Benchmark only: folder for eval.csv, eval.json and eval.svg (default: --pred).
+    /// Benchmark only: folder for eval.csv, eval.json and eval.svg (default: --pred). When it
+    /// holds a training run (report.json), its report.html is rebuilt to show the scores.
     #[arg(long)]
     out: Option<PathBuf>,
     #[arg(long)]
     json: bool,
 }
 
-pub fn run(a: EvalArgs) -> Result<()> {
+pub fn run(gpu: impl FnOnce() -> Result<Arc<GpuContext>>, a: EvalArgs) -> Result<()> {
     let context = || format!("eval --pred {} --gt {}", a.pred.display(), a.gt.display());
     if let Some(root) = find_ground_truth(&a.gt) {
         let gt = GroundTruth::read(&root).with_context(context)?;
@@ -49,8 +53,11 @@ pub fn run(a: EvalArgs) -> Result<()> {
             frames: a.frames.clone(),
         };
         let eval = evaluate_sequence(&a.pred, &gt, &options).with_context(context)?;
-        let files = write_sequence_eval(a.out.as_deref().unwrap_or(&a.pred), &eval)
-            .with_context(context)?;
+        let dir = a.out.as_deref().unwrap_or(&a.pred);
+        let mut files = write_sequence_eval(dir, &eval).with_context(context)?;
+        if dir.join("report.json").is_file() {
+            files.extend(rebuild_report(gpu, dir));
+        }
         if a.json {
             println!("{}", serde_json::to_string_pretty(&eval)?);
         } else {
@@ -61,6 +68,15 @@ pub fn run(a: EvalArgs) -> Result<()> {
         return Ok(());
     }
     folders(&a).with_context(context)
+}
+
+/// Rebuilds the report.html of the training run in `dir` so it shows the scores just written
+/// there. The scores stand without it, so a report that cannot be rebuilt (its dataset path
+/// relative to another directory, say) is a warning.
+fn rebuild_report(gpu: impl FnOnce() -> Result<Arc<GpuContext>>, dir: &Path) -> Option<PathBuf> {
+    let rebuilt = gpu().and_then(|ctx| Ok(write_html_report(&ctx, dir)?));
+    let page = dir.join("report.html");
+    rebuilt.map_err(|e| eprintln!("warning: {} not rebuilt: {e:#}", page.display())).ok()
 }
 
 /// The file-by-file comparison of two folders in the same layout.

@@ -239,7 +239,7 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
         Command::Train(args) => train::train(|| gpu.create(), args),
         Command::Demo(args) => demo::demo(&gpu.create()?, &args),
         Command::Ablate(args) => demo::ablate(&gpu.create()?, &args),
-        Command::Eval(args) => eval::run(args),
+        Command::Eval(args) => eval::run(|| gpu.create(), args),
         Command::Bench(Bench::Sort { n, bits, repetitions, lsd_only, json }) => {
             let ctx = gpu.create()?;
             let report = bench_sort(&ctx, n, bits, repetitions as usize, lsd_only)

@@ -103,6 +103,19 @@ fn check_shape(path: &Path, image: &Image) -> Result<(), ImageError> {
 /// Writes an 8-bit PNG (values clamped to [0, 1], rounded), atomically.
 pub fn write_png(path: &Path, image: &Image) -> Result<(), ImageError> {
     check_shape(path, image)?;
+    super::write_atomically(path, |w| encode_png(image, w))
+        .map_err(|e| fail(path, format!("cannot write: {e}")))
+}
+
+/// Encodes an image of 1 to 4 channels (values clamped to [0, 1], 8 bits) as PNG into `out`.
+/// A shape that does not fit (the encoder would panic on it) is an error.
+pub fn encode_png(image: &Image, out: impl std::io::Write) -> std::io::Result<()> {
+    let expect = image.width as usize * image.height as usize * image.channels as usize;
+    if !(1..=4).contains(&image.channels) || image.data.len() != expect {
+        let shape = format!("{}×{}×{}", image.width, image.height, image.channels);
+        let problem = format!("{} values do not make a {shape} PNG", image.data.len());
+        return Err(std::io::Error::other(problem));
+    }
     let bytes: Vec<u8> =
         image.data.iter().map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8).collect();
     let color = [
@@ -111,12 +124,9 @@ pub fn write_png(path: &Path, image: &Image) -> Result<(), ImageError> {
         ExtendedColorType::Rgb8,
         ExtendedColorType::Rgba8,
     ][image.channels as usize - 1];
-    super::write_atomically(path, |w| {
-        image::codecs::png::PngEncoder::new(w)
-            .write_image(&bytes, image.width, image.height, color)
-            .map_err(std::io::Error::other)
-    })
-    .map_err(|e| fail(path, format!("cannot write: {e}")))
+    image::codecs::png::PngEncoder::new(out)
+        .write_image(&bytes, image.width, image.height, color)
+        .map_err(std::io::Error::other)
 }
 
 /// Writes a 32-bit float EXR of an RGB or RGBA image, atomically.

@@ -217,7 +217,8 @@ fn tick_label(v: f64) -> String {
     }
 }
 
-fn escape(text: &str) -> String {
+/// `text` safe inside XML or HTML text and attribute values.
+pub(crate) fn escape(text: &str) -> String {
     text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 

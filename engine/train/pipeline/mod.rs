@@ -7,6 +7,7 @@
 pub mod config;
 mod frame;
 mod graph_stage;
+mod html_report;
 mod plateau;
 mod run;
 mod run_log;
@@ -14,5 +15,6 @@ mod run_log;
 pub use config::{ReferencePose, TrainConfig};
 pub use frame::{optimize_frame, FrameReport, FrameTask};
 pub use graph_stage::{GraphReport, LevelReport};
+pub use html_report::write_html_report;
 pub use plateau::StopReason;
 pub use run::{run_train, TrainJob, TrainProgress, TrainReport};

@@ -4,6 +4,7 @@
 
 use super::config::TrainConfig;
 use super::frame::{optimize_frame, FrameReport, FrameTask};
+use super::html_report::write_html_report;
 use super::run_log::RunLog;
 use crate::camera::mean_up;
 use crate::dataset::Dataset;
@@ -59,10 +60,12 @@ pub struct TrainReport {
     pub outputs: Vec<PathBuf>,
     /// The USD export's up axis, chosen from the cameras' mean up vector, and how.
     pub up_axis: String,
+    /// The colour behind the renders and the targets they are scored against (the config's).
+    pub background: [f32; 3],
 }
 
-/// Runs (or resumes) `job`; `OUT/report.json` is rewritten after every frame, and `OUT/run.log`
-/// gains what the run did (its end or its error included).
+/// Runs (or resumes) `job`; `OUT/report.json` is rewritten after every frame, `OUT/report.html`
+/// written at the end, and `OUT/run.log` gains what the run did (its end or its error included).
 pub fn run_train(
     ctx: &Arc<GpuContext>,
     job: &TrainJob,
@@ -118,6 +121,7 @@ fn run_logged(
         faces: 0,
         outputs: vec![job.out.join("meshes"), job.out.join("gaussians")],
         up_axis: String::new(),
+        background: job.config.background,
     };
     let up = up_axis(&dataset, &mut report.up_axis);
     report.frames = earlier_frame_reports(&job.out, &report.resumed_frames);
@@ -194,6 +198,8 @@ fn run_logged(
         report.outputs.extend(exported);
     }
     finish_report(&mut report, &mesh, started, &job.out)?;
+    let page = write_html_report(ctx, &job.out)?;
+    log.line(&format!("report: {}", page.display()))?;
     Ok(report)
 }
 
