@@ -127,7 +127,12 @@ fn parse_frame(
         (Some(w), Some(h)) => {
             return Err(bad(format!("image size {w}×{h} is not a positive integer size")))
         }
-        _ if !image.is_file() => return Err(DatasetError::MissingImage(image)),
+        _ if !image.is_file() => {
+            return Err(bad(format!(
+                "no `w` and `h`, and the image {} is missing",
+                image.display()
+            )))
+        }
         _ => image_size(&image)?,
     };
     let fx = match (number("fl_x")?, number("camera_angle_x")?) {

@@ -91,6 +91,17 @@ pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
         );
     }
     let train = (0..cameras.len()).filter(|i| !test.contains(i)).collect();
+    // Views are built for every frame the metadata claims, so the claim is checked against
+    // the files that back it: one edited number must not make the loader build a trillion.
+    let images = dir.join("images").join(&meta.cameras[0]);
+    let found = std::fs::read_dir(&images).map_or(0, |files| files.take(meta.frames).count());
+    if found < meta.frames {
+        return Err(bad(format!(
+            "`frames` is {}, but {} holds {found} files",
+            meta.frames,
+            images.display()
+        )));
+    }
     let frames = (0..meta.frames)
         .map(|t| Frame {
             time: t as f64 / meta.fps,

@@ -236,6 +236,8 @@ impl PlyElement {
 pub struct Ply {
     pub elements: Vec<PlyElement>,
     pub comments: Vec<String>,
+    /// The source, for errors (a file may have no element to name it).
+    path: PathBuf,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -266,7 +268,7 @@ impl Ply {
             Format::Ascii => read_ascii_body(path, body, &mut elements)?,
             _ => read_binary_body(path, body, format == Format::BigEndian, &mut elements)?,
         }
-        Ok(Ply { elements, comments })
+        Ok(Ply { elements, comments, path: path.to_path_buf() })
     }
 
     pub fn element(&self, name: &str) -> Option<&PlyElement> {
@@ -275,8 +277,7 @@ impl Ply {
 
     /// Like [`Ply::element`], but a missing element is an error naming the file.
     pub fn require(&self, name: &str) -> Result<&PlyElement, PlyError> {
-        let path = self.elements.first().map(|e| e.path.as_path()).unwrap_or(Path::new("PLY"));
-        self.element(name).ok_or_else(|| error(path, format!("no '{name}' element")))
+        self.element(name).ok_or_else(|| error(&self.path, format!("no '{name}' element")))
     }
 }
 
