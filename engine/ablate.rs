@@ -54,41 +54,62 @@ pub fn previous_temporal_stage(c: &mut TrainConfig) {
     ) = (0, 0.0, 0.0, 300, 300);
 }
 
+/// The temporal ablations of one benchmark; see [`run_temporal_ablations`].
 pub struct TemporalAblationJob {
     /// A benchmark dataset (with `gt/info.json`).
     pub data: PathBuf,
+    /// The folder that receives one train output per variant and the tables.
     pub out: PathBuf,
+    /// The configuration every variant changes.
     pub base: TrainConfig,
     /// A `tagsplat train` output whose frame 0 every variant continues.
     pub frame0: PathBuf,
+    /// The frames each variant trains and is scored on; frame 0 comes from `frame0`.
     pub frames: Range<usize>,
 }
 
 /// One variant's scores (fractions of the benchmark's size, dB, seconds).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct TemporalRow {
+    /// The variant's name.
     pub variant: String,
+    /// Tracking RMSE over all points and scored frames (NaN without track rows).
     pub tracking_rmse: f64,
+    /// Tracking RMSE of the worst frame (NaN without track rows).
     pub tracking_worst_frame: f64,
+    /// Point-to-surface Chamfer of the worst frame (NaN when no frame was scored).
     pub chamfer_worst_frame: f64,
+    /// Mesh-render PSNR of the last scored frame, dB (NaN when the train report lacks it).
     pub psnr_mesh_last_db: f64,
     /// Means over the later frames.
     pub seconds_per_frame: f64,
+    /// Iterations per later frame, the graph levels' and the per-vertex ones together.
     pub iterations_per_frame: f64,
 }
 
+/// Why the temporal ablations failed.
 #[derive(Debug, thiserror::Error)]
 pub enum AblateError {
+    /// The dataset has no ground truth to score against.
     #[error("{0} has no gt/info.json: temporal ablations need a benchmark with ground truth")]
     NoGroundTruth(PathBuf),
+    /// The given train output has no complete frame 0.
     #[error("{}: no finished frame 0 to continue", .0.display())]
     NoFrame0(PathBuf),
+    /// A variant's training failed, or its output folder could not be created.
     #[error(transparent)]
     Train(#[from] TrainError),
+    /// A variant could not be scored, or the ground truth read.
     #[error(transparent)]
     Eval(#[from] SequenceEvalError),
+    /// A file could not be copied or written.
     #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file being written.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
 }
 
 /// Runs every variant into `out/<n>_<name>/` (a finished variant is resumed, not redone) and

@@ -12,22 +12,40 @@ use std::path::{Path, PathBuf};
 /// Rotation rows must be orthonormal to this tolerance (f32-written files pass comfortably).
 const RIGID_TOLERANCE: f64 = 1e-4;
 
+/// Why a camera could not be built, read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum CameraError {
+    /// Reading or writing a camera file failed, or its contents are not a valid camera.
     #[error("{}: {problem}", path.display())]
-    File { path: PathBuf, problem: String },
+    File {
+        /// The `cam.json` file.
+        path: PathBuf,
+        /// What went wrong with it.
+        problem: String,
+    },
+    /// The numbers fail a check of [`Camera::new`]; the message names the check.
     #[error("invalid camera: {0}")]
     Invalid(String),
 }
 
+/// A pinhole camera with OpenCV axes (x right, y down, z forward); pixel (i, j) is centred at
+/// (i + 0.5, j + 0.5). Built through [`Camera::new`] (or the other constructors), it is checked;
+/// the fields are public and not re-checked when changed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Focal length along x, in pixels.
     pub fx: f64,
+    /// Focal length along y, in pixels.
     pub fy: f64,
+    /// Principal point x, in pixels (pixel centres at half-integers).
     pub cx: f64,
+    /// Principal point y, in pixels (pixel centres at half-integers).
     pub cy: f64,
+    /// Rigid transform from world to camera coordinates (last row 0 0 0 1).
     pub world_to_camera: DMat4,
 }
 
@@ -125,6 +143,9 @@ impl Camera {
         Self::new(width, height, fx, fy, cx, cy, world_to_camera)
     }
 
+    /// Reads a `cam.json` (format in the module docs) and checks it as [`Camera::new`] does.
+    /// Fails with [`CameraError::File`] when the file cannot be read, is not a camera JSON (unknown
+    /// fields are rejected), or is not a valid camera.
     pub fn load_json(path: &Path) -> Result<Self, CameraError> {
         let file_error = |problem: String| CameraError::File { path: path.to_path_buf(), problem };
         let text =

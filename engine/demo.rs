@@ -17,10 +17,15 @@ use std::sync::Arc;
 /// The demo's size: small enough for a minute on a 2-core CPU through lavapipe.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct DemoOptions {
+    /// Cameras in the ring (default 10).
     pub views: usize,
+    /// Frames generated (default 5).
     pub frames: usize,
+    /// Image size, pixels (default 128).
     pub resolution: u32,
+    /// Frame 0's iterations (default 600); densification ends at three quarters of them.
     pub canonical_iterations: u32,
+    /// Most per-vertex iterations of every later frame (default 200).
     pub temporal_iterations: u32,
 }
 
@@ -41,39 +46,57 @@ impl Default for DemoOptions {
 pub struct Scores {
     /// Means over frames of the evaluation-view PSNR of Gaussian and mesh renders, dB.
     pub psnr_gs: f64,
+    /// Mean PSNR of the mesh renders over frames, dB.
     pub psnr_mesh: f64,
     /// Chamfer (mean nearest-neighbour distance) and EMD as fractions of the ground truth's
     /// bounding-box diagonal, means over frames.
     pub chamfer_per_diagonal: f64,
+    /// EMD as a fraction of the ground truth's bounding-box diagonal, mean over frames.
     pub emd_per_diagonal: f64,
     /// Tracking MSE (squared scene units) and RMSE as a fraction of the subject's height (its
     /// ground-truth frame-0 extent along y).
     pub tracking_mse: f64,
+    /// Tracking RMSE as a fraction of the subject's height.
     pub tracking_rmse_per_height: f64,
+    /// Ground-truth points bound to the reconstruction and tracked.
     pub tracked_points: usize,
+    /// Wall time of reconstruction, tracking and scoring, seconds.
     pub seconds: f64,
+    /// Every metric of the output folder against the data folder.
     pub eval: FolderReport,
 }
 
+/// What [`run_demo`] reports (also written to `demo.json`).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct DemoReport {
+    /// The demo's size.
     pub options: DemoOptions,
+    /// The generated dataset (`dir/data`).
     pub data: PathBuf,
+    /// The reconstruction (`dir/out`).
     pub out: PathBuf,
+    /// The reconstruction's scores.
     pub scores: Scores,
+    /// The training run's report.
     pub train: TrainReport,
 }
 
+/// Why the demo (or an ablation run) failed; each variant names the step.
 #[derive(Debug, thiserror::Error)]
 pub enum DemoError {
+    /// The synthetic data could not be generated.
     #[error("generating the data: {0}")]
     Synth(#[from] crate::synth::generate::SynthError),
+    /// The reconstruction failed (writing the demo's own files included).
     #[error("reconstructing: {0}")]
     Train(#[from] crate::train::TrainError),
+    /// The ground-truth points could not be read or tracked.
     #[error("tracking: {0}")]
     Track(#[from] crate::track::TrackError),
+    /// The output could not be scored.
     #[error("evaluating: {0}")]
     Eval(#[from] crate::eval::FolderError),
+    /// A mesh sequence (reconstructed or ground truth) could not be read.
     #[error("reading the result: {0}")]
     Sequence(#[from] crate::sequence::SequenceError),
 }
@@ -154,7 +177,9 @@ pub fn train_and_score(
 
 /// One ablation: a name and what it switches off.
 pub struct Ablation {
+    /// The variant's name, as its table row shows it; its output folder is named after it.
     pub name: &'static str,
+    /// Changes the base configuration into the variant's.
     pub apply: fn(&mut TrainConfig),
 }
 

@@ -7,7 +7,7 @@
 //!   validation.
 //! - [`sort`]: exclusive prefix scan and LSD radix sort on the GPU.
 //! - [`ablate`]: the temporal stage's ablations on a benchmark with ground truth.
-//! - [`bench`]: benchmarks measured against bounds from the same run.
+//! - [`bench`](mod@bench): benchmarks measured against bounds from the same run.
 //! - [`demo`]: the whole job on generated data, scored against its ground truth.
 //! - [`rng`]: a small deterministic generator for tests, benchmarks and synthetic data.
 //! - [`camera`]: the pinhole camera (OpenCV axes) and its `cam.json` form.
@@ -21,7 +21,7 @@
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
 //! - [`raster`]: differentiable visibility-buffer mesh rasterizer (forward, backward, CPU reference).
 //! - [`train`]: the training loops (single-frame fit with the 3DGS baseline densification).
-//! - [`track`]: surface points bound on frame 0 and followed through a mesh sequence.
+//! - [`track`](mod@track): surface points bound on frame 0 and followed through a mesh sequence.
 //! - [`loss`]: the fused image loss (L1 + SSIM) with its gradient.
 //! - [`optim`]: fused Adam with moments that survive Gaussian-set changes, schedules.
 //! - [`eval`]: image, surface and tracking metrics.
@@ -32,6 +32,9 @@
 //! - [`synth`]: synthetic dynamic scenes with ground truth (procedural body, glTF skinning).
 //! - [`init`]: the first mesh of a frame from its masks (visual hull, marching tetrahedra,
 //!   vertex colours), when no mesh is given.
+
+// Every public item says what it is: `scripts/test.sh` builds the docs with warnings as errors.
+#![warn(missing_docs)]
 
 pub mod ablate;
 pub mod bench;

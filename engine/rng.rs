@@ -8,11 +8,13 @@ pub struct SplitMix64 {
 }
 
 impl SplitMix64 {
+    /// A generator whose sequence is fixed by `seed`; any seed, zero included, is fine.
     #[inline]
     pub fn new(seed: u64) -> Self {
         Self { state: seed }
     }
 
+    /// The next 64 bits of the sequence.
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
         self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -22,6 +24,7 @@ impl SplitMix64 {
         z ^ (z >> 31)
     }
 
+    /// The high 32 bits of [`next_u64`](Self::next_u64).
     #[inline]
     pub fn next_u32(&mut self) -> u32 {
         (self.next_u64() >> 32) as u32

@@ -4,9 +4,12 @@
 
 /// Window radius: scikit-image uses `int(3.5 · σ + 0.5)` = 5 for σ = 1.5.
 pub const RADIUS: usize = 5;
+/// Window side in pixels (11).
 pub const WINDOW: usize = 2 * RADIUS + 1;
 const SIGMA: f64 = 1.5;
+/// Stabilizer of the luminance term, (0.01 · L)² for data range L = 1.
 pub const C1: f64 = 0.01 * 0.01;
+/// Stabilizer of the contrast-structure term, (0.03 · L)² for data range L = 1.
 pub const C2: f64 = 0.03 * 0.03;
 
 /// The separable window's weights, summing to 1.
@@ -20,7 +23,7 @@ pub fn gaussian_weights() -> [f64; WINDOW] {
     w.map(|v| v / sum)
 }
 
-/// S from the moments (μx, μy, E[x²], E[y²], E[xy]), with population (co)variances.
+/// S from the moments (μx, μy, `E[x²]`, `E[y²]`, `E[xy]`), with population (co)variances.
 #[inline]
 pub fn ssim_formula([ux, uy, uxx, uyy, uxy]: [f64; 5]) -> f64 {
     let vx = uxx - ux * ux;

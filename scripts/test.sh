@@ -36,4 +36,6 @@ if [[ "${VK_ICD_FILENAMES:-}" == *lvp_icd* ]]; then
 fi
 # The library builds without the command-line program's crates (how embedders take it).
 cargo check --lib --no-default-features
+# The public API's documentation: every public item documented, every intra-doc link resolved.
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --lib
 cargo build --benches --examples

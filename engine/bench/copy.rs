@@ -27,8 +27,11 @@ push_layout!(CopyParams: [BENCH_COPY], [len, total_threads]);
 /// bound is what the device can do (lavapipe copies on a shared host vary by up to 3x).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct CopyBandwidth {
+    /// Size of one copy, bytes.
     pub bytes: u64,
+    /// Bytes copied per second by the compute copy kernel.
     pub compute_bytes_per_s: f64,
+    /// Bytes copied per second by `vkCmdCopyBuffer`.
     pub transfer_bytes_per_s: f64,
 }
 
@@ -41,6 +44,8 @@ pub struct CopyProbe {
 }
 
 impl CopyProbe {
+    /// Creates the kernel and the two buffers and fills the source; fails when the pipeline or
+    /// a buffer cannot be created or the fill cannot be submitted.
     pub fn new(ctx: &Arc<GpuContext>, bytes: u64) -> GpuResult<Self> {
         let len = (bytes / 16) as usize;
         let desc = PipelineDesc {

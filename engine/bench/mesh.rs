@@ -19,10 +19,14 @@ const PIXEL_PASS_BYTES: f64 = 8.0 + 8.0 + 56.0 + 24.0 + 16.0;
 /// Per-pixel passes of the forward, by pass name.
 const PIXEL_PASSES: [&str; 3] = ["raster clear", "raster resolve", "raster antialias"];
 
+/// What the mesh benchmark renders.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct MeshBenchConfig {
+    /// Triangle count asked of [`bumpy_sphere`].
     pub triangles: usize,
+    /// Width and height of every view, pixels.
     pub resolution: u32,
+    /// Number of [`ring_cameras`](super::ring_cameras).
     pub views: usize,
     /// Passes over all views; the first is a warm-up and not timed.
     pub rounds: usize,
@@ -34,25 +38,33 @@ impl Default for MeshBenchConfig {
     }
 }
 
+/// Timings of [`bench_mesh`].
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct MeshBenchReport {
+    /// Name of the Vulkan device.
     pub device: String,
+    /// The configuration that ran.
     pub config: MeshBenchConfig,
     /// Triangles of the generated mesh (close to the configured count).
     pub triangles: usize,
     /// Median wall ms per view: forward, backward.
     pub forward_ms: f64,
+    /// Median wall ms per view of the backward (recording and submission included).
     pub backward_ms: f64,
     /// Triangles and pixels rendered per second by the forward (median wall time).
     pub tris_per_s: f64,
+    /// Pixels per second: `resolution²` over the median forward wall time.
     pub pixels_per_s: f64,
     /// Median GPU ms per view of each pass.
     pub passes_ms: BTreeMap<String, f64>,
     /// Sub-triangles that went to the tiled large-triangle path, per view (mean).
     pub large_per_view: f64,
+    /// Copy bandwidth measured in the same run.
     pub copy: CopyBandwidth,
     /// The per-pixel forward passes at copy bandwidth, and measured time over that bound.
     pub pixel_passes_bound_ms: f64,
+    /// Median GPU ms of the per-pixel forward passes over `pixel_passes_bound_ms` (1 is at the
+    /// bound; 0 when the bound is 0).
     pub pixel_passes_over_bound: f64,
 }
 
@@ -89,6 +101,9 @@ pub fn bumpy_sphere(triangles: usize) -> Result<RasterMesh, RasterError> {
     RasterMesh::new(positions, faces, colors)
 }
 
+/// Renders [`bumpy_sphere`] from the ring cameras forward and backward, `rounds` passes over
+/// the views (at least 2, the first untimed), then measures the copy bandwidth. Fails when the
+/// mesh, the rasterizer or a GPU submission fails.
 pub fn bench_mesh(
     ctx: &Arc<GpuContext>,
     config: &MeshBenchConfig,

@@ -15,33 +15,45 @@ use serde::Serialize;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+/// Why [`bench_sequence`] failed.
 #[derive(Debug, thiserror::Error)]
 pub enum SequenceBenchError {
+    /// The dataset folder (named) has neither `gt/info.json` nor `info.json`.
     #[error("{}: no ground truth to score against (neither gt/info.json nor info.json)", .0.display())]
     NoGroundTruth(PathBuf),
+    /// The training run failed.
     #[error(transparent)]
     Train(#[from] TrainError),
+    /// Reading the ground truth, scoring, or writing the evaluation files failed.
     #[error(transparent)]
     Eval(#[from] SequenceEvalError),
 }
 
+/// What [`bench_sequence`] measured and scored.
 #[derive(Clone, Debug, Serialize)]
 pub struct SequenceBenchReport {
     /// The Vulkan device and the host CPU (`model name` of /proc/cpuinfo, when readable).
     pub device: String,
+    /// The host CPU model, `None` when /proc/cpuinfo cannot be read.
     pub cpu: Option<String>,
+    /// The dataset folder trained on.
     pub data: PathBuf,
+    /// The ground-truth folder scored against.
     pub ground_truth: PathBuf,
+    /// The output folder of the training run and the evaluation files.
     pub out: PathBuf,
     /// Wall seconds of the whole training run (resumed frames cost nothing).
     pub train_total_s: f64,
     /// Optimisation seconds of frame 0, and the mean over the later scored frames (None where
     /// the training report lacks them, e.g. frames resumed from an earlier run).
     pub frame0_s: Option<f64>,
+    /// Mean optimisation seconds over the scored frames after frame 0 that report it.
     pub later_frame_mean_s: Option<f64>,
     /// Iterations of each scored frame, in frame order.
     pub iterations: Vec<Option<u64>>,
+    /// The sequence's scores against the ground truth.
     pub scores: SequenceSummary,
+    /// The scores of each scored frame, in frame order.
     pub rows: Vec<FrameScores>,
     /// The evaluation files written.
     pub files: Vec<PathBuf>,

@@ -21,21 +21,30 @@ const MAX_REPETITIONS: usize = 1000;
 /// read once and written once in its final place.
 const BUCKET_PATH_COPIES: u32 = 2;
 
+/// Results of [`bench_sort`].
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SortBenchReport {
+    /// Name of the Vulkan device.
     pub device: String,
+    /// Number of key–value pairs sorted.
     pub n: usize,
+    /// Significant bits of each key.
     pub bits: u32,
+    /// Size of one key, bytes (4 or 8).
     pub key_bytes: u32,
+    /// LSD passes needed for `bits` (8-bit digits).
     pub passes: u32,
+    /// Timed sorts, after one warm-up.
     pub repetitions: usize,
     /// GPU time of the fastest sort (timestamps), ms; `keys_per_s` and the fraction use it.
     pub sort_ms: f64,
     /// Median GPU time of one sort, ms.
     pub sort_median_ms: f64,
+    /// Keys sorted per second by the fastest sort.
     pub keys_per_s: f64,
     /// Median GPU time per kind of pass within one sort, ms.
     pub stage_ms: Vec<PassTime>,
+    /// Copy bandwidth measured between the sorts of the same submission.
     pub copy: CopyBandwidth,
     /// Compute-copy bandwidth, GB/s (10^9 bytes copied per second).
     pub copy_gb_per_s: f64,
@@ -49,7 +58,9 @@ pub struct SortBenchReport {
     pub path_bound_ms: f64,
     /// `path_bound_ms / sort_ms`: the fraction of the bound for the bytes the path moves.
     pub path_bound_fraction: f64,
+    /// Wall time of one `sort_unstable_by_key` of the same pairs on the host, ms.
     pub cpu_sort_ms: f64,
+    /// Keys per second of that CPU sort.
     pub cpu_sort_keys_per_s: f64,
     /// The kernel variant: "Lanes" (CPU devices) or "Subgroups".
     pub variant: String,

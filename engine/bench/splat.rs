@@ -16,9 +16,13 @@ use std::time::Instant;
 /// What the benchmark renders.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct SplatBenchConfig {
+    /// Gaussians of the [`random_scene`].
     pub gaussians: usize,
+    /// Number of [`ring_cameras`].
     pub views: usize,
+    /// Width and height of every view, pixels.
     pub resolution: u32,
+    /// Spherical-harmonics degree of the scene and the render.
     pub sh_degree: u32,
     /// Passes over all views; the first is a warm-up and not timed.
     pub rounds: usize,
@@ -30,13 +34,18 @@ impl Default for SplatBenchConfig {
     }
 }
 
+/// Timings of [`bench_splat`].
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SplatBenchReport {
+    /// Name of the Vulkan device.
     pub device: String,
+    /// The configuration that ran.
     pub config: SplatBenchConfig,
     /// Median wall seconds per view: forward, backward, and both.
     pub fwd_s: f64,
+    /// Median wall seconds per view of the backward.
     pub bwd_s: f64,
+    /// Median wall seconds per view of forward + backward.
     pub fwd_bwd_s: f64,
     /// Forward + backward views per second (1 / fwd_bwd_s).
     pub fwd_bwd_per_s: f64,
@@ -100,14 +109,21 @@ pub fn ring_cameras(views: usize, resolution: u32) -> Vec<Camera> {
 /// The GPU side of one benchmark view: the scene, zeroed gradient buffers and densification
 /// statistics, and a loss gradient on every pixel's colour and alpha (as a training loss gives).
 pub struct BenchWork {
+    /// The scene's parameters.
     pub scene: GaussianBuffers,
+    /// Gradients, shaped like `scene`, zeroed once at creation and accumulated by each backward.
     pub grads: GaussianBuffers,
+    /// Densification statistics, one `[f32; 2]` per Gaussian, starting at zero.
     pub densify_stats: GpuBuffer<[f32; 2]>,
+    /// dL/dcolour and dL/dalpha per pixel, each `1 / pixels`.
     pub grad_rgba: GpuBuffer<[f32; 4]>,
+    /// dL/ddepth per pixel, zero.
     pub grad_depth: GpuBuffer<f32>,
 }
 
 impl BenchWork {
+    /// Uploads `scene` and creates the buffers for `resolution²` pixels; fails when an upload,
+    /// an allocation or the zeroing submission fails.
     pub fn new(
         ctx: &Arc<GpuContext>,
         scene: &GaussianScene,
@@ -149,6 +165,9 @@ impl BenchWork {
     }
 }
 
+/// Renders [`random_scene`] (seed `0x5EED`) from the ring cameras forward and backward,
+/// `rounds` passes over the views (at least 2, the first untimed). Fails when the splatter
+/// fails.
 pub fn bench_splat(
     ctx: &Arc<GpuContext>,
     config: &SplatBenchConfig,

@@ -18,26 +18,35 @@ use std::time::Instant;
 
 const REGULARIZE_PASS: &str = "regularize";
 
+/// Why [`bench_topology`] failed.
 #[derive(Debug, thiserror::Error)]
 pub enum TopologyBenchError {
+    /// The device lacks timestamp queries, or a GPU operation failed.
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    /// Uploading the Gaussian scene failed.
     #[error(transparent)]
     Splat(#[from] crate::splat::SplatError),
+    /// Creating, uploading or recording the regularizers failed.
     #[error(transparent)]
     Regularize(#[from] crate::regularize::RegularizeError),
+    /// Building the torus mesh, densifying or pruning failed.
     #[error(transparent)]
     Topology(#[from] crate::topology::TopologyError),
 }
 
+/// What the topology benchmark runs.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct TopologyBenchConfig {
     /// Torus resolution: `major × minor` vertices.
     pub major: u32,
+    /// Vertices around the tube (see `major`); at least 3 are used.
     pub minor: u32,
     /// Fraction of faces split per densify step and of Gaussians picked per prune step.
     pub fraction: f64,
+    /// Densify and prune steps timed (at least 1), and timed regularizer runs after one warm-up.
     pub repetitions: usize,
+    /// Spherical-harmonics degree of the Gaussians.
     pub sh_degree: u32,
 }
 
@@ -47,19 +56,28 @@ impl Default for TopologyBenchConfig {
     }
 }
 
+/// Timings of [`bench_topology`].
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct TopologyBenchReport {
+    /// Name of the Vulkan device.
     pub device: String,
+    /// The configuration that ran.
     pub config: TopologyBenchConfig,
+    /// Vertices of the torus (one Gaussian each).
     pub vertices: usize,
+    /// Faces of the torus.
     pub faces: usize,
     /// Median wall time of one densify step (splits, flips, compaction, scene remap), ms.
     pub densify_ms: f64,
+    /// Faces split by the last densify step.
     pub densify_splits: usize,
+    /// Edge flips made by the last densify step.
     pub densify_flips: usize,
     /// Median wall time of one prune step (merges, compaction, scene remap), ms.
     pub prune_ms: f64,
+    /// Gaussians removed by the last prune step.
     pub pruned: usize,
+    /// Gaussians the last prune step picked but kept, having no legal collapse.
     pub prune_kept_no_legal_edge: usize,
     /// Cloning the Gaussian arrays once: the floor of any remap, ms.
     pub scene_clone_ms: f64,
@@ -67,12 +85,16 @@ pub struct TopologyBenchReport {
     pub neighbourhoods_ms: f64,
     /// Fastest GPU time of both regularizer passes with every term on, ms.
     pub regularize_ms: f64,
+    /// Vertices per second at `regularize_ms`.
     pub regularize_vertices_per_s: f64,
     /// Bytes the passes must move at least (each buffer read or written once), and that at the
     /// compute-copy bandwidth.
     pub regularize_min_bytes: u64,
+    /// `regularize_min_bytes` divided by the compute copy rate, ms.
     pub regularize_bound_ms: f64,
+    /// `regularize_bound_ms / regularize_ms`.
     pub bandwidth_fraction: f64,
+    /// Copy bandwidth measured between the regularizer runs of the same submission.
     pub copy: CopyBandwidth,
     /// The f64 CPU reference (one thread) on the same input, ms.
     pub reference_ms: f64,

@@ -11,8 +11,10 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
 
+/// What the training benchmark runs.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct TrainBenchConfig {
+    /// Scene, cameras and resolution (as the splatting benchmark's; its `rounds` is unused).
     pub scene: SplatBenchConfig,
     /// Timed iterations, after one warm-up round over the views.
     pub iterations: usize,
@@ -24,12 +26,16 @@ impl Default for TrainBenchConfig {
     }
 }
 
+/// Timings of [`bench_train`].
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct TrainBenchReport {
+    /// Name of the Vulkan device.
     pub device: String,
+    /// The configuration that ran.
     pub config: TrainBenchConfig,
     /// Median wall seconds of one full iteration.
     pub s_per_iter: f64,
+    /// Iterations per second (1 / s_per_iter; 0 when that is 0).
     pub iters_per_s: f64,
     /// Median GPU ms per iteration of each top-level pass.
     pub passes_ms: BTreeMap<String, f64>,
@@ -49,6 +55,9 @@ const RATES: LearningRates = LearningRates {
     sh_rest: 1.25e-4,
 };
 
+/// Trains [`random_scene`] against renders of another random scene for one warm-up round
+/// over the views plus `iterations` timed steps, then runs [`bench_splat`] (2 rounds) on the
+/// same scene for the floor. Fails when a render, the trainer or a step fails.
 pub fn bench_train(
     ctx: &Arc<GpuContext>,
     config: &TrainBenchConfig,

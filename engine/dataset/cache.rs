@@ -25,6 +25,7 @@ fn size_of(image: &Image) -> usize {
 }
 
 impl ImageCache {
+    /// An empty cache holding up to `budget` bytes of pixel data (f32 samples).
     pub fn new(budget: usize) -> Self {
         Self { budget, inner: Mutex::new(Entries::default()) }
     }

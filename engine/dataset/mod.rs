@@ -23,31 +23,74 @@ use std::sync::Arc;
 /// Default budget of decoded pixel data kept in memory.
 pub const DEFAULT_CACHE_BYTES: usize = 1 << 30;
 
+/// Why a dataset could not be loaded, or one of its files read.
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
+    /// A metadata file cannot be read, is not valid JSON, or holds values the layout does not
+    /// allow.
     #[error("{}: {problem}", path.display())]
-    File { path: PathBuf, problem: String },
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// A camera is missing or invalid.
     #[error("{}: camera {camera}: {problem}", path.display())]
-    Camera { path: PathBuf, camera: String, problem: String },
+    Camera {
+        /// The file the camera was read from.
+        path: PathBuf,
+        /// The camera's name in the dataset.
+        camera: String,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// An image or mask file named by the metadata does not exist.
     #[error("missing image {}", .0.display())]
     MissingImage(PathBuf),
+    /// An image or mask's size differs from its camera's.
     #[error("{}: image is {width}×{height} but camera {camera} is {camera_width}×{camera_height}", path.display())]
     SizeMismatch {
+        /// The image or mask file.
         path: PathBuf,
+        /// The camera's name in the dataset.
         camera: String,
+        /// Width of the image, in pixels.
         width: u32,
+        /// Height of the image, in pixels.
         height: u32,
+        /// Width of the camera, in pixels.
         camera_width: u32,
+        /// Height of the camera, in pixels.
         camera_height: u32,
     },
+    /// An image or mask file does not decode.
     #[error(transparent)]
     Image(#[from] ImageError),
+    /// The layout takes masks from the alpha channel, and this image has none.
     #[error("{}: has no alpha channel to use as the mask", .0.display())]
     NoMask(PathBuf),
+    /// Every view's mask of a frame is empty (no pixel above 0.5).
     #[error("frame {frame}: the mask is empty in every view")]
-    EmptyMasks { frame: usize },
+    EmptyMasks {
+        /// Index of the frame, in time order.
+        frame: usize,
+    },
+    /// A frame's cameras differ from the first frame's (in a dataset that is not monocular).
     #[error("{}: frame {frame} has cameras [{found}] but frame {first} has [{expected}]", path.display())]
-    CameraSets { path: PathBuf, frame: usize, first: usize, found: String, expected: String },
+    CameraSets {
+        /// The metadata file.
+        path: PathBuf,
+        /// Index of the frame that differs, in time order.
+        frame: usize,
+        /// Index of the frame it is compared with (the first).
+        first: usize,
+        /// Names of the cameras in `frame`, comma-separated.
+        found: String,
+        /// Names of the cameras in `first`, comma-separated.
+        expected: String,
+    },
+    /// The folder holds none of the metadata files of a known layout.
     #[error("{}: no dataset here (looked for dataset.json, train_meta.json, transforms*.json)", .0.display())]
     Unknown(PathBuf),
 }
@@ -56,8 +99,11 @@ pub enum DatasetError {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Format {
+    /// This project's own layout ([`own`]).
     Own,
+    /// Dynamic 3D Gaussians / CMU Panoptic ([`panoptic`]).
     Panoptic,
+    /// nerfstudio / D-NeRF `transforms*.json` ([`nerfstudio`]).
     Nerfstudio,
 }
 
@@ -111,30 +157,42 @@ pub enum MaskSource {
 /// One image of one camera at one frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct View {
+    /// Index into [`Dataset::cameras`].
     pub camera: usize,
+    /// The image file.
     pub image: PathBuf,
+    /// Where the view's mask comes from.
     pub mask: MaskSource,
 }
 
 /// The views captured at one time (seconds, or the frame index where the source has no clock).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
+    /// Capture time in seconds, or the frame index where the source has no clock.
     pub time: f64,
+    /// The views of the frame, sorted by camera index.
     pub views: Vec<View>,
 }
 
+/// A loaded multi-view dataset: cameras in the engine's convention, frames in time order, and
+/// the file of every view. Images are decoded on demand through a bounded cache.
 #[derive(Debug)]
 pub struct Dataset {
+    /// The dataset folder.
     pub root: PathBuf,
+    /// The layout it was read from.
     pub format: Format,
     /// The convention the intrinsics were read in (the cameras are converted from it).
     pub pixel_centers: PixelCenters,
+    /// Name of each camera, parallel to `cameras`.
     pub camera_names: Vec<String>,
+    /// The cameras, with pixel centres at half-integers.
     pub cameras: Vec<Camera>,
     /// In time order.
     pub frames: Vec<Frame>,
     /// Camera indices for training and for held-out evaluation.
     pub train: Vec<usize>,
+    /// Camera indices held out for evaluation.
     pub test: Vec<usize>,
     cache: ImageCache,
 }

@@ -15,18 +15,26 @@ use crate::camera::Camera;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+/// Name of the metadata file in the dataset folder.
 pub const META: &str = "dataset.json";
+/// The value of `format` in [`META`].
 pub const FORMAT_NAME: &str = "tagsplat-dataset";
 
 /// The contents of `dataset.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OwnMeta {
+    /// [`FORMAT_NAME`]; the loader refuses anything else.
     pub format: String,
+    /// Layout version; the loader reads version 1 only.
     pub version: u32,
+    /// Number of frames; every camera has one image and one mask per frame.
     pub frames: usize,
+    /// Frames per second (positive): frame t is at time t / fps seconds.
     pub fps: f64,
+    /// Camera names: each has `cameras/<name>.json` and a folder under `images/` and `masks/`.
     pub cameras: Vec<String>,
+    /// The cameras (from `cameras`) held out for evaluation; the others train.
     pub test_cameras: Vec<String>,
 }
 
@@ -35,18 +43,24 @@ pub fn frame_name(t: usize) -> String {
     format!("{t:06}")
 }
 
+/// `dir/cameras/<camera>.json`.
 pub fn camera_path(dir: &Path, camera: &str) -> PathBuf {
     dir.join("cameras").join(format!("{camera}.json"))
 }
 
+/// `dir/images/<camera>/<t>.png`, `<t>` as in [`frame_name`].
 pub fn image_path(dir: &Path, camera: &str, t: usize) -> PathBuf {
     dir.join("images").join(camera).join(format!("{}.png", frame_name(t)))
 }
 
+/// `dir/masks/<camera>/<t>.png`, `<t>` as in [`frame_name`].
 pub fn mask_path(dir: &Path, camera: &str, t: usize) -> PathBuf {
     dir.join("masks").join(camera).join(format!("{}.png", frame_name(t)))
 }
 
+/// Reads the layout from `dir`, checking `dataset.json`, every camera, and that `images/` of the
+/// first camera holds at least `frames` files. The intrinsics stay as written;
+/// [`Dataset::load`](super::Dataset::load) is the entry point that converts them.
 pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
     let meta_path = dir.join(META);
     let meta: OwnMeta = read_json(&meta_path)?;

@@ -15,7 +15,9 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+/// Metadata of the training cameras; its presence marks the layout.
 pub const TRAIN_META: &str = "train_meta.json";
+/// Metadata of the test cameras (optional).
 pub const TEST_META: &str = "test_meta.json";
 
 #[derive(Deserialize)]
@@ -32,6 +34,10 @@ struct Meta {
 /// Per camera id: its camera, whether it is a test camera.
 type Rig = BTreeMap<i64, (Camera, bool)>;
 
+/// Reads the layout from `dir`: cameras from both metadata files (sorted by camera id, named by
+/// it), one frame per time step with time = frame index. The intrinsics stay as written
+/// (integer pixel centres); [`Dataset::load`](super::Dataset::load) is the entry point that
+/// converts them.
 pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
     let mut rig: Rig = BTreeMap::new();
     let mut per_frame: Vec<Vec<(i64, PathBuf)>> = Vec::new();

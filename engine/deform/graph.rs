@@ -15,10 +15,12 @@ pub struct DeformGraph {
     pub node_vertices: Vec<u32>,
     /// Per vertex: its nodes and their weights (sum 1; unused slots weigh 0).
     pub bound_nodes: Vec<[u32; NODES_PER_VERTEX]>,
+    /// The weights of `bound_nodes`, slot for slot.
     pub bound_weights: Vec<[f32; NODES_PER_VERTEX]>,
     /// Node k's neighbours are `neighbours[start..start + count]`, `[start, count] =
     /// neighbour_ranges[k]`; the relation is symmetric.
     pub neighbour_ranges: Vec<[u32; 2]>,
+    /// Every node's neighbour list, concatenated; indexed through `neighbour_ranges`.
     pub neighbours: Vec<u32>,
     /// Mean distance between linked nodes (scene units): the graph's length scale.
     pub node_spacing: f32,

@@ -157,6 +157,7 @@ impl GraphDeformer {
         })
     }
 
+    /// The number of graph nodes.
     pub fn nodes(&self) -> usize {
         self.push.nodes as usize
     }

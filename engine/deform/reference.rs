@@ -8,11 +8,15 @@ use glam::{DMat3, DQuat, DVec3};
 /// Node transforms: a translation and a (w, x, y, z) rotation, not necessarily unit, per node.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NodeTransforms {
+    /// Per node, the translation t_k added after rotating about the node's rest position
+    /// (scene units).
     pub translations: Vec<[f64; 3]>,
+    /// Per node, the rotation R_k as a (w, x, y, z) quaternion; normalised where it is used.
     pub rotations: Vec<[f64; 4]>,
 }
 
 impl NodeTransforms {
+    /// `nodes` identity transforms: zero translations and (1, 0, 0, 0) rotations.
     pub fn identity(nodes: usize) -> Self {
         Self { translations: vec![[0.0; 3]; nodes], rotations: vec![[1.0, 0.0, 0.0, 0.0]; nodes] }
     }

@@ -3,7 +3,7 @@
 //! matrix). Exact up to floating-point rounding in the potentials.
 
 /// For an `n × n` row-major matrix of finite costs, returns `col[i]`, the column matched to
-/// row `i`, so that Σ cost[i][col[i]] is minimal over all permutations.
+/// row `i`, so that `Σ cost[i][col[i]]` is minimal over all permutations.
 pub fn min_cost_assignment(n: usize, cost: &[f64]) -> Vec<usize> {
     assert_eq!(cost.len(), n * n, "cost matrix must be n × n");
     // Index 0 is a virtual column that holds the row being inserted.

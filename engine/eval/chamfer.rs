@@ -20,6 +20,7 @@ use serde::Serialize;
 pub struct ChamferReport {
     /// Points drawn on each mesh (or the sizes of the point sets, when they differ).
     pub samples_pred: usize,
+    /// Points drawn on (or in) the ground truth.
     pub samples_gt: usize,
     /// Symmetric mean of squared nearest-neighbour distances, squared scene units.
     pub squared: f64,

@@ -11,6 +11,7 @@ use super::sample::{sample_surface, surface_points};
 use super::EvalError;
 use serde::Serialize;
 
+/// Earth mover's distance as defined in the module docs.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct EmdReport {
     /// Points in each set.

@@ -19,11 +19,14 @@ use crate::mesh::{MeshError, TriMesh};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
+/// Sample counts and seed of [`evaluate_folders`].
 #[derive(Clone, Copy, Debug)]
 pub struct FolderOptions {
     /// Surface samples per mesh for Chamfer, and for EMD (exact, O(n³)).
     pub chamfer_samples: usize,
+    /// Surface samples per mesh for EMD (default 1000).
     pub emd_samples: usize,
+    /// Seeds the surface samples.
     pub seed: u64,
 }
 
@@ -33,49 +36,87 @@ impl Default for FolderOptions {
     }
 }
 
+/// Why two folders could not be compared.
 #[derive(Debug, thiserror::Error)]
 pub enum FolderError {
+    /// A metric failed on a predicted file (images of different sizes included).
     #[error("{}: {source}", path.display())]
-    Metric { path: PathBuf, source: EvalError },
+    Metric {
+        /// The predicted file.
+        path: PathBuf,
+        /// The metric's error.
+        source: EvalError,
+    },
+    /// A mesh could not be read.
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// An image could not be read.
     #[error(transparent)]
     Image(#[from] ImageError),
+    /// A `trajectories.csv` could not be read.
     #[error(transparent)]
     Trajectories(#[from] TrajectoriesError),
+    /// A ground-truth mesh has no prediction of the same name.
     #[error("missing prediction {} (the ground truth has {})", pred.display(), gt.display())]
-    Missing { pred: PathBuf, gt: PathBuf },
+    Missing {
+        /// The predicted mesh expected.
+        pred: PathBuf,
+        /// The ground-truth mesh.
+        gt: PathBuf,
+    },
+    /// A folder could not be listed.
     #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The folder.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The folders share no metric: no meshes, trajectories or images to compare.
     #[error("nothing to compare: {} has no meshes/*.ply, trajectories.csv or images/", .0.display())]
     Nothing(PathBuf),
 }
 
+/// One frame's mesh metrics.
 #[derive(Clone, Debug, Serialize)]
 pub struct MeshFrameReport {
+    /// The mesh's file name without `.ply` (the six-digit frame index).
     pub frame: String,
+    /// Chamfer distance of the prediction to the ground truth.
     pub chamfer: ChamferReport,
+    /// Earth mover's distance of the prediction to the ground truth.
     pub emd: EmdReport,
 }
 
+/// Image metrics over every predicted image with a ground-truth counterpart.
 #[derive(Clone, Debug, Serialize)]
 pub struct ImageReport {
+    /// Images compared.
     pub images: usize,
     /// Means over images, dB and unitless.
     pub psnr_db: f64,
+    /// Mean SSIM (RGB).
     pub ssim: f64,
 }
 
+/// Every metric the two folders allow (see the module docs).
 #[derive(Clone, Debug, Serialize)]
 pub struct FolderReport {
+    /// Per ground-truth frame, in file-name order (empty without a predicted `meshes/`).
     pub meshes: Vec<MeshFrameReport>,
     /// Means over frames: squared scene units, scene units, scene units.
     pub chamfer_squared_mean: Option<f64>,
+    /// Mean Chamfer distance over frames, scene units (None without meshes).
     pub chamfer_mean: Option<f64>,
+    /// Mean EMD over frames, scene units (None without meshes).
     pub emd_mean: Option<f64>,
+    /// Surface samples per mesh for Chamfer.
     pub chamfer_samples: usize,
+    /// Surface samples per mesh for EMD.
     pub emd_samples: usize,
+    /// Tracking error, when both folders have a `trajectories.csv`.
     pub tracking: Option<TrackingReport>,
+    /// Image metrics, when some predicted image has a ground-truth counterpart.
     pub images: Option<ImageReport>,
 }
 
@@ -93,6 +134,9 @@ fn list(dir: &Path, ext: &str) -> Result<Vec<PathBuf>, FolderError> {
     Ok(files)
 }
 
+/// Compares the prediction folder `pred` with the ground-truth folder `gt` (see the module
+/// docs). Fails on the first unreadable file or failing metric, on a ground-truth mesh without
+/// its prediction, and when nothing can be compared.
 pub fn evaluate_folders(
     pred: &Path,
     gt: &Path,

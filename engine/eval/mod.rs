@@ -1,6 +1,6 @@
 //! Evaluation metrics, each with its exact definition and unit in its own file:
-//! - [`psnr`]: peak signal-to-noise ratio of images in [0, 1], in dB.
-//! - [`ssim`]: structural similarity (11×11 Gaussian window, σ = 1.5), unitless; equals
+//! - [`psnr`](mod@psnr): peak signal-to-noise ratio of images in [0, 1], in dB.
+//! - [`ssim`](mod@ssim): structural similarity (11×11 Gaussian window, σ = 1.5), unitless; equals
 //!   scikit-image's `structural_similarity(gaussian_weights=True, sigma=1.5,
 //!   use_sample_covariance=False, data_range=1)`.
 //! - [`chamfer`]: symmetric Chamfer distance between area-uniform surface samples of two meshes.
@@ -35,22 +35,64 @@ pub use tracking::{tracking_error, TrackingReport};
 /// Why a metric could not be computed.
 #[derive(Debug, thiserror::Error)]
 pub enum EvalError {
+    /// Prediction and ground truth differ in length (the prediction's first).
     #[error("inputs differ in size: {0} vs {1} values")]
     SizeMismatch(usize, usize),
+    /// An input is empty, or a sample count is zero (the input named).
     #[error("empty input: {0}")]
     Empty(&'static str),
+    /// An input holds a NaN or infinity (the input named).
     #[error("non-finite value in {0}")]
     NonFinite(&'static str),
+    /// An image is smaller than the SSIM window in width or height.
     #[error("image {width}×{height} is smaller than the {window}×{window} SSIM window")]
-    ImageTooSmall { width: usize, height: usize, window: usize },
+    ImageTooSmall {
+        /// Image width, pixels.
+        width: usize,
+        /// Image height, pixels.
+        height: usize,
+        /// The window's side, pixels.
+        window: usize,
+    },
+    /// An image buffer's length is not width × height × channels.
     #[error("image buffer holds {len} values, expected {width}×{height}×{channels}")]
-    ImageShape { len: usize, width: usize, height: usize, channels: usize },
+    ImageShape {
+        /// Values in the buffer.
+        len: usize,
+        /// Image width, pixels.
+        width: usize,
+        /// Image height, pixels.
+        height: usize,
+        /// Values per pixel.
+        channels: usize,
+    },
+    /// A face refers to a vertex past the mesh's vertex count.
     #[error("face {face} refers to vertex {index}, but the mesh has {vertices} vertices")]
-    FaceIndex { face: usize, index: u32, vertices: usize },
+    FaceIndex {
+        /// The face's index.
+        face: usize,
+        /// The vertex index it holds.
+        index: u32,
+        /// The mesh's vertex count.
+        vertices: usize,
+    },
+    /// A surface sample names a face past the mesh's face count.
     #[error("a surface sample lies on face {face}, but the mesh has {faces} faces")]
-    SampleFace { face: u32, faces: usize },
+    SampleFace {
+        /// The face the sample names.
+        face: u32,
+        /// The mesh's face count.
+        faces: usize,
+    },
+    /// A mesh has no face of positive area (nothing to sample, or to measure against).
     #[error("the mesh has no surface area to sample")]
     NoArea,
+    /// A ground-truth trajectory point has no predicted point of the same id and frame.
     #[error("ground-truth point `{id}` at frame {frame} has no prediction")]
-    MissingPrediction { id: String, frame: u32 },
+    MissingPrediction {
+        /// The point's id.
+        id: String,
+        /// The frame.
+        frame: u32,
+    },
 }

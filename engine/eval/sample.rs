@@ -7,7 +7,9 @@ use crate::rng::SplitMix64;
 /// A point on a mesh: face index and barycentric weights (b ≥ 0, Σb = 1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceSample {
+    /// Index of the face the point lies on.
     pub face: u32,
+    /// Barycentric weights of the face's three corners, in face order.
     pub bary: [f64; 3],
 }
 

@@ -10,11 +10,14 @@ use crate::io::trajectories::TrackPoint;
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 
+/// Tracking error as defined in the module docs.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TrackingReport {
     /// Distinct point ids and frames in the ground truth, and the pairs compared.
     pub points: usize,
+    /// Distinct frames in the ground truth.
     pub frames: usize,
+    /// (point id, frame) pairs compared: every ground-truth row.
     pub pairs: usize,
     /// Mean squared error, squared scene units.
     pub mse: f64,

@@ -20,8 +20,11 @@ use std::time::Duration;
 /// A point on the surface: face index, barycentric coordinates and the point itself.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
+    /// Index of the face the point lies on.
     pub face: u32,
+    /// Weights of the face's three corners, in face order, summing to 1.
     pub barycentric: [f64; 3],
+    /// The point, in the mesh's coordinates.
     pub position: DVec3,
     /// Distance from the query point (closest-point query) or ray parameter t (ray cast,
     /// in units of the ray direction's length).

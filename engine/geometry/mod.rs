@@ -15,10 +15,23 @@ pub use bvh::{triangles, SurfaceBvh, SurfacePoint};
 /// A mesh that cannot be queried.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SurfaceError {
+    /// The mesh has no faces.
     #[error("the mesh has no faces")]
     EmptyMesh,
+    /// A vertex position (used by a face or not) has a NaN or infinite coordinate.
     #[error("vertex {vertex} has a non-finite position")]
-    NonFinitePosition { vertex: usize },
+    NonFinitePosition {
+        /// Index of the vertex.
+        vertex: usize,
+    },
+    /// A face refers to a vertex past the end of the positions.
     #[error("face {face} uses vertex {index}, but the mesh has {vertices} vertices")]
-    IndexOutOfRange { face: usize, index: u32, vertices: usize },
+    IndexOutOfRange {
+        /// Index of the face.
+        face: usize,
+        /// The vertex index it holds.
+        index: u32,
+        /// Number of vertices in the mesh.
+        vertices: usize,
+    },
 }

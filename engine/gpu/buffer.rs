@@ -58,21 +58,25 @@ impl<T: Pod> GpuBuffer<T> {
         Ok(buffer)
     }
 
+    /// Number of elements.
     #[inline]
     pub fn len(&self) -> usize {
         self.len
     }
 
+    /// Whether the buffer holds no elements.
     #[inline]
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
 
+    /// Size in bytes: `len() * size_of::<T>()`.
     #[inline]
     pub fn size_bytes(&self) -> u64 {
         (self.len * size_of::<T>()) as u64
     }
 
+    /// The name given at creation, used in error messages.
     pub fn name(&self) -> &str {
         &self.name
     }

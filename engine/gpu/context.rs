@@ -17,28 +17,42 @@ use std::sync::{Arc, Mutex, MutexGuard};
 /// device's memory is host-visible (lavapipe), so CI runs a discrete GPU's path.
 #[derive(Clone, Debug, Default)]
 pub struct ContextOptions {
+    /// The device: an index or a case-insensitive piece of its name (see [`choose_device`]).
     pub device: Option<String>,
+    /// Whether to enable the Khronos validation layer and count its messages.
     pub validation: Option<bool>,
+    /// Whether to send every upload and readback through staging buffers.
     pub force_staging: Option<bool>,
 }
 
 /// Device limits and properties the engine sizes its work by.
 #[derive(Clone, Debug)]
 pub struct DeviceLimits {
+    /// `maxStorageBufferRange`: the largest storage-buffer binding, in bytes.
     pub max_storage_buffer_range: u64,
+    /// `maxMemoryAllocationSize`: the largest single allocation, in bytes.
     pub max_memory_allocation_size: u64,
+    /// `maxComputeWorkGroupCount`: workgroups per dispatch along x, y and z.
     pub max_workgroup_count: [u32; 3],
+    /// `maxComputeWorkGroupInvocations`: invocations in one workgroup.
     pub max_workgroup_invocations: u32,
+    /// `maxComputeSharedMemorySize`: shared memory of one workgroup, in bytes.
     pub max_shared_memory_bytes: u32,
+    /// The default subgroup size.
     pub subgroup_size: u32,
     /// Nanoseconds per timestamp tick; `None` when the compute queue cannot write timestamps.
     pub timestamp_period_ns: Option<f64>,
+    /// Valid bits of a timestamp on the compute queue (0 without timestamps).
     pub timestamp_valid_bits: u32,
     /// Pipelines can require full subgroups (see [`DeviceCapabilities::full_subgroups`]).
     pub full_subgroups: bool,
+    /// The largest subgroup size the device may use (the default size without subgroup size
+    /// control).
     pub max_subgroup_size: u32,
 }
 
+/// A Vulkan instance and logical device with one compute queue, its allocator and pipeline
+/// cache. Created by [`GpuContext::new`] and shared as `Arc<GpuContext>`.
 pub struct GpuContext {
     _entry: ash::Entry,
     instance: ash::Instance,
@@ -169,10 +183,12 @@ impl GpuContext {
         devices.map(|(_, devices)| devices)
     }
 
+    /// The device in use.
     pub fn info(&self) -> &DeviceInfo {
         &self.info
     }
 
+    /// The device limits the engine sizes its work by.
     pub fn limits(&self) -> &DeviceLimits {
         &self.limits
     }
@@ -192,10 +208,12 @@ impl GpuContext {
         self.staging.lock().unwrap_or_else(|e| e.into_inner())
     }
 
+    /// The validation messages so far (always empty unless [`Self::validation_enabled`]).
     pub fn validation(&self) -> &Arc<ValidationLog> {
         &self.validation_log
     }
 
+    /// The logical device, for code that records its own Vulkan commands.
     pub fn device(&self) -> &ash::Device {
         &self.device
     }
@@ -210,6 +228,7 @@ impl GpuContext {
         self.queue.lock().unwrap_or_else(|e| e.into_inner())
     }
 
+    /// Index of the queue family of [`Self::queue`].
     pub fn queue_family(&self) -> u32 {
         self.queue_family
     }

@@ -7,20 +7,34 @@ use std::ffi::CStr;
 /// The capabilities of one physical device that the engine cares about.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DeviceCapabilities {
+    /// The Vulkan version the device supports, packed as by `vk::make_api_version`; 1.2 or later
+    /// is required.
     pub api_version: u32,
+    /// `shaderInt64`: 64-bit integers in shaders (required).
     pub shader_int64: bool,
+    /// `shaderBufferInt64Atomics`: 64-bit atomics on storage buffers (required).
     pub buffer_int64_atomics: bool,
+    /// `shaderBufferFloat32AtomicAdd` of VK_EXT_shader_atomic_float (required).
     pub buffer_float32_atomic_add: bool,
+    /// VK_KHR_push_descriptor is available (required).
     pub push_descriptor: bool,
+    /// The default subgroup size; required to be a power of two in 4..=128. 0 below Vulkan 1.2.
     pub subgroup_size: u32,
+    /// Subgroup operations are supported in compute shaders (required).
     pub subgroup_in_compute: bool,
+    /// Subgroup arithmetic operations are supported (required).
     pub subgroup_arithmetic: bool,
+    /// Subgroup ballot operations are supported (required).
     pub subgroup_ballot: bool,
+    /// Subgroup shuffle operations are supported (required).
     pub subgroup_shuffle: bool,
+    /// Some queue family supports compute (required).
     pub has_compute_queue: bool,
     /// Optional: VK_EXT_subgroup_size_control with computeFullSubgroups, so pipelines can ask
     /// for full subgroups (some drivers, Intel's, may otherwise launch partial ones).
     pub full_subgroups: bool,
+    /// The largest subgroup size the device may use: VK_EXT_subgroup_size_control's maximum, at
+    /// least [`subgroup_size`](Self::subgroup_size).
     pub max_subgroup_size: u32,
 }
 

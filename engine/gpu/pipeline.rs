@@ -20,11 +20,16 @@ use std::sync::Arc;
 
 /// What a compute pipeline is made of.
 pub struct PipelineDesc<'a> {
+    /// Name for error messages and panics.
     pub name: &'static str,
+    /// The shader, from `crate::shaders`.
     pub shader: &'static Shader,
+    /// Value of specialization constant `i` at index `i`; constant 0 is the workgroup size by
+    /// convention.
     pub specialization: &'a [u32],
 }
 
+/// A compute pipeline with its layout, built from a [`Shader`]'s reflected interface.
 pub struct ComputePipeline {
     ctx: Arc<GpuContext>,
     pub(crate) pipeline: vk::Pipeline,
@@ -35,6 +40,9 @@ pub struct ComputePipeline {
 }
 
 impl ComputePipeline {
+    /// Builds the pipeline (through the context's pipeline cache). Asks for full subgroups where
+    /// the device supports them and the workgroup size is a multiple of the largest subgroup size.
+    /// Fails with [`GpuError::Pipeline`] when the driver refuses it, or [`GpuError::Vulkan`].
     pub fn new(ctx: &Arc<GpuContext>, desc: &PipelineDesc) -> GpuResult<Self> {
         let device = ctx.device();
         let shader = desc.shader;

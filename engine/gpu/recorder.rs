@@ -36,6 +36,7 @@ const STAGES: vk::PipelineStageFlags = vk::PipelineStageFlags::from_raw(
 );
 
 impl<'a> Recorder<'a> {
+    /// An empty recorder with its own command pool, command buffer and fence.
     pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
         let device = ctx.device();
         let pool_info = vk::CommandPoolCreateInfo::default()
@@ -219,6 +220,7 @@ impl<'a> Recorder<'a> {
         self.timestamps.begin(self.ctx.device(), self.cmd, name);
     }
 
+    /// Ends the innermost open pass; does nothing when none is open.
     pub fn end_pass(&mut self) {
         self.timestamps.end(self.ctx.device(), self.cmd);
     }

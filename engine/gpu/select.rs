@@ -11,9 +11,13 @@ pub const DEVICE_ENV: &str = "TAGSPLAT_DEVICE";
 /// One physical device as the user sees it.
 #[derive(Clone, Debug)]
 pub struct DeviceInfo {
+    /// Index in the instance's device list, as the `wanted` of [`choose_device`] takes it.
     pub index: usize,
+    /// The driver's device name.
     pub name: String,
+    /// Discrete, integrated, virtual, CPU or other.
     pub kind: vk::PhysicalDeviceType,
+    /// What the device offers of what the engine needs.
     pub capabilities: DeviceCapabilities,
 }
 

@@ -14,6 +14,7 @@
 pub struct Shader {
     /// Source path under `shaders/`.
     pub path: &'static str,
+    /// The SPIR-V module.
     pub spirv: &'static [u8],
     /// Bytes of the push-constant block: the end of its last member; 0 without one.
     pub push_size: usize,
@@ -26,7 +27,7 @@ pub struct Shader {
 
 impl Shader {
     /// Whether the push-constant block has a member `name` at byte `offset`; `const`, so that
-    /// [`push_layout!`] asserts it at compile time.
+    /// `push_layout!` asserts it at compile time.
     pub const fn push_member_at(&self, name: &str, offset: usize) -> bool {
         let mut i = 0;
         while i < self.push_members.len() {

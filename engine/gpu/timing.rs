@@ -10,7 +10,9 @@ const QUERIES_PER_POOL: u32 = 128;
 /// The GPU time of one recorded pass.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PassTime {
+    /// The name given to [`Recorder::begin_pass`](super::Recorder::begin_pass).
     pub name: String,
+    /// GPU time between the pass's begin and end, in milliseconds.
     pub ms: f64,
     /// Nesting level: 0 for a top-level pass, 1 inside one, …
     pub depth: u32,
@@ -19,6 +21,7 @@ pub struct PassTime {
 /// The pass times of one submission, in the order the passes began.
 #[derive(Clone, Debug, Default)]
 pub struct PassTimes {
+    /// One entry per timed pass; empty where the queue cannot write timestamps.
     pub passes: Vec<PassTime>,
 }
 

@@ -19,10 +19,12 @@ pub struct ValidationLog {
 }
 
 impl ValidationLog {
+    /// Number of error messages so far.
     pub fn error_count(&self) -> u32 {
         self.errors.load(Ordering::Relaxed)
     }
 
+    /// Number of warning messages so far.
     pub fn warning_count(&self) -> u32 {
         self.warnings.load(Ordering::Relaxed)
     }

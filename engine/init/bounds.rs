@@ -11,15 +11,19 @@ use glam::DVec3;
 /// An axis-aligned box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
+    /// Lower corner, world units.
     pub lo: DVec3,
+    /// Upper corner, world units.
     pub hi: DVec3,
 }
 
 impl Aabb {
+    /// Edge lengths along x, y and z (`hi - lo`).
     pub fn size(&self) -> DVec3 {
         self.hi - self.lo
     }
 
+    /// Product of the edge lengths.
     pub fn volume(&self) -> f64 {
         self.size().x * self.size().y * self.size().z
     }

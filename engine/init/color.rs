@@ -13,8 +13,12 @@ use glam::DVec3;
 /// A view to colour from: its camera, image, and mask (one value per pixel).
 #[derive(Clone, Copy, Debug)]
 pub struct ColorSource<'a> {
+    /// The view's camera.
     pub camera: &'a Camera,
+    /// The view's image, the camera's size.
     pub image: &'a Image,
+    /// The view's mask, one value per pixel in [0, 1], row-major; colour comes only from pixels
+    /// at 0.99 or above.
     pub mask: &'a [f32],
 }
 

@@ -7,8 +7,12 @@
 /// row-major, plus a continuous extension past the image border.
 #[derive(Clone, Debug)]
 pub struct SignedDistance {
+    /// Width of the mask, in pixels.
     pub width: usize,
+    /// Height of the mask, in pixels.
     pub height: usize,
+    /// Signed distance of each pixel centre to the outline, in pixels (positive inside),
+    /// row-major.
     pub values: Vec<f32>,
 }
 

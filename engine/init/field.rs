@@ -11,7 +11,9 @@ use glam::DVec3;
 /// One view's camera and the signed distance of its (hole-filled) mask.
 #[derive(Clone, Debug)]
 pub struct ViewField {
+    /// The view's camera.
     pub camera: Camera,
+    /// Signed distance to the outline of the view's mask, in pixels.
     pub distance: SignedDistance,
 }
 
@@ -35,6 +37,7 @@ impl ViewField {
 /// The combined field over all views.
 #[derive(Clone, Debug)]
 pub struct HullField {
+    /// One term per view.
     pub views: Vec<ViewField>,
     /// Views allowed to disagree (say "outside") at a kept point.
     pub tolerance: usize,
@@ -82,8 +85,11 @@ impl HullField {
 /// Where a regular grid sits: the first vertex, the spacing (scene units) and the vertex counts.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridFrame {
+    /// Position of vertex (0, 0, 0), world units.
     pub origin: DVec3,
+    /// Spacing between neighbouring vertices, world units.
     pub step: f64,
+    /// Vertex counts along x, y and z.
     pub dims: [usize; 3],
 }
 
@@ -100,10 +106,12 @@ impl GridFrame {
         i + self.dims[0] * (j + self.dims[1] * k)
     }
 
+    /// Number of vertices.
     pub fn len(&self) -> usize {
         self.dims.iter().product()
     }
 
+    /// Whether the grid has no vertices.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

@@ -83,40 +83,99 @@ impl Default for InitOptions {
 pub struct HullView {
     /// Camera name, for messages.
     pub name: String,
+    /// The view's camera.
     pub camera: Camera,
+    /// One value per pixel in [0, 1], row-major, `width × height` of the camera.
     pub mask: Vec<f32>,
+    /// The image, the camera's size; vertex colours need one in every view.
     pub image: Option<Arc<Image>>,
 }
 
+/// Why no initial mesh was built.
 #[derive(Debug, thiserror::Error)]
 pub enum InitError {
+    /// Reading a mask or an image of the dataset failed.
     #[error(transparent)]
     Dataset(#[from] DatasetError),
+    /// The frame index is past the dataset's last frame.
     #[error("{}: frame {frame} does not exist (the dataset has {frames} frames)", root.display())]
-    NoFrame { root: std::path::PathBuf, frame: usize, frames: usize },
+    NoFrame {
+        /// The dataset folder.
+        root: std::path::PathBuf,
+        /// The frame asked for.
+        frame: usize,
+        /// Number of frames in the dataset.
+        frames: usize,
+    },
+    /// Fewer than 2 views were given.
     #[error("{count} view(s) [{names}]: a visual hull needs masks from at least 2 cameras looking from different directions")]
-    TooFewViews { count: usize, names: String },
+    TooFewViews {
+        /// Number of views given.
+        count: usize,
+        /// Their names, comma-separated.
+        names: String,
+    },
+    /// A mask's length is not the camera's pixel count.
     #[error("view {name}: the mask has {len} values but the camera is {width}×{height} pixels")]
-    MaskSize { name: String, len: usize, width: u32, height: u32 },
-    #[error("view {name}: the image is {image_width}×{image_height} with {channels} channels but the camera is {width}×{height} pixels")]
-    ImageSize {
+    MaskSize {
+        /// Name of the view.
         name: String,
-        image_width: u32,
-        image_height: u32,
-        channels: u8,
+        /// Values in the mask.
+        len: usize,
+        /// The camera's width in pixels.
         width: u32,
+        /// The camera's height in pixels.
         height: u32,
     },
+    /// An image's size differs from its camera's, it has no channels, or its data length is wrong.
+    #[error("view {name}: the image is {image_width}×{image_height} with {channels} channels but the camera is {width}×{height} pixels")]
+    ImageSize {
+        /// Name of the view.
+        name: String,
+        /// Width of the image, in pixels.
+        image_width: u32,
+        /// Height of the image, in pixels.
+        image_height: u32,
+        /// Channels of the image.
+        channels: u8,
+        /// The camera's width in pixels.
+        width: u32,
+        /// The camera's height in pixels.
+        height: u32,
+    },
+    /// Every mask is empty (no value above 0.5).
     #[error("the masks are empty in all {count} views [{names}]: nothing marks the subject")]
-    EmptyMasks { count: usize, names: String },
+    EmptyMasks {
+        /// Number of views.
+        count: usize,
+        /// Their names, comma-separated.
+        names: String,
+    },
+    /// The subject cannot be located: the rays through the silhouette centres are (nearly)
+    /// parallel, or fewer than 2 masks are non-empty.
     #[error("the rays through the silhouette centres of [{names}] are (nearly) parallel or fewer than 2 masks are non-empty: the cameras cannot locate the subject")]
-    Parallel { names: String },
+    Parallel {
+        /// Names of all views, comma-separated.
+        names: String,
+    },
+    /// No region of space is inside enough silhouettes (all views but `tolerance`), or no grid
+    /// sample is.
     #[error("the silhouette cones of the {count} views never intersect{tolerance}: the cameras or the masks are wrong{empty}")]
-    Disjoint { count: usize, tolerance: String, empty: String },
+    Disjoint {
+        /// Number of views.
+        count: usize,
+        /// Message fragment naming the tolerance; empty when it is 0.
+        tolerance: String,
+        /// Message fragment naming the views with empty masks; empty when there are none.
+        empty: String,
+    },
+    /// An option is out of range; the message names it.
     #[error("invalid options: {0}")]
     Options(String),
+    /// The hull cannot be queried for remeshing or colouring.
     #[error("colouring or remeshing: {0}")]
     Surface(#[from] crate::geometry::SurfaceError),
+    /// The extracted hull is not a manifold (a bug).
     #[error("the extracted hull is not a manifold (a bug): {0}")]
     Topology(#[from] crate::topology::TopologyError),
 }
@@ -124,24 +183,33 @@ pub enum InitError {
 /// What was built, with the figures that explain it.
 #[derive(Clone, Debug, Serialize)]
 pub struct InitReport {
+    /// Number of views used.
     pub views: usize,
     /// Box the hull was carved in, scene units.
     pub bounds_lo: [f64; 3],
+    /// Upper corner of the box the hull was carved in, scene units.
     pub bounds_hi: [f64; 3],
     /// Size of one pixel at the box centre in the typical view, scene units.
     pub pixel: f64,
     /// Grid vertex spacing, scene units, and vertex counts of the grid that gave the mesh.
     pub voxel: f64,
+    /// Grid vertices along x, y and z.
     pub grid: [usize; 3],
+    /// Mask pixels filled as small enclosed holes, over all views.
     pub mask_hole_pixels: usize,
+    /// Grid samples filled as enclosed cavities (see [`extract::close_grid`]).
     pub cavity_samples: usize,
+    /// Connected pieces of the extracted mesh dropped for the largest one.
     pub components_dropped: usize,
     /// Vertices of the marching-tetrahedra mesh before remeshing.
     pub extracted_vertices: usize,
     /// Target edge length of the remeshing, scene units, and what it did.
     pub edge_length: f64,
+    /// Splits, collapses and flips of the remeshing (zero with no rounds).
     pub remesh: remesh::RemeshStats,
+    /// Vertices of the final mesh.
     pub vertices: usize,
+    /// Faces of the final mesh.
     pub faces: usize,
     /// Vertices no view saw (coloured from their neighbours); 0 without colours.
     pub unseen_vertices: usize,
@@ -156,15 +224,21 @@ pub struct StageSeconds {
     pub silhouettes: f64,
     /// Field sampling, marching tetrahedra, largest component.
     pub extract: f64,
+    /// Isotropic remeshing.
     pub remesh: f64,
+    /// Vertex colours.
     pub color: f64,
+    /// The whole build.
     pub total: f64,
 }
 
 /// The mesh and how it was made.
 #[derive(Clone, Debug)]
 pub struct InitMesh {
+    /// The mesh: closed, oriented (counter-clockwise seen from outside), in scene units, with
+    /// vertex colours when they were asked for and every view has an image.
     pub mesh: TriMesh,
+    /// What was built and how long each stage took.
     pub report: InitReport,
 }
 

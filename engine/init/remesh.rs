@@ -16,8 +16,11 @@ use glam::DVec3;
 /// Counts of what the rounds did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct RemeshStats {
+    /// Edges split.
     pub splits: usize,
+    /// Edges collapsed.
     pub collapses: usize,
+    /// Edges flipped.
     pub flips: usize,
 }
 

@@ -9,16 +9,23 @@ use std::path::{Path, PathBuf};
 /// 4 = RGBA).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
+    /// Channels per pixel, 1 to 4.
     pub channels: u8,
+    /// The values, interleaved, row-major (read from PNG: in [0, 1]).
     pub data: Vec<f32>,
 }
 
+/// An image file that cannot be opened, decoded or written; names the file.
 #[derive(Debug, thiserror::Error)]
 #[error("{}: {problem}", path.display())]
 pub struct ImageError {
+    /// The file.
     pub path: PathBuf,
+    /// What went wrong.
     pub problem: String,
 }
 

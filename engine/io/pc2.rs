@@ -14,7 +14,9 @@ const HEADER_BYTES: usize = 32;
 #[derive(Debug, thiserror::Error)]
 #[error("{}: {problem}", path.display())]
 pub struct Pc2Error {
+    /// The file.
     pub path: PathBuf,
+    /// What is wrong with it.
     pub problem: String,
 }
 
@@ -25,6 +27,7 @@ fn error(path: &Path, problem: impl Into<String>) -> Pc2Error {
 /// The contents of a PC2 file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PointCache {
+    /// Frame of the first sample.
     pub start_frame: f32,
     /// Frames per sample (1 = one sample per frame).
     pub sample_rate: f32,

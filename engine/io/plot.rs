@@ -10,15 +10,22 @@ use std::path::Path;
 /// One named polyline, (x, y) in data units.
 #[derive(Clone, Debug, Default)]
 pub struct Series {
+    /// Name in the legend.
     pub name: String,
+    /// The points in order; non-finite ones leave a gap.
     pub points: Vec<[f64; 2]>,
 }
 
+/// One plot panel: a title, labelled axes and the series drawn in it.
 #[derive(Clone, Debug, Default)]
 pub struct Panel {
+    /// Title above the plot area.
     pub title: String,
+    /// Label of the x axis.
     pub x_label: String,
+    /// Label of the y axis.
     pub y_label: String,
+    /// The series, drawn in order with colours by index ([`colour`]).
     pub series: Vec<Series>,
     /// One data unit is as long on both axes (for positions in space).
     pub equal_scale: bool,

@@ -12,7 +12,9 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 #[error("{}: {problem}", path.display())]
 pub struct PlyError {
+    /// The file.
     pub path: PathBuf,
+    /// What is wrong with it.
     pub problem: String,
 }
 
@@ -23,13 +25,21 @@ fn error(path: &Path, problem: impl Into<String>) -> PlyError {
 /// A PLY scalar type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ScalarType {
+    /// `char` / `int8`.
     I8,
+    /// `uchar` / `uint8`.
     U8,
+    /// `short` / `int16`.
     I16,
+    /// `ushort` / `uint16`.
     U16,
+    /// `int` / `int32`.
     I32,
+    /// `uint` / `uint32`.
     U32,
+    /// `float` / `float32`.
     F32,
+    /// `double` / `float64`.
     F64,
 }
 
@@ -71,10 +81,18 @@ impl ScalarType {
     }
 }
 
+/// The shape of a property: one scalar per row, or a list per row.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum PropertyKind {
+    /// One value of this type per row.
     Scalar(ScalarType),
-    List { count: ScalarType, item: ScalarType },
+    /// A count, then that many items, per row.
+    List {
+        /// Type of the count before each row (an integer type).
+        count: ScalarType,
+        /// Type of the items.
+        item: ScalarType,
+    },
 }
 
 impl PropertyKind {
@@ -87,9 +105,12 @@ impl PropertyKind {
     }
 }
 
+/// One property of an element, as declared in the header.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Property {
+    /// Name of the property.
     pub name: String,
+    /// Its type.
     pub kind: PropertyKind,
 }
 
@@ -132,7 +153,9 @@ struct PropertyData {
 /// One element (e.g. `vertex`, `face`) with every property's values.
 #[derive(Clone, Debug)]
 pub struct PlyElement {
+    /// Name of the element.
     pub name: String,
+    /// The properties, in header order.
     pub properties: Vec<Property>,
     len: usize,
     data: Vec<PropertyData>,
@@ -140,14 +163,17 @@ pub struct PlyElement {
 }
 
 impl PlyElement {
+    /// Number of rows.
     pub fn len(&self) -> usize {
         self.len
     }
 
+    /// Whether the element has no rows.
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
 
+    /// Whether the element declares a property named `property`.
     pub fn has(&self, property: &str) -> bool {
         self.properties.iter().any(|p| p.name == property)
     }
@@ -234,7 +260,9 @@ impl PlyElement {
 /// A parsed PLY file.
 #[derive(Clone, Debug)]
 pub struct Ply {
+    /// The elements, in file order.
     pub elements: Vec<PlyElement>,
+    /// Text of the `comment` lines, in order.
     pub comments: Vec<String>,
     /// The source, for errors (a file may have no element to name it).
     path: PathBuf,
@@ -271,6 +299,7 @@ impl Ply {
         Ok(Ply { elements, comments, path: path.to_path_buf() })
     }
 
+    /// The first element named `name`, if any.
     pub fn element(&self, name: &str) -> Option<&PlyElement> {
         self.elements.iter().find(|e| e.name == name)
     }
@@ -538,8 +567,11 @@ fn read_row(
 
 /// Values of one property to write.
 pub enum ColumnOut {
+    /// Written as `float`.
     F32(Vec<f32>),
+    /// Written as `uchar`.
     U8(Vec<u8>),
+    /// Written as `uint`.
     U32(Vec<u32>),
     /// A list of exactly three `int` per row, with a `uchar` count (triangle `vertex_indices`).
     Triangles(Vec<[u32; 3]>),
@@ -582,15 +614,19 @@ impl ColumnOut {
 
 /// One element to write: its name and its properties' columns, all of the same length.
 pub struct ElementOut {
+    /// Name of the element.
     pub name: String,
+    /// Name and values of each property, in header order.
     pub properties: Vec<(String, ColumnOut)>,
 }
 
 impl ElementOut {
+    /// An element named `name` with no properties yet.
     pub fn new(name: &str) -> Self {
         Self { name: name.into(), properties: Vec::new() }
     }
 
+    /// Adds the property `property` with its values, after those added before.
     pub fn with(mut self, property: &str, column: ColumnOut) -> Self {
         self.properties.push((property.into(), column));
         self

@@ -9,17 +9,34 @@ use std::path::{Path, PathBuf};
 /// A trajectory CSV that cannot be read; names the file (and the line).
 #[derive(Debug, thiserror::Error)]
 pub enum TrajectoriesError {
+    /// A line is malformed, has a non-finite coordinate, or repeats an (id, frame) pair.
     #[error("{}: line {line}: {problem}", path.display())]
-    Csv { path: PathBuf, line: usize, problem: String },
+    Csv {
+        /// The file.
+        path: PathBuf,
+        /// The line, counted from 1.
+        line: usize,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// The file cannot be read.
     #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
 }
 
 /// One point of a trajectory: point `id` at `frame`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrackPoint {
+    /// Name of the point: non-empty, without commas or quotes.
     pub id: String,
+    /// Frame index.
     pub frame: u32,
+    /// Position, scene units.
     pub position: [f64; 3],
 }
 

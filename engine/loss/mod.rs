@@ -32,7 +32,9 @@ const WORKGROUP: u32 = 128;
 /// mean of `w (1 − S)` (0 when the image is smaller than the window).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LossTerms {
+    /// Per channel, the mean over all pixels of `w |x − y|`.
     pub l1: [f32; 4],
+    /// Per channel, the mean of `w (1 − S)` over the pixels whose window lies inside the image.
     pub dssim: [f32; 4],
 }
 
@@ -93,6 +95,8 @@ fn scratch<const N: usize>(
 }
 
 impl ImageLoss {
+    /// Builds the four pipelines with empty scratch (see [`Self::reserve`]); fails when a pipeline
+    /// or buffer cannot be created.
     pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
         let pipeline = |name, shader| {
             ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &[WORKGROUP] })

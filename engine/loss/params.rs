@@ -6,6 +6,7 @@ use bytemuck::{Pod, Zeroable};
 
 /// Shares of the two terms of the image loss (3DGS's λ_D-SSIM = 0.2).
 pub const LOSS_SHARE_L1: f32 = 0.8;
+/// The D-SSIM term's share; [`LOSS_SHARE_L1`] is the rest.
 pub const LOSS_SHARE_SSIM: f32 = 0.2;
 
 /// One image size, the per-channel weights λ and the SSIM window.
@@ -37,10 +38,12 @@ impl LossParams {
         }
     }
 
+    /// Width × height of the image.
     pub fn pixels(&self) -> usize {
         self.size[0] as usize * self.size[1] as usize
     }
 
+    /// The per-channel weights λ (r, g, b, alpha).
     pub fn channel_weights(&self) -> [f32; 4] {
         self.channel_weights
     }

@@ -7,9 +7,13 @@ use crate::ssim_window::{gaussian_weights, ssim_formula, C1, C2, RADIUS, WINDOW}
 
 /// Loss value, its per-channel terms and dL/drender.
 pub struct ReferenceLoss {
+    /// `Σ_c λ_c (0.8 l1_c + 0.2 dssim_c)`.
     pub total: f64,
+    /// Per channel, the mean over all pixels of `w |x − y|`.
     pub l1: [f64; 4],
+    /// Per channel, the mean of `w (1 − S)` over the pixels whose window lies inside the image.
     pub dssim: [f64; 4],
+    /// dL/drender, one vec4 per pixel (row-major).
     pub gradient: Vec<[f64; 4]>,
 }
 

@@ -9,17 +9,30 @@ pub use bounds::{bounding_box, bounding_diagonal};
 use crate::io::ply::{write_ply, ColumnOut, ElementOut, Ply, PlyError};
 use std::path::{Path, PathBuf};
 
+/// Why a mesh file could not be read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
+    /// A PLY file cannot be read, parsed or written, or lacks a required element or property.
     #[error(transparent)]
     Ply(#[from] PlyError),
+    /// Any other problem with a mesh file: the mesh is invalid ([`TriMesh::problem`]), a face has
+    /// fewer than 3 vertices, or (OBJ) the file cannot be read, parsed or written.
     #[error("{}: {problem}", path.display())]
-    Invalid { path: PathBuf, problem: String },
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        problem: String,
+    },
 }
 
+/// A triangle mesh as plain arrays: positions, counter-clockwise faces (seen from outside),
+/// optional vertex colours. Not checked on construction; see [`TriMesh::problem`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
+    /// Vertex positions, world units.
     pub positions: Vec<[f32; 3]>,
+    /// Vertex indices of each triangle, counter-clockwise seen from outside.
     pub faces: Vec<[u32; 3]>,
     /// Per-vertex sRGB-free 8-bit colours (values in [0, 255] mapping to [0, 1]).
     pub colors: Option<Vec<[u8; 3]>>,

@@ -21,11 +21,17 @@ pub const NEW_ROW: u32 = u32::MAX;
 /// Learning rate per parameter group for one step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LearningRates {
+    /// Rate of the positions.
     pub positions: f32,
+    /// Rate of the log-scales.
     pub log_scales: f32,
+    /// Rate of the rotation quaternions.
     pub rotations: f32,
+    /// Rate of the opacity logits.
     pub opacity_logits: f32,
+    /// Rate of the degree-0 (DC) SH coefficient of each colour channel.
     pub sh_dc: f32,
+    /// Rate of the higher SH bands.
     pub sh_rest: f32,
 }
 
@@ -68,6 +74,8 @@ struct RemapParams {
 }
 push_layout!(RemapParams: [OPTIM_REMAP_ROWS], [new_rows, old_rows, row_width, unused]);
 
+/// The fused Adam step and row-remap pipelines, with first and second moments for every
+/// parameter float of a Gaussian set of a fixed size and SH degree.
 pub struct Adam {
     ctx: Arc<GpuContext>,
     step: ComputePipeline,
@@ -119,10 +127,12 @@ impl Adam {
         Ok(adam)
     }
 
+    /// The number of Gaussians the moments are shaped for.
     pub fn len(&self) -> usize {
         self.gaussians
     }
 
+    /// Whether the optimizer is shaped for no Gaussians.
     pub fn is_empty(&self) -> bool {
         self.gaussians == 0
     }

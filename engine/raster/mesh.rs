@@ -7,8 +7,11 @@ use std::collections::HashMap;
 /// Positions (world units), counter-clockwise faces and linear RGB colours per vertex.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RasterMesh {
+    /// Vertex positions, world units.
     pub positions: Vec<[f32; 3]>,
+    /// Triangles as vertex indices, counter-clockwise.
     pub faces: Vec<[u32; 3]>,
+    /// Linear RGB colour per vertex.
     pub colors: Vec<[f32; 3]>,
 }
 

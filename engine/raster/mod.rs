@@ -40,20 +40,58 @@ pub use record::VertexGradients;
 
 use crate::gpu::GpuError;
 
+/// Why a mesh, a setting or a render was rejected, or the GPU failed.
 #[derive(Debug, thiserror::Error)]
 pub enum RasterError {
+    /// A GPU allocation, upload, pipeline or submission failed.
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    /// A vertex position has a NaN or infinite coordinate (the first such vertex).
     #[error("vertex {vertex} has a non-finite position {position:?}")]
-    NonFinite { vertex: usize, position: [f32; 3] },
+    NonFinite {
+        /// Index of the vertex.
+        vertex: usize,
+        /// Its position as given.
+        position: [f32; 3],
+    },
+    /// A face names a vertex index at or past the vertex count (the first such face).
     #[error("face {face} {indices:?} indexes past the {vertices} vertices")]
-    FaceIndex { face: usize, indices: [u32; 3], vertices: usize },
+    FaceIndex {
+        /// Index of the face.
+        face: usize,
+        /// Its three vertex indices.
+        indices: [u32; 3],
+        /// The mesh's vertex count.
+        vertices: usize,
+    },
+    /// A per-vertex or per-pixel array has the wrong length.
     #[error("{what}: {len} values where {expected} are needed")]
-    Length { what: &'static str, len: usize, expected: usize },
+    Length {
+        /// What the array holds.
+        what: &'static str,
+        /// Its length.
+        len: usize,
+        /// The length needed.
+        expected: usize,
+    },
+    /// The mesh has more triangles than the visibility buffer's ids can name (`u32::MAX / 2`).
     #[error("{triangles} triangles: at most {max} fit the visibility buffer's 32-bit ids")]
-    TooManyTriangles { triangles: usize, max: usize },
+    TooManyTriangles {
+        /// The mesh's triangle count.
+        triangles: usize,
+        /// The most triangles allowed.
+        max: usize,
+    },
+    /// The camera's (or parameters') width × height differs from the rasterizer's image size.
     #[error("camera is {camera:?} pixels but the rasterizer's images are {images:?}")]
-    CameraSize { camera: (u32, u32), images: (u32, u32) },
+    CameraSize {
+        /// The camera's (width, height) in pixels.
+        camera: (u32, u32),
+        /// The rasterizer's (width, height) in pixels.
+        images: (u32, u32),
+    },
+    /// The settings are invalid (near plane not positive and finite), or the parameters were
+    /// made for another mesh.
     #[error("invalid raster settings: {0}")]
     Settings(String),
 }

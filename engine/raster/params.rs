@@ -70,6 +70,9 @@ push_layout!(
 );
 
 impl RasterParams {
+    /// The push constants for rendering a mesh of `vertices` vertices and `triangles` triangles
+    /// from `camera`; fails with [`RasterError::Settings`] when `settings.near` is not positive
+    /// and finite.
     pub fn new(
         camera: &Camera,
         settings: &RasterSettings,
@@ -95,14 +98,17 @@ impl RasterParams {
         })
     }
 
+    /// Image width in pixels.
     pub fn width(&self) -> u32 {
         self.size[0]
     }
 
+    /// Image height in pixels.
     pub fn height(&self) -> u32 {
         self.size[1]
     }
 
+    /// Tiles of `TILE_SIZE` × `TILE_SIZE` pixels covering the image, as a dispatch size (x, y, 1).
     pub fn tiles(&self) -> [u32; 3] {
         [self.size[2], self.size[3], 1]
     }
@@ -111,10 +117,12 @@ impl RasterParams {
         self.counts[2] & FLAG_COUNT_WRITES != 0
     }
 
+    /// The vertex count these parameters were made for.
     pub fn vertices(&self) -> usize {
         self.counts[0] as usize
     }
 
+    /// The triangle count these parameters were made for.
     pub fn triangles(&self) -> usize {
         self.counts[1] as usize
     }
@@ -125,8 +133,11 @@ impl RasterParams {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct SubTriangle {
+    /// x0, y0, x1, y1 of corners 0 and 1, in 1/256 pixel.
     pub xy01: [i32; 4],
+    /// x2, y2 of corner 2 (1/256 pixel), the triangle id, and one unused slot.
     pub xy2_id: [i32; 4],
+    /// 1/z (camera space) at the three corners, and one unused slot.
     pub inv_depth: [f32; 4],
 }
 

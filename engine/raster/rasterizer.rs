@@ -13,7 +13,9 @@ use std::sync::Arc;
 /// Everything one forward pass produced, read back (row-major, `width × height` pixels).
 #[derive(Clone, Debug, Default)]
 pub struct RasterFrame {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
     /// Triangle per pixel, [`super::NO_TRIANGLE`] where uncovered.
     pub ids: Vec<u32>,
@@ -21,11 +23,13 @@ pub struct RasterFrame {
     pub barycentrics: Vec<[f32; 3]>,
     /// Interpolated colour and coverage before anti-aliasing.
     pub resolved: Vec<[f32; 4]>,
+    /// Interpolated camera-space depth z; 0 where uncovered.
     pub depth: Vec<f32>,
     /// World-space unit face normals.
     pub normals: Vec<[f32; 3]>,
     /// The anti-aliased colour and mask: what the backward differentiates.
     pub color: Vec<[f32; 3]>,
+    /// The anti-aliased mask (coverage), one value per pixel.
     pub mask: Vec<f32>,
 }
 
@@ -64,6 +68,8 @@ pub(super) struct ImageBuffers {
     pub(super) pairs: GpuBuffer<[u32; 4]>,
 }
 
+/// A mesh on the GPU with the pipelines and per-image buffers to rasterize it at one image
+/// size and differentiate the result.
 pub struct MeshRasterizer {
     pub(super) ctx: Arc<GpuContext>,
     pub(super) kernels: Kernels,
@@ -175,14 +181,17 @@ impl MeshRasterizer {
         &self.mesh.positions
     }
 
+    /// Vertex colours on the GPU (r, g, b per vertex).
     pub fn colors(&self) -> &GpuBuffer<f32> {
         &self.mesh.colors
     }
 
+    /// The mesh's vertex count.
     pub fn vertex_count(&self) -> usize {
         self.vertices
     }
 
+    /// The mesh's triangle count.
     pub fn triangle_count(&self) -> usize {
         self.triangles
     }

@@ -10,7 +10,9 @@ use crate::gpu::{GpuBuffer, PassTimes, Recorder};
 /// Loss gradients per vertex, read back.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct VertexGradients {
+    /// dL/dposition per vertex (world space).
     pub positions: Vec<[f32; 3]>,
+    /// dL/dcolour per vertex.
     pub colors: Vec<[f32; 3]>,
 }
 
@@ -270,6 +272,8 @@ impl MeshRasterizer {
         &self.image.color
     }
 
+    /// The anti-aliased mask of the last forward (one float per pixel), for a loss kernel in the
+    /// same submission.
     pub fn mask_image(&self) -> &GpuBuffer<f32> {
         &self.image.mask
     }

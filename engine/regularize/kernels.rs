@@ -48,11 +48,14 @@ push_layout!(
 /// terms.
 #[derive(Clone, Copy)]
 pub struct Temporal<'a> {
+    /// Previous positions, x, y, z per Gaussian.
     pub positions: &'a GpuBuffer<f32>,
+    /// Previous rotations, one (w, x, y, z) quaternion per Gaussian.
     pub rotations: &'a GpuBuffer<[f32; 4]>,
 }
 
 impl<'a> Temporal<'a> {
+    /// The positions and rotations of `previous`.
     pub fn of(previous: &'a GaussianBuffers) -> Self {
         Self { positions: &previous.positions, rotations: &previous.rotations }
     }
@@ -198,6 +201,7 @@ impl Regularizers {
         self.count
     }
 
+    /// Whether the uploaded neighbourhoods cover no Gaussian.
     pub fn is_empty(&self) -> bool {
         self.count == 0
     }

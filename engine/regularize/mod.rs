@@ -27,11 +27,17 @@ pub use neighbourhoods::{Neighbourhoods, BOUNDARY_BIT};
 /// Loss weights (defaults 1, 5, 1, 4, 4, 20 in field order) and the temporal weight falloff λ_w.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Weights {
+    /// Weight of the flatness term (eq. 4).
     pub scale_2d: f32,
+    /// Weight of the Laplacian smoothness term (eq. 5).
     pub laplacian: f32,
+    /// Weight of the normal-alignment term (eq. 6).
     pub normal: f32,
+    /// Weight of the temporal edge-length term (eq. 9).
     pub edge_length: f32,
+    /// Weight of the temporal local-rigidity term (eq. 10–11).
     pub rigidity: f32,
+    /// Weight of the temporal rotation-similarity term (eq. 12).
     pub rotation: f32,
     /// Falloff of ωᵢⱼ per mean edge length.
     pub lambda_w: f32,
@@ -54,11 +60,17 @@ impl Default for Weights {
 /// Unweighted value of every term (temporal ones 0 without a previous frame).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Losses<T> {
+    /// Σᵢ exp(s_{i,z}): the Gaussians' extent along their own z axis (eq. 4).
     pub scale_2d: T,
+    /// Mean squared Laplacian of the positions (eq. 5).
     pub laplacian: T,
+    /// Misalignment of each Gaussian's z axis with its area-weighted vertex normal (eq. 6).
     pub normal: T,
+    /// Change of edge lengths since the previous frame (eq. 9).
     pub edge_length: T,
+    /// Deviation of each 1-ring from a rigid motion since the previous frame (eq. 10–11).
     pub rigidity: T,
+    /// Disagreement between neighbours' rotations since the previous frame (eq. 12).
     pub rotation: T,
 }
 
@@ -66,6 +78,7 @@ pub struct Losses<T> {
 pub const LOSS_SLOTS: usize = 6;
 
 impl<T: Copy> Losses<T> {
+    /// From the loss buffer's slots, in field order.
     pub fn from_slots(s: [T; LOSS_SLOTS]) -> Self {
         Self {
             scale_2d: s[0],
@@ -77,15 +90,20 @@ impl<T: Copy> Losses<T> {
         }
     }
 
+    /// The values as loss-buffer slots, in field order.
     pub fn slots(&self) -> [T; LOSS_SLOTS] {
         [self.scale_2d, self.laplacian, self.normal, self.edge_length, self.rigidity, self.rotation]
     }
 }
 
+/// Why uploading neighbourhoods or recording the regularizers failed.
 #[derive(Debug, thiserror::Error)]
 pub enum RegularizeError {
+    /// A GPU allocation, upload, pipeline or submission failed.
     #[error(transparent)]
     Gpu(#[from] crate::gpu::GpuError),
+    /// A parameter, gradient or previous-frame buffer holds a different Gaussian count than the
+    /// uploaded neighbourhoods.
     #[error("mismatched buffers: {0}")]
     Shape(String),
 }

@@ -12,7 +12,9 @@ pub const BOUNDARY_BIT: u32 = 1 << 31;
 /// vertex is on the boundary.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Neighbourhoods {
+    /// Per vertex, `[start, count]` into `ring`; `count` carries [`BOUNDARY_BIT`] on the boundary.
     pub ranges: Vec<[u32; 2]>,
+    /// Every vertex's neighbours, concatenated.
     pub ring: Vec<u32>,
     /// Mean edge length when built: the length scale of the temporal weights.
     pub mean_edge_length: f32,
@@ -32,10 +34,12 @@ impl Neighbourhoods {
         Self { ranges, ring, mean_edge_length: mean_edge_length(mesh) }
     }
 
+    /// The number of vertex rows (dead vertices have empty neighbourhoods).
     pub fn len(&self) -> usize {
         self.ranges.len()
     }
 
+    /// Whether there are no vertex rows.
     pub fn is_empty(&self) -> bool {
         self.ranges.is_empty()
     }

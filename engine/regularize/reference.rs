@@ -8,8 +8,11 @@ use glam::{DMat3, DQuat, DVec3, DVec4};
 /// Parameters as stored (positions, log-scales, quaternions (w, x, y, z)) in f64.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Params {
+    /// Position μ per Gaussian.
     pub positions: Vec<[f64; 3]>,
+    /// Log-scale s per Gaussian.
     pub log_scales: Vec<[f64; 3]>,
+    /// Quaternion q = (w, x, y, z) per Gaussian, not necessarily unit.
     pub rotations: Vec<[f64; 4]>,
 }
 

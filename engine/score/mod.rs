@@ -32,27 +32,51 @@ use std::path::{Path, PathBuf};
 /// Why a sequence could not be scored; every variant names the file at fault.
 #[derive(Debug, thiserror::Error)]
 pub enum SequenceEvalError {
+    /// A file that reads but does not fit: a missing frame 0, an unbindable point, a bad frame
+    /// range or ground truth.
     #[error("{}: {problem}", path.display())]
-    Invalid { path: PathBuf, problem: String },
+    Invalid {
+        /// The file (or folder) at fault.
+        path: PathBuf,
+        /// What is wrong.
+        problem: String,
+    },
+    /// A file could not be read or written.
     #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// A metric failed on the data of a file.
     #[error("{}: {source}", path.display())]
-    Metric { path: PathBuf, source: EvalError },
+    Metric {
+        /// The file.
+        path: PathBuf,
+        /// The metric's error.
+        source: EvalError,
+    },
     /// A reader's error that names its file already.
     #[error(transparent)]
     Read(TrajectoriesError),
+    /// The ground truth's `points.csv` could not be read.
     #[error(transparent)]
     Query(TrackError),
+    /// A mesh could not be read.
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// A predicted frame's vertex count or faces differ from frame 0's.
     #[error(transparent)]
     Sequence(#[from] SequenceError),
 }
 
+/// Options of [`evaluate_sequence`].
 #[derive(Clone, Debug)]
 pub struct SequenceEvalOptions {
     /// Area-uniform samples per mesh for Chamfer (the benchmarks' score, docs/benchmarks.md: 5000).
     pub chamfer_samples: usize,
+    /// Seeds the Chamfer samples.
     pub seed: u64,
     /// Frames to score (default: every ground-truth frame).
     pub frames: Option<Range<usize>>,
@@ -67,21 +91,29 @@ impl Default for SequenceEvalOptions {
 /// One frame's scores, fractions of `size`.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameScores {
+    /// The frame index.
     pub frame: usize,
     /// None when `tracks.csv` has no row for the frame.
     pub tracking_rmse_over_size: Option<f64>,
+    /// Largest tracking error of the frame (None as `tracking_rmse_over_size`).
     pub tracking_max_over_size: Option<f64>,
     /// Point-to-surface Chamfer, and its halves (prediction → truth, truth → prediction).
     pub chamfer_over_size: f64,
+    /// Chamfer's prediction → truth half.
     pub chamfer_pred_to_gt_over_size: f64,
+    /// Chamfer's truth → prediction half.
     pub chamfer_gt_to_pred_over_size: f64,
+    /// The frame's entry of the training report (all None without one).
     #[serde(flatten)]
     pub train: FrameTrainStats,
 }
 
+/// A value and the frame it belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct FrameValue {
+    /// The frame index.
     pub frame: usize,
+    /// The value.
     pub value: f64,
 }
 
@@ -90,36 +122,50 @@ pub struct FrameValue {
 pub struct SequenceSummary {
     /// The ground truth's `size`, scene units.
     pub size: f64,
+    /// Ground-truth points tracked.
     pub points: usize,
+    /// Chamfer samples per mesh.
     pub chamfer_samples: usize,
     /// Frames scored, and frames of the requested range the prediction lacks.
     pub frames: Vec<usize>,
+    /// Frames of the requested range the prediction lacks.
     pub missing_frames: Vec<usize>,
     /// Distance from the ground-truth points to the predicted frame-0 surface: mean, largest.
     pub binding_mean_over_size: f64,
+    /// Largest distance from a ground-truth point to the predicted frame-0 surface.
     pub binding_max_over_size: f64,
     /// Over all points and scored frames (None without a track row in them).
     pub tracking_rmse_over_size: Option<f64>,
+    /// Largest tracking error over all points and scored frames (None as the RMSE).
     pub tracking_max_over_size: Option<f64>,
     /// The frame of the highest tracking RMSE.
     pub tracking_worst_frame: Option<FrameValue>,
     /// Mean over the scored frames, and the worst frame (None when no frame was scored).
     pub chamfer_mean_over_size: Option<f64>,
+    /// The frame of the highest Chamfer distance.
     pub chamfer_worst_frame: Option<FrameValue>,
     /// PSNR of the first and the last scored frame, dB (None when the report lacks it).
     pub psnr_gs_first_db: Option<f64>,
+    /// Gaussian-render PSNR of the last scored frame, dB.
     pub psnr_gs_last_db: Option<f64>,
+    /// Mesh-render PSNR of the first scored frame, dB.
     pub psnr_mesh_first_db: Option<f64>,
+    /// Mesh-render PSNR of the last scored frame, dB.
     pub psnr_mesh_last_db: Option<f64>,
     /// The training report read, None when the prediction has none.
     pub train_report: Option<PathBuf>,
 }
 
+/// What [`evaluate_sequence`] returns.
 #[derive(Clone, Debug, Serialize)]
 pub struct SequenceEval {
+    /// The prediction folder.
     pub pred: PathBuf,
+    /// The ground truth's folder.
     pub ground_truth: PathBuf,
+    /// The sequence's scores.
     pub summary: SequenceSummary,
+    /// Every scored frame's scores, in frame order.
     pub frames: Vec<FrameScores>,
 }
 

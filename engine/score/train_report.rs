@@ -14,7 +14,10 @@ pub struct FrameTrainStats {
     /// Held-out (or training, see the report's `eval_views`) PSNR of the Gaussian and the mesh
     /// renders, dB.
     pub psnr_gs_db: Option<f64>,
+    /// PSNR of the mesh renders, dB (the report's `psnr_mesh`).
     pub psnr_mesh_db: Option<f64>,
+    /// The frame's per-vertex iterations (the report's `iterations`; the graph stage's not
+    /// included).
     pub iterations: Option<u64>,
     /// Optimisation wall time of the frame, seconds.
     pub wall_s: Option<f64>,

@@ -46,7 +46,9 @@ const BUDGET_PER_FILE_BYTE: usize = 64;
 #[derive(Debug, thiserror::Error)]
 #[error("{}: {problem}", path.display())]
 pub struct GlbError {
+    /// The GLB file.
     pub path: PathBuf,
+    /// What is wrong with it.
     pub problem: String,
 }
 

@@ -23,14 +23,24 @@ use std::path::{Path, PathBuf};
 /// What can go wrong reading or writing a sequence; every message names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum SequenceError {
+    /// Reading or writing a frame's PLY or OBJ file (or the PC2 layout's base OBJ) failed.
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// Reading or writing the PC2 point cache failed.
     #[error(transparent)]
     Pc2(#[from] Pc2Error),
+    /// Reading or writing the GLB file failed.
     #[error(transparent)]
     Glb(#[from] GlbError),
+    /// The path is no sequence, a file is missing, the frames disagree with frame 0, or the
+    /// sequence cannot be written.
     #[error("{}: {problem}", path.display())]
-    Invalid { path: PathBuf, problem: String },
+    Invalid {
+        /// The file or folder concerned.
+        path: PathBuf,
+        /// What is wrong with it.
+        problem: String,
+    },
 }
 
 fn invalid(path: &Path, problem: impl Into<String>) -> SequenceError {
@@ -40,6 +50,7 @@ fn invalid(path: &Path, problem: impl Into<String>) -> SequenceError {
 /// A mesh sequence: the same faces in every frame, vertex positions per frame.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshSequence {
+    /// Triangles as vertex indices, shared by every frame.
     pub faces: Vec<[u32; 3]>,
     /// Vertex positions of each frame, all of one length.
     pub frames: Vec<Vec<[f32; 3]>>,
@@ -50,7 +61,9 @@ pub struct MeshSequence {
 /// The file kind of a frame in a folder.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FrameFormat {
+    /// Binary PLY (vertex colours when present).
     Ply,
+    /// Wavefront OBJ.
     Obj,
 }
 

@@ -16,7 +16,9 @@ use std::path::{Path, PathBuf};
 /// they are: this names the axis, it does not rotate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum UpAxis {
+    /// +Y is up.
     Y,
+    /// +Z is up.
     Z,
 }
 
@@ -32,6 +34,7 @@ impl UpAxis {
         }
     }
 
+    /// The `upAxis` token: `"Y"` or `"Z"`.
     pub fn name(self) -> &'static str {
         match self {
             UpAxis::Y => "Y",
@@ -43,14 +46,19 @@ impl UpAxis {
 /// Tracked points to add: an id and a position per frame (scene units), each trajectory as
 /// long as the sequence.
 pub struct UsdTracks<'a> {
+    /// One id per tracked point.
     pub ids: &'a [String],
+    /// Per tracked point (in the order of `ids`), its position in every frame.
     pub trajectories: &'a [Vec<[f64; 3]>],
 }
 
+/// An error that names the `.usda` file and what is wrong.
 #[derive(Debug, thiserror::Error)]
 #[error("{}: {problem}", path.display())]
 pub struct UsdError {
+    /// The `.usda` file.
     pub path: PathBuf,
+    /// What is wrong: the sequence, the frame rate, the tracks, or the write.
     pub problem: String,
 }
 

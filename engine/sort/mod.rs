@@ -73,6 +73,7 @@ impl RadixTuning {
         Self { max_bucket_len: len, ..self }
     }
 
+    /// Which pair of kernels runs.
     pub fn variant(&self) -> RadixVariant {
         self.variant
     }
@@ -85,10 +86,13 @@ impl RadixTuning {
         self.keys_per_thread
     }
 
+    /// Cap on the bucket path's bucket length, in pairs; 0 (as in [`subgroups`](Self::subgroups))
+    /// means the bucket path is never taken.
     pub fn max_bucket_len(&self) -> u32 {
         self.max_bucket_len
     }
 
+    /// Pairs per tile, the share of one workgroup: workgroup size × keys per invocation.
     pub fn tile_len(&self) -> usize {
         (self.workgroup_size * self.keys_per_thread) as usize
     }

@@ -25,7 +25,9 @@ const RADIX: usize = 1 << RADIX_BITS;
 
 /// A key type the GPU radix sort handles: u32 or u64 (stored as two little-endian words).
 pub trait RadixKey: Pod + Ord + Send + Sync {
+    /// 32-bit words per key: 1 for u32, 2 for u64.
     const WORDS: u32;
+    /// Bits per key.
     const BITS: u32 = 32 * Self::WORDS;
     /// The key with every bit from `bits` up cleared.
     fn low_bits(self, bits: u32) -> Self;
@@ -159,6 +161,8 @@ struct LanesPasses {
     plan_flag: GpuBuffer<u32>,
 }
 
+/// A GPU radix sorter of (key, u32 value) pairs for up to a fixed capacity, with its pipelines
+/// and scratch buffers.
 pub struct RadixSort<K: RadixKey> {
     tuning: RadixTuning,
     passes: Passes<K>,
@@ -328,10 +332,12 @@ impl<K: RadixKey> RadixSort<K> {
         }))
     }
 
+    /// The tuning the sorter was built with.
     pub fn tuning(&self) -> RadixTuning {
         self.tuning
     }
 
+    /// The most pairs one sort takes.
     pub fn capacity(&self) -> usize {
         self.capacity
     }

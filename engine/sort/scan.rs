@@ -21,6 +21,8 @@ struct ScanParams {
 }
 push_layout!(ScanParams: [SORT_SCAN_REDUCE, SORT_SCAN_DOWNSWEEP], [len, has_block_offsets]);
 
+/// A GPU exclusive prefix scan of u32 for up to a fixed capacity, with its pipelines and block-sum
+/// buffers.
 pub struct PrefixScan {
     reduce: ComputePipeline,
     downsweep: ComputePipeline,
@@ -56,6 +58,7 @@ impl PrefixScan {
         })
     }
 
+    /// The most elements one scan takes.
     pub fn capacity(&self) -> usize {
         self.capacity
     }

@@ -5,6 +5,8 @@ use super::GaussianScene;
 use crate::gpu::{BufferBinding, GpuBuffer, GpuContext, GpuResult, Recorder};
 use std::sync::Arc;
 
+/// A Gaussian set's parameters (or their gradients) on the GPU, one buffer per group, with
+/// its Gaussian count and SH degree.
 pub struct GaussianBuffers {
     /// 3 floats per Gaussian.
     pub positions: GpuBuffer<f32>,
@@ -12,6 +14,7 @@ pub struct GaussianBuffers {
     pub log_scales: GpuBuffer<f32>,
     /// (w, x, y, z) per Gaussian.
     pub rotations: GpuBuffer<[f32; 4]>,
+    /// 1 float per Gaussian: the opacity before the sigmoid.
     pub opacity_logits: GpuBuffer<f32>,
     /// `sh_coefficients(sh_degree) * 3` floats per Gaussian, as in [`GaussianScene::sh`].
     pub sh: GpuBuffer<f32>,
@@ -63,14 +66,17 @@ impl GaussianBuffers {
         })
     }
 
+    /// The number of Gaussians.
     pub fn len(&self) -> usize {
         self.len
     }
 
+    /// Whether there are no Gaussians.
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
 
+    /// The SH degree the `sh` buffer is laid out for.
     pub fn sh_degree(&self) -> u32 {
         self.sh_degree
     }

@@ -63,22 +63,27 @@ impl FrameParams {
         }
     }
 
+    /// Image width in pixels.
     pub fn width(&self) -> u32 {
         self.size[0]
     }
 
+    /// Image height in pixels.
     pub fn height(&self) -> u32 {
         self.size[1]
     }
 
+    /// Width × height.
     pub fn pixels(&self) -> usize {
         self.size[0] as usize * self.size[1] as usize
     }
 
+    /// Tiles across and down the image ([`TILE_SIZE`] pixels square).
     pub fn tiles(&self) -> (u32, u32) {
         (self.size[2], self.size[3])
     }
 
+    /// The number of Gaussians the render was set up for.
     pub fn gaussians(&self) -> usize {
         self.options[0] as usize
     }
@@ -93,12 +98,17 @@ pub fn tile_grid(width: u32, height: u32) -> (u32, u32) {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Splat {
+    /// Projected mean, in pixels.
     pub mean: [f32; 2],
+    /// View-space depth z.
     pub depth: f32,
+    /// Opacity after the sigmoid (1 in mask mode).
     pub opacity: f32,
+    /// Inverse 2D covariance Q as (Q00, Q01, Q11), in 1/pixel².
     pub conic: [f32; 3],
     /// ln(255 · opacity): the footprint is σ ≤ extent.
     pub extent: f32,
+    /// RGB colour; the fourth float is unused.
     pub color: [f32; 4],
     /// Tiles [x0, x1) × [y0, y1) of the footprint's bounding box.
     pub tile_rect: [u32; 4],

@@ -47,16 +47,22 @@ pub use frame::{FrameParams, Splat, GRAD2D_STRIDE};
 pub use scene::{GaussianScene, SceneError};
 pub use splatter::Splatter;
 
+/// Why a scene, a setting or a render was rejected, or the GPU failed.
 #[derive(Debug, thiserror::Error)]
 pub enum SplatError {
+    /// The scene's arrays are inconsistent, or its file could not be read or written.
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// A GPU allocation, upload, pipeline or submission failed.
     #[error(transparent)]
     Gpu(crate::gpu::GpuError),
+    /// The render settings are invalid (see [`RenderSettings::check`]).
     #[error("invalid render settings: {0}")]
     Settings(String),
+    /// A buffer passed to the backward does not match the size of the forward it differentiates.
     #[error("mismatched buffers: {0}")]
     Shape(String),
+    /// A backward or a readback was asked for before any forward pass.
     #[error("backward or readback before any forward pass")]
     NoForward,
 }
@@ -84,6 +90,7 @@ pub struct RenderSettings {
     /// View-depth range kept; Gaussians outside are culled. Scene-relative: callers derive it
     /// from the scene extent.
     pub near: f32,
+    /// Far end of the kept view-depth range (see `near`).
     pub far: f32,
     /// SH degree used (at most the scene's).
     pub sh_degree: u32,

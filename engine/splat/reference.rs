@@ -28,7 +28,9 @@ use std::array::from_fn;
 /// A rendered image, row-major: pixel (x, y) at `y * width + x`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
     /// `C + T · background`.
     pub color: Vec<[f64; 3]>,
@@ -41,9 +43,13 @@ pub struct Image {
 /// dL/d(every stored parameter), laid out as [`GaussianScene`]'s arrays.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Gradients {
+    /// dL/dposition per Gaussian.
     pub positions: Vec<[f64; 3]>,
+    /// dL/dlog-scale per Gaussian.
     pub log_scales: Vec<[f64; 3]>,
+    /// dL/dquaternion (w, x, y, z) per Gaussian, with respect to the stored q.
     pub rotations: Vec<[f64; 4]>,
+    /// dL/dopacity logit per Gaussian.
     pub opacity_logits: Vec<f64>,
     /// Same layout as [`GaussianScene::sh`].
     pub sh: Vec<f64>,
@@ -65,6 +71,7 @@ impl Gradients {
 /// One Gaussian's part in one pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Contribution {
+    /// Index of the Gaussian in the scene.
     pub gaussian: usize,
     /// `α = min(0.99, o·exp(−σ))` at the pixel centre.
     pub alpha: f64,

@@ -5,10 +5,19 @@ use super::{sh_coefficients, MAX_SH_DEGREE};
 use crate::io::ply::{write_ply, ColumnOut, ElementOut, Ply, PlyElement, PlyError};
 use std::path::{Path, PathBuf};
 
+/// Why a scene is inconsistent or its PLY file could not be read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
+    /// Reading or writing a scene file failed, or the file is no valid 3DGS PLY.
     #[error("{}: {problem}", path.display())]
-    File { path: PathBuf, problem: String },
+    File {
+        /// The file concerned.
+        path: PathBuf,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// An array's length does not fit the Gaussian count, or the SH degree is above
+    /// [`MAX_SH_DEGREE`].
     #[error("invalid Gaussian scene: {0}")]
     Invalid(String),
 }
@@ -23,20 +32,27 @@ impl From<PlyError> for SceneError {
 /// coefficient-major: `sh[(i * coefficients + k) * 3 + channel]`, DC first.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct GaussianScene {
+    /// Position per Gaussian, world units.
     pub positions: Vec<[f32; 3]>,
+    /// Natural log of the scale along each of the Gaussian's own axes.
     pub log_scales: Vec<[f32; 3]>,
     /// (w, x, y, z), not necessarily normalised.
     pub rotations: Vec<[f32; 4]>,
+    /// Opacity before the sigmoid.
     pub opacity_logits: Vec<f32>,
+    /// SH coefficients: RGB triples per Gaussian, coefficient-major, DC first (see above).
     pub sh: Vec<f32>,
+    /// SH degree, 0 to [`MAX_SH_DEGREE`].
     pub sh_degree: u32,
 }
 
 impl GaussianScene {
+    /// The number of Gaussians (rows of `positions`).
     pub fn len(&self) -> usize {
         self.positions.len()
     }
 
+    /// Whether there are no Gaussians.
     pub fn is_empty(&self) -> bool {
         self.positions.is_empty()
     }

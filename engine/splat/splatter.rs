@@ -19,6 +19,8 @@ use crate::sort::{PrefixScan, RadixSort};
 use bytemuck::Pod;
 use std::sync::Arc;
 
+/// The splatting renderer for one camera at a time: its pipelines, sorter and every buffer
+/// the forward and backward passes exchange, grown to the work and reused.
 pub struct Splatter {
     ctx: Arc<GpuContext>,
     kernels: Kernels,
@@ -66,6 +68,8 @@ fn ensure<T: Pod>(ctx: &Arc<GpuContext>, buffer: &mut GpuBuffer<T>, len: usize) 
 }
 
 impl Splatter {
+    /// Builds the pipelines with small initial buffers (they grow on the first forward); fails
+    /// when a pipeline or buffer cannot be created.
     pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
         Ok(Self {
             ctx: ctx.clone(),
@@ -119,7 +123,7 @@ impl Splatter {
     }
 
     /// Renders `scene` from `camera` in one submission (two when the intersections outgrow
-    /// the buffers). The outputs stay on the GPU ([`Self::rgba`], [`Self::depth`]) until the
+    /// the buffers). The outputs stay on the GPU ([`Self::rgba`], `depth`) until the
     /// next forward; the returned times name every pass.
     pub fn forward(
         &mut self,

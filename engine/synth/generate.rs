@@ -35,9 +35,17 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug, PartialEq)]
 pub enum SubjectSource {
     /// The procedural body with this many icosphere subdivisions (4: 2562 vertices).
-    Procedural { subdivisions: u32 },
+    Procedural {
+        /// Icosphere subdivision levels; [`load_subject`] accepts at most 6.
+        subdivisions: u32,
+    },
     /// A rigged glTF file and the animation to play (the first when `None`).
-    Gltf { path: PathBuf, animation: Option<String> },
+    Gltf {
+        /// The `.glb` or `.gltf` file.
+        path: PathBuf,
+        /// Name of the animation to play; `None` for the file's first.
+        animation: Option<String>,
+    },
 }
 
 /// How fast the subject moves per captured frame.
@@ -75,19 +83,27 @@ impl MotionPreset {
     }
 }
 
+/// What [`generate`] writes. [`generate`] rejects views outside 1..=1000, frames outside
+/// 1..=100000, resolution outside 8..=8192 and samples outside 1..=16.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SynthOptions {
+    /// What to animate.
     pub subject: SubjectSource,
+    /// Number of cameras.
     pub views: usize,
+    /// Number of captured frames.
     pub frames: usize,
     /// Width and height of every image, pixels.
     pub resolution: u32,
+    /// Seed of the camera azimuth offset and of the tracked-point choice.
     pub seed: u64,
     /// Samples per pixel along each axis (4 → 16 samples).
     pub samples: u32,
     /// Tracked points: this many random vertices and this many random surface points.
     pub track_vertices: usize,
+    /// Number of area-uniform random surface points tracked (see `track_vertices`).
     pub track_surface: usize,
+    /// How fast the subject moves per captured frame.
     pub motion: MotionPreset,
 }
 
@@ -107,40 +123,76 @@ impl Default for SynthOptions {
     }
 }
 
+/// Why [`generate`] or [`load_subject`] failed.
 #[derive(Debug, thiserror::Error)]
 pub enum SynthError {
+    /// An option is out of range; the string says which.
     #[error("invalid options: {0}")]
     Options(String),
+    /// The glTF subject could not be loaded.
     #[error(transparent)]
     Gltf(#[from] GltfError),
+    /// The subject cannot be generated: a procedural body that is not a closed manifold,
+    /// non-finite positions after skinning, or no spatial extent.
     #[error("the subject is not usable: {0}")]
     Subject(String),
+    /// A camera could not be built or its JSON file written.
     #[error("camera {camera}: {source}")]
-    Camera { camera: usize, source: CameraError },
+    Camera {
+        /// Index of the camera.
+        camera: usize,
+        /// The underlying error.
+        source: CameraError,
+    },
+    /// The reference renderer refused a view.
     #[error("frame {frame}, camera {camera}: {source}")]
-    Render { frame: usize, camera: usize, source: RenderError },
+    Render {
+        /// The frame being rendered.
+        frame: usize,
+        /// Index of the camera.
+        camera: usize,
+        /// The underlying error.
+        source: RenderError,
+    },
+    /// An image or mask PNG could not be written.
     #[error(transparent)]
     Image(#[from] ImageError),
+    /// A ground-truth mesh PLY could not be written.
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// The random surface points could not be sampled.
     #[error("tracked points: {0}")]
     Eval(#[from] EvalError),
+    /// A directory or file could not be created or written.
     #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The directory or file.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
 }
 
+/// What [`generate`] wrote.
 #[derive(Clone, Debug, Serialize)]
 pub struct SynthReport {
+    /// Vertices of the subject mesh.
     pub vertices: usize,
+    /// Triangles of the subject mesh.
     pub faces: usize,
+    /// Number of cameras.
     pub views: usize,
+    /// Number of captured frames.
     pub frames: usize,
+    /// Width and height of every image, pixels.
     pub resolution: u32,
+    /// Number of tracked points written (vertices plus surface points).
     pub tracked_points: usize,
     /// `None` for a closed manifold; otherwise why not (allowed for glTF input only).
     pub manifold_problem: Option<String>,
     /// Bounding-sphere radius of the subject over all frames, scene units.
     pub radius: f64,
+    /// The motion preset used.
     pub motion: MotionPreset,
     /// Vertex motion between consecutive frames, fractions of the subject's size.
     pub motion_per_frame: MotionStats,

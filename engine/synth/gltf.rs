@@ -15,10 +15,18 @@ use std::path::{Path, PathBuf};
 /// Frames per second at which the animation is sampled.
 pub const FPS: f64 = 30.0;
 
+/// Why a glTF subject could not be loaded.
 #[derive(Debug, thiserror::Error)]
 pub enum GltfError {
+    /// The file cannot be read, is not valid glTF 2.0, or lacks what a subject needs (a node
+    /// with a mesh and a skin, the named animation, triangles, consistent skin data).
     #[error("{}: {problem}", path.display())]
-    Invalid { path: PathBuf, problem: String },
+    Invalid {
+        /// The glTF file.
+        path: PathBuf,
+        /// What is wrong with it.
+        problem: String,
+    },
 }
 
 /// One animated property of one node, keyframes as 4-vectors (xyz for translation and scale,
@@ -41,6 +49,7 @@ pub struct GltfRig {
     channels: Vec<Channel>,
     joints: Vec<usize>,
     inverse_bind: Vec<DMat4>,
+    /// Name of the animation played (`#<index>` when it has none).
     pub animation: String,
     /// Length of the animation in seconds.
     pub duration: f64,

@@ -5,7 +5,7 @@
 //! - [`skinning`]: linear blend skinning, shared by both subjects.
 //! - [`texture`]: the coloured procedural texture painted on the rest pose.
 //! - [`raster`]: the supersampled CPU reference renderer (RGB + anti-aliased mask).
-//! - [`generate`]: cameras, renders, per-frame meshes and point trajectories on disk.
+//! - [`generate`](mod@generate): cameras, renders, per-frame meshes and point trajectories on disk.
 
 pub mod generate;
 pub mod gltf;
@@ -27,9 +27,13 @@ use glam::DMat4;
 /// A skinned subject: one rest mesh, its weights, and how its joints move.
 #[derive(Clone, Debug)]
 pub struct Subject {
+    /// Rest-pose vertex positions, scene units.
     pub rest: Vec<[f32; 3]>,
+    /// Triangles indexing `rest`, counter-clockwise from outside.
     pub faces: Vec<[u32; 3]>,
+    /// Joint influences of each rest vertex.
     pub skin: SkinWeights,
+    /// Where the skinning matrices of each frame come from.
     pub motion: Motion,
     /// Animation frames per captured frame (1: the animation's own speed).
     pub pace: f64,

@@ -7,8 +7,11 @@ use serde::Serialize;
 /// benchmarks' README tabulates.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct MotionStats {
+    /// Mean vertex displacement.
     pub mean: f64,
+    /// 90th-percentile vertex displacement.
     pub p90: f64,
+    /// Largest vertex displacement.
     pub max: f64,
 }
 

@@ -13,17 +13,27 @@ use glam::DVec3;
 /// An RGB image (interleaved, values in [0, 1]) and its coverage mask in [0, 1].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Render {
+    /// Image width, pixels (the camera's).
     pub width: u32,
+    /// Image height, pixels (the camera's).
     pub height: u32,
+    /// `width × height × 3` linear RGB values, row-major, background black.
     pub rgb: Vec<f32>,
+    /// `width × height` coverage values: the fraction of a pixel's samples that hit the subject.
     pub alpha: Vec<f32>,
 }
 
 /// Why a view cannot be rendered.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum RenderError {
+    /// A vertex has camera-space depth `z <= 0` (or NaN); the renderer does not clip.
     #[error("vertex {vertex} lies at or behind the camera plane (depth {depth}); the reference renderer does not clip")]
-    BehindCamera { vertex: usize, depth: f64 },
+    BehindCamera {
+        /// The first such vertex.
+        vertex: usize,
+        /// Its camera-space depth, scene units.
+        depth: f64,
+    },
 }
 
 /// Renders `positions`/`faces` (closed surface, counter-clockwise from outside) from `camera`

@@ -5,7 +5,9 @@ use glam::{DMat4, DVec3};
 /// Up to four joint influences per vertex; weights sum to 1 (unused slots have weight 0).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SkinWeights {
+    /// Joint indices of each vertex's four slots.
     pub joints: Vec<[u32; 4]>,
+    /// Weight of each slot, matching `joints`.
     pub weights: Vec<[f32; 4]>,
 }
 

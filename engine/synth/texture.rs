@@ -5,10 +5,12 @@
 
 use glam::DVec3;
 
+/// The procedural texture of a subject, fitted to its rest pose.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Texture {
     /// Centre and radius of the rest pose's bounding sphere (about the box centre).
     pub center: DVec3,
+    /// Radius of that sphere, scene units (1 when the rest pose has no extent).
     pub radius: f64,
 }
 

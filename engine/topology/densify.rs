@@ -30,12 +30,17 @@ impl Default for DensifyConfig {
 /// What a densification step did, and the remap it applied.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DensifyReport {
+    /// The vertex remap applied to the mesh and scene: the old row of each new row,
+    /// [`NEW_ROW`] for the Gaussians added by splits.
     pub old_of_new: Vec<u32>,
+    /// Faces split 1→3 at their centroid.
     pub split_faces: usize,
     /// Faces over the threshold that could not split (a centroid split would make a
     /// degenerate triangle).
     pub refused_splits: usize,
+    /// Edge flips made by [`improve_angles`] after the splits.
     pub flips: usize,
+    /// Gaussians whose scales the scale rule halved (new ones and their corners).
     pub halved: usize,
 }
 

@@ -18,6 +18,7 @@ pub struct InitConfig {
     pub flatness: f32,
     /// Opacity after the sigmoid ("near 1").
     pub opacity: f32,
+    /// Spherical-harmonics degree of the scene; the higher coefficients start at zero.
     pub sh_degree: u32,
 }
 

@@ -12,9 +12,13 @@ pub const WELD_TOLERANCE: f32 = 1e-6;
 /// What [`import`] repaired.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ImportReport {
+    /// Vertex rows merged into an earlier one by the weld.
     pub welded_vertices: usize,
+    /// Faces dropped because the weld merged two of their corners.
     pub dropped_faces: usize,
+    /// Welded vertices used by no remaining face, dropped.
     pub unused_vertices: usize,
+    /// Faces reversed to make the orientation consistent.
     pub flipped_faces: usize,
 }
 
@@ -22,8 +26,11 @@ pub struct ImportReport {
 /// mesh's (apply it to per-vertex colours with [`super::remap_rows`]).
 #[derive(Clone, Debug)]
 pub struct Imported {
+    /// The manifold mesh built from the repaired arrays.
     pub mesh: ManifoldMesh,
+    /// The repairs made.
     pub report: ImportReport,
+    /// For each vertex row of `mesh`, the file's vertex row it comes from.
     pub old_of_new: Vec<u32>,
 }
 

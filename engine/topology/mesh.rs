@@ -12,6 +12,8 @@ use std::collections::HashMap;
 /// "No half-edge / no vertex / no row".
 pub const NONE: u32 = u32::MAX;
 
+/// A manifold, consistently oriented triangle mesh: vertex positions beside implicit half-edge
+/// connectivity, with removed faces and vertices kept as tombstones until [`Self::compact`].
 #[derive(Clone, Debug)]
 pub struct ManifoldMesh {
     /// One row per vertex index (tombstoned rows keep stale values until compaction). Callers
@@ -26,6 +28,7 @@ pub struct ManifoldMesh {
     pub(super) synced_vertices: usize,
 }
 
+/// The next half-edge in the same face: `3f + (k + 1) % 3` for `h = 3f + k`.
 #[inline]
 pub fn next(h: u32) -> u32 {
     if h % 3 == 2 {
@@ -35,6 +38,7 @@ pub fn next(h: u32) -> u32 {
     }
 }
 
+/// The previous half-edge in the same face: `3f + (k + 2) % 3` for `h = 3f + k`.
 #[inline]
 pub fn prev(h: u32) -> u32 {
     if h % 3 == 0 {
@@ -44,6 +48,7 @@ pub fn prev(h: u32) -> u32 {
     }
 }
 
+/// The face that owns half-edge `h` (`h / 3`).
 #[inline]
 pub fn face_of(h: u32) -> u32 {
     h / 3
@@ -100,11 +105,13 @@ impl ManifoldMesh {
         Ok(())
     }
 
+    /// The vertex half-edge `h` starts at.
     #[inline]
     pub fn origin(&self, h: u32) -> u32 {
         self.faces[(h / 3) as usize][(h % 3) as usize]
     }
 
+    /// The vertex half-edge `h` ends at.
     #[inline]
     pub fn dest(&self, h: u32) -> u32 {
         self.origin(next(h))
@@ -134,11 +141,13 @@ impl ManifoldMesh {
         self.faces[f as usize]
     }
 
+    /// Whether face row `f` has not been removed.
     #[inline]
     pub fn is_face_live(&self, f: u32) -> bool {
         self.faces[f as usize][0] != NONE
     }
 
+    /// Whether vertex row `v` has not been removed.
     #[inline]
     pub fn is_vertex_live(&self, v: u32) -> bool {
         self.anchors[v as usize] != NONE
@@ -154,10 +163,12 @@ impl ManifoldMesh {
         self.faces.len()
     }
 
+    /// Number of live vertices.
     pub fn vertex_count(&self) -> usize {
         self.live_vertices
     }
 
+    /// Number of live faces.
     pub fn face_count(&self) -> usize {
         self.live_faces
     }
@@ -181,6 +192,7 @@ impl ManifoldMesh {
         })
     }
 
+    /// Number of live undirected edges (counts [`Self::edges`], O(F)).
     pub fn edge_count(&self) -> usize {
         self.edges().count()
     }
@@ -220,6 +232,7 @@ impl ManifoldMesh {
         a != NONE && self.twin(a) == NONE
     }
 
+    /// Whether half-edge `h` has no twin (its edge has one face).
     #[inline]
     pub fn is_boundary_edge(&self, h: u32) -> bool {
         self.twin(h) == NONE

@@ -77,28 +77,88 @@ pub use weld::{weld, Welded};
 use crate::mesh::TriMesh;
 use std::path::PathBuf;
 
+/// Why a mesh could not be built, imported, densified or pruned. Vertex and face numbers index
+/// the arrays checked at that step: [`import`] checks positions and indices on the file's rows
+/// and everything else after welding.
 #[derive(Debug, thiserror::Error)]
 pub enum TopologyError {
+    /// A face names a vertex index at or past the number of positions.
     #[error("face {face} {corners:?} indexes past the {vertices} vertices")]
-    IndexOutOfRange { face: u32, corners: [u32; 3], vertices: usize },
+    IndexOutOfRange {
+        /// The offending face.
+        face: u32,
+        /// Its corner indices.
+        corners: [u32; 3],
+        /// The number of vertex rows.
+        vertices: usize,
+    },
+    /// A face names the same vertex at two corners.
     #[error("face {face} {corners:?} repeats a vertex")]
-    DegenerateFace { face: u32, corners: [u32; 3] },
+    DegenerateFace {
+        /// The offending face.
+        face: u32,
+        /// Its corner indices.
+        corners: [u32; 3],
+    },
+    /// An edge has more than two faces, or two faces that run it in the same direction.
     #[error("non-manifold edge {a}–{b}: faces {faces:?} (more than two faces, or two faces running it the same way)")]
-    NonManifoldEdge { a: u32, b: u32, faces: Vec<u32> },
+    NonManifoldEdge {
+        /// One end of the edge.
+        a: u32,
+        /// The other end of the edge.
+        b: u32,
+        /// The faces found on the edge.
+        faces: Vec<u32>,
+    },
+    /// [`orient_faces`] found no orientation on which all faces agree.
     #[error("the surface is not orientable (face {face} cannot agree with its neighbours)")]
-    NonOrientable { face: u32 },
+    NonOrientable {
+        /// The face whose orientation conflicted.
+        face: u32,
+    },
+    /// A vertex's faces form more than one fan.
     #[error("non-manifold vertex {vertex}: its faces form more than one fan (pinched)")]
-    PinchedVertex { vertex: u32 },
+    PinchedVertex {
+        /// The pinched vertex.
+        vertex: u32,
+    },
+    /// A vertex row is used by no face.
     #[error("vertex {vertex} is used by no face")]
-    UnusedVertex { vertex: u32 },
+    UnusedVertex {
+        /// The unused vertex.
+        vertex: u32,
+    },
+    /// A position has a NaN or infinite coordinate.
     #[error("vertex {vertex} has a non-finite position")]
-    NonFinite { vertex: u32 },
+    NonFinite {
+        /// The first vertex with a non-finite coordinate.
+        vertex: u32,
+    },
+    /// [`import`] was asked for a closed mesh and found a boundary edge.
     #[error("the mesh is open (edge {a}–{b} has one face) where a closed one is needed")]
-    Open { a: u32, b: u32 },
+    Open {
+        /// One end of the boundary edge.
+        a: u32,
+        /// The other end of the boundary edge.
+        b: u32,
+    },
+    /// [`import`] was left with fewer than 4 faces after welding.
     #[error("the mesh has {faces} faces; at least 4 are needed")]
-    TooSmall { faces: usize },
+    TooSmall {
+        /// The number of faces left.
+        faces: usize,
+    },
+    /// Inputs that must agree do not ([`densify`], [`prune`]): a mesh that is not compact,
+    /// a scene whose row count differs from the vertex count or that fails its own check, or
+    /// scores whose length differs from the face rows. The string says which.
     #[error("mismatched inputs: {0}")]
     Mismatch(String),
+    /// Another error, tagged with the file it came from.
     #[error("{}: {source}", path.display())]
-    InFile { path: PathBuf, source: Box<TopologyError> },
+    InFile {
+        /// The file the mesh came from.
+        path: PathBuf,
+        /// The underlying error.
+        source: Box<TopologyError>,
+    },
 }

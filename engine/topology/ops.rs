@@ -11,8 +11,10 @@ use glam::DVec3;
 /// (the point lies outside it, or on one of its edges).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum SplitRefusal {
+    /// A new triangle's area would be at or below `1e-5` × its longest squared edge.
     #[error("a new triangle would be degenerate")]
     Degenerate,
+    /// A new triangle's normal would point away from the old face's.
     #[error("a new triangle would face against the old one (point outside the face)")]
     FoldsOver,
 }
@@ -38,12 +40,16 @@ impl From<GeometryRefusal> for FlipRefusal {
 /// Why an edge flip was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum FlipRefusal {
+    /// The edge has only one face.
     #[error("boundary edges cannot flip")]
     Boundary,
+    /// The two opposite vertices are already joined by an edge.
     #[error("the new diagonal already exists")]
     EdgeExists,
+    /// A new triangle's area would be at or below `1e-5` × its longest squared edge.
     #[error("a new triangle would be degenerate")]
     Degenerate,
+    /// A new triangle's normal would point away from the summed normal of the old pair.
     #[error("a new triangle would face against the old ones (non-convex quad)")]
     FoldsOver,
 }
@@ -51,20 +57,34 @@ pub enum FlipRefusal {
 /// Why an edge collapse was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum CollapseRefusal {
+    /// The mesh has 5 live vertices or fewer.
     #[error("the mesh would keep 4 vertices or fewer")]
     TooFewVertices,
+    /// The 1-rings of the two ends share other than exactly one (boundary edge) or two
+    /// (interior edge) vertices.
     #[error("the link condition fails (the collapse would pinch two sheets)")]
     LinkCondition,
+    /// The edge is interior but both its ends lie on a boundary.
     #[error(
         "an interior edge joins two boundary vertices (the collapse would pinch the boundary)"
     )]
     BoundaryPinch,
+    /// A face of the edge has its two other edges on the boundary, so its far corner would
+    /// keep no face.
     #[error("a vertex would keep no face")]
     DanglingVertex,
+    /// A face kept around either end would point its normal away from its old normal.
     #[error("face {face} would flip its normal")]
-    FlipsNormal { face: u32 },
+    FlipsNormal {
+        /// The face that would flip.
+        face: u32,
+    },
+    /// A face kept around either end would become degenerate.
     #[error("face {face} would degenerate")]
-    Degenerate { face: u32 },
+    Degenerate {
+        /// The face that would degenerate.
+        face: u32,
+    },
 }
 
 impl ManifoldMesh {

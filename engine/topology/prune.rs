@@ -28,11 +28,14 @@ impl Default for PruneConfig {
     }
 }
 
+/// What a pruning step did, and the remap it applied.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PruneReport {
+    /// The vertex remap applied to the mesh and scene: the old row of each kept row.
     pub old_of_new: Vec<u32>,
     /// Gaussians picked by the criteria.
     pub candidates: usize,
+    /// Picked Gaussians merged into a neighbour and removed.
     pub pruned: usize,
     /// Picked Gaussians that stay because none of their edges could collapse legally.
     pub kept_no_legal_edge: usize,

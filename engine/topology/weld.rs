@@ -7,9 +7,13 @@ use std::collections::HashMap;
 /// weld dropped), `old_of_new` (each kept vertex's first old row) and the count of dropped faces.
 #[derive(Clone, Debug)]
 pub struct Welded {
+    /// The kept positions, in order of first occurrence.
     pub positions: Vec<[f32; 3]>,
+    /// The surviving faces, indexing `positions`.
     pub faces: Vec<[u32; 3]>,
+    /// For each kept vertex, the input row it was taken from.
     pub old_of_new: Vec<u32>,
+    /// Number of input faces dropped because two of their corners merged.
     pub dropped_faces: usize,
 }
 

@@ -19,7 +19,9 @@ pub const QUERY_OFFSET: f64 = 0.02;
 /// What one `bench track` run measured (one thread).
 #[derive(Clone, Debug, Serialize)]
 pub struct TrackBenchReport {
+    /// Triangles of the benchmark mesh.
     pub triangles: usize,
+    /// Vertices of the benchmark mesh.
     pub vertices: usize,
     /// Closest-point queries lie up to this far off the unit sphere.
     pub query_offset: f64,
@@ -31,9 +33,11 @@ pub struct TrackBenchReport {
     pub brute_force_queries_per_s: f64,
     /// Ray casts per second through the BVH, and by brute force.
     pub rays_per_s: f64,
+    /// Ray casts per second by testing every triangle.
     pub brute_force_rays_per_s: f64,
     /// BVH queries timed, and how many of them brute force also answered (and agreed on).
     pub queries: usize,
+    /// Of those, the queries brute force also answered (and agreed on).
     pub brute_force_queries: usize,
     /// Every checked BVH answer equals brute force (distance, ray parameter).
     pub verified: bool,

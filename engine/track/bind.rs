@@ -3,9 +3,10 @@
 use crate::geometry::bvh::SurfaceBvh;
 use glam::DVec3;
 
-/// A point fixed to the surface: its position in a frame with vertices v is Σ bₖ·v[face[k]].
+/// A point fixed to the surface: its position in a frame with vertices v is `Σ bₖ·v[face[k]]`.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Binding {
+    /// Index of the frame-0 face the point lies on.
     pub face: u32,
     /// b ≥ 0, Σb = 1.
     pub barycentric: [f64; 3],
@@ -17,7 +18,10 @@ pub struct Binding {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Unbound {
     /// The closest surface point is farther than the allowed distance.
-    TooFar { distance: f64 },
+    TooFar {
+        /// Distance from the query point to the closest surface point.
+        distance: f64,
+    },
     /// The ray hits no face.
     Missed,
     /// The query has a non-finite coordinate.

@@ -9,7 +9,7 @@
 //! - [`queries`]: `points.csv` / `pixels.csv` readers; [`output`]: `tracks.csv` / JSON writers.
 //! - [`plot`]: an SVG of the trajectories; [`project`]: tracks seen through a camera.
 //! - [`run`]: one tracking run from queries to report.
-//! - [`bench`]: the `bench track` measurement.
+//! - [`bench`](mod@bench): the `bench track` measurement.
 
 pub mod bench;
 pub mod bind;
@@ -32,14 +32,46 @@ use std::path::PathBuf;
 /// What can go wrong while tracking; file errors name the file.
 #[derive(Debug, thiserror::Error)]
 pub enum TrackError {
+    /// A mesh is unusable for surface queries (e.g. no faces, a non-finite position), or there
+    /// are no frames.
     #[error(transparent)]
     Surface(#[from] SurfaceError),
+    /// A frame's vertex count differs from frame 0's.
     #[error("frame {frame} has {found} vertices, frame 0 has {expected}")]
-    FrameVertexCount { frame: usize, found: usize, expected: usize },
+    FrameVertexCount {
+        /// Index of the frame.
+        frame: usize,
+        /// Its vertex count.
+        found: usize,
+        /// Frame 0's vertex count.
+        expected: usize,
+    },
+    /// A binding's face, or a vertex of it, is out of range in some frame.
     #[error("binding {binding} refers to face {face}, which is not among the {faces} faces or uses a vertex the frame lacks")]
-    FaceOutOfRange { binding: usize, face: u32, faces: usize },
+    FaceOutOfRange {
+        /// Index of the binding.
+        binding: usize,
+        /// The face it refers to.
+        face: u32,
+        /// The sequence's face count.
+        faces: usize,
+    },
+    /// A query CSV file is malformed.
     #[error("{path}: line {line}: {message}")]
-    Csv { path: PathBuf, line: usize, message: String },
+    Csv {
+        /// The CSV file.
+        path: PathBuf,
+        /// The offending line, counted from 1.
+        line: usize,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// Reading or writing a file failed.
     #[error("{path}: {error}")]
-    Io { path: PathBuf, error: std::io::Error },
+    Io {
+        /// The file concerned.
+        path: PathBuf,
+        /// The underlying I/O error.
+        error: std::io::Error,
+    },
 }

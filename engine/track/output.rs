@@ -13,19 +13,26 @@ use std::path::Path;
 /// Everything a tracking run found.
 #[derive(Clone, Debug, Serialize)]
 pub struct TrackReport {
+    /// Frames in the sequence.
     pub frames: usize,
+    /// Vertices per frame.
     pub vertices: usize,
+    /// Faces of the sequence.
     pub faces: usize,
     /// Largest accepted distance from a 3D query point to the frame-0 surface (scene units).
     pub max_distance: f64,
+    /// The bound points, in query order.
     pub points: Vec<TrackedPoint>,
+    /// The queries that could not be bound, in query order.
     pub unbound: Vec<UnboundPoint>,
 }
 
 /// A bound point and its position in every frame.
 #[derive(Clone, Debug, Serialize)]
 pub struct TrackedPoint {
+    /// The query's id.
     pub id: String,
+    /// Where on the frame-0 surface it is bound.
     #[serde(flatten)]
     pub binding: Binding,
     /// Position per frame (scene units).
@@ -35,7 +42,9 @@ pub struct TrackedPoint {
 /// A query that was not bound, and why.
 #[derive(Clone, Debug, Serialize)]
 pub struct UnboundPoint {
+    /// The query's id.
     pub id: String,
+    /// Why it was not bound, in words.
     pub reason: String,
     /// Distance to the surface when that was the reason.
     pub distance: Option<f64>,

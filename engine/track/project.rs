@@ -14,12 +14,16 @@ use glam::DVec3;
 /// One point of one frame in the image.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImagePoint {
+    /// The tracked point's id.
     pub id: String,
+    /// The frame index.
     pub frame: usize,
     /// Pixel coordinates (the centre of pixel (i, j) is (i + 0.5, j + 0.5)); NaN when the point
     /// is at or behind the camera plane.
     pub u: f64,
+    /// The vertical pixel coordinate (y down), same convention as `u`.
     pub v: f64,
+    /// In front of the camera, inside the image and not occluded by the frame's surface.
     pub visible: bool,
 }
 

@@ -12,8 +12,15 @@ use glam::DVec3;
 
 /// What to track: frame-0 points, or pixels of a camera (ray-cast onto the frame-0 surface).
 pub enum Queries {
+    /// (id, position) per point, in frame-0 coordinates (scene units).
     Points(Vec<(String, [f64; 3])>),
-    Pixels { camera: Camera, pixels: Vec<(String, [f64; 2])> },
+    /// Pixels of one camera, each cast as a ray onto the frame-0 surface.
+    Pixels {
+        /// The camera whose rays are cast onto the frame-0 surface.
+        camera: Camera,
+        /// (id, (u, v)) per point; pixel (i, j) is centred at (i + 0.5, j + 0.5).
+        pixels: Vec<(String, [f64; 2])>,
+    },
 }
 
 /// Binds `queries` on frame 0 of the sequence (`faces`, vertex positions per frame) and

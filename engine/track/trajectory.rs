@@ -4,7 +4,7 @@ use super::bind::Binding;
 use super::TrackError;
 use glam::DVec3;
 
-/// Position of `binding` on the mesh with `faces` and vertex `positions`: Σ bₖ·v[face[k]].
+/// Position of `binding` on the mesh with `faces` and vertex `positions`: `Σ bₖ·v[face[k]]`.
 /// None when the face or one of its vertices is out of range.
 #[inline]
 pub fn position(binding: &Binding, faces: &[[u32; 3]], positions: &[[f32; 3]]) -> Option<DVec3> {

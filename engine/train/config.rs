@@ -5,6 +5,7 @@
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+/// The `tagsplat fit` configuration (one static frame); every key has a default.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FitConfig {
@@ -12,15 +13,21 @@ pub struct FitConfig {
     pub iterations: u32,
     /// SH degree stored per Gaussian; the active degree rises by one every `sh_increase_every`.
     pub sh_degree: u32,
+    /// Iterations between rises of the active SH degree (default 1000).
     pub sh_increase_every: u32,
     /// Colour behind the Gaussians; targets are composited over it with their masks.
     pub background: [f32; 3],
     /// Seeds view order, initial points and splits.
     pub seed: u64,
+    /// Image loss weights.
     pub loss: LossWeights,
+    /// Adam learning rates.
     pub learning_rates: LearningRateConfig,
+    /// The 3DGS densification schedule and thresholds.
     pub densify: DensifyConfig,
+    /// Random initialisation, when no initial Gaussians are given.
     pub init: InitConfig,
+    /// How often the loss is read back and the held-out views evaluated.
     pub report: ReportConfig,
 }
 
@@ -39,12 +46,19 @@ pub struct LossWeights {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LearningRateConfig {
+    /// Position rate at the first iteration, × the scene extent (default 1.6e-4).
     pub positions: f32,
+    /// Position rate at the last iteration, × the scene extent (default 1.6e-6).
     pub positions_final: f32,
+    /// Rate of the log-scales (default 5e-3).
     pub log_scales: f32,
+    /// Rate of the rotation quaternions (default 1e-3).
     pub rotations: f32,
+    /// Rate of the opacity logits (default 0.05).
     pub opacity_logits: f32,
+    /// Rate of the SH DC (base colour) coefficients (default 2.5e-3).
     pub sh_dc: f32,
+    /// Rate of the higher SH coefficients (default 2.5e-3 / 20).
     pub sh_rest: f32,
 }
 
@@ -53,14 +67,20 @@ pub struct LearningRateConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DensifyConfig {
+    /// Whether densification runs at all (default true).
     pub enabled: bool,
+    /// Densification runs at iterations after this one (default 500).
     pub from: u32,
+    /// Last iteration densification may run at (default 1500); it also stops `every` iterations
+    /// before the run ends.
     pub until: u32,
+    /// Iterations between densification steps (default 100).
     pub every: u32,
     /// Mean 2D mean-gradient norm in NDC units (3DGS: 2e-4).
     pub grad_threshold: f32,
     /// Largest scale (× extent) below which a Gaussian is cloned rather than split.
     pub percent_dense: f32,
+    /// Gaussians with an opacity below this are pruned (default 0.005).
     pub prune_opacity: f32,
     /// Largest scale (× extent) beyond which a Gaussian is pruned.
     pub prune_scale: f32,
@@ -74,9 +94,11 @@ pub struct DensifyConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct InitConfig {
+    /// Points placed inside the masks (default 5000).
     pub points: u32,
 }
 
+/// When the fit reads back its loss and evaluates.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ReportConfig {
@@ -152,14 +174,35 @@ impl Default for ReportConfig {
     }
 }
 
+/// Why a configuration could not be loaded or is invalid.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
+    /// The file could not be read.
     #[error("cannot read config {path}: {error}")]
-    Read { path: PathBuf, error: std::io::Error },
+    Read {
+        /// The config file.
+        path: PathBuf,
+        /// The I/O error.
+        error: std::io::Error,
+    },
+    /// The file is not valid TOML, has an unknown key, or a value of the wrong type.
     #[error("config {path}: {error}")]
-    Parse { path: PathBuf, error: Box<toml::de::Error> },
+    Parse {
+        /// The config file.
+        path: PathBuf,
+        /// The parser's error.
+        error: Box<toml::de::Error>,
+    },
+    /// A value is out of its range, or inconsistent with another key's.
     #[error("config{}: `{key}` {problem}", .path.as_ref().map(|p| format!(" {}", p.display())).unwrap_or_default())]
-    Value { path: Option<PathBuf>, key: &'static str, problem: String },
+    Value {
+        /// The config file (None for a config not read from a file).
+        path: Option<PathBuf>,
+        /// The key, dotted (`densify.every`).
+        key: &'static str,
+        /// What is wrong with the value.
+        problem: String,
+    },
 }
 
 impl FitConfig {

@@ -15,7 +15,9 @@ pub struct DensifyRules {
     pub grad_threshold: f32,
     /// Largest scale up to which a selected Gaussian is cloned; above it, split.
     pub clone_max_scale: f32,
+    /// Gaussians with a lower opacity are pruned.
     pub prune_opacity: f32,
+    /// Gaussians with a larger largest scale are pruned.
     pub prune_max_scale: f32,
     /// Most Gaussians after the step; the largest gradients win when it binds.
     pub budget: usize,
@@ -24,8 +26,11 @@ pub struct DensifyRules {
 /// What one step did.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct DensifyCounts {
+    /// Gaussians cloned (one new Gaussian each).
     pub cloned: usize,
+    /// Gaussians split (each replaced by two).
     pub split: usize,
+    /// Gaussians pruned (split ones not counted).
     pub pruned: usize,
 }
 

@@ -22,16 +22,21 @@ use std::time::Instant;
 /// What the loop tells its caller after every iteration (the CLI draws a progress bar).
 #[derive(Clone, Copy, Debug)]
 pub struct Progress {
+    /// The iteration just finished, 1-based.
     pub iteration: u32,
+    /// The run's iteration count.
     pub iterations: u32,
     /// The mean loss of the last statistics interval.
     pub loss: Option<f32>,
+    /// Gaussians after the iteration (densification changes the count).
     pub gaussians: usize,
 }
 
+/// What [`fit`] returns.
 pub struct FitOutcome {
     /// The final Gaussians, or the last ones with a finite loss when the run stopped early.
     pub scene: GaussianScene,
+    /// The run's report.
     pub report: FitReport,
     /// Final renders of the evaluation views, by camera name.
     pub renders: Vec<(String, Image)>,

@@ -59,8 +59,11 @@ pub type ColoredPoints = (Vec<[f32; 3]>, Vec<[f32; 3]>);
 
 /// One view for sampling: its camera, mask (> 0.5 inside) and colour image (RGB, row-major).
 pub struct MaskedView<'a> {
+    /// The view's camera.
     pub camera: &'a Camera,
+    /// One value per pixel, row-major; above 0.5 is inside.
     pub mask: &'a [f32],
+    /// One RGB colour per pixel, row-major.
     pub rgb: &'a [[f32; 3]],
 }
 

@@ -16,12 +16,16 @@ use crate::splat::GaussianScene;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+/// A fit of one dataset frame (`tagsplat fit`); see [`run_fit_job`].
 pub struct FitJob {
+    /// The dataset folder.
     pub data: PathBuf,
+    /// The frame to fit.
     pub frame: usize,
     /// A point cloud or mesh (PLY or OBJ) whose vertices seed the Gaussians; without one,
     /// points are sampled inside the masks.
     pub init: Option<PathBuf>,
+    /// The fit configuration.
     pub config: FitConfig,
 }
 

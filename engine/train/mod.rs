@@ -26,58 +26,111 @@ pub use views::{load_targets, ViewTarget};
 
 use std::path::PathBuf;
 
+/// Why training (a fit or a pipeline run) failed.
 #[derive(Debug, thiserror::Error)]
 pub enum TrainError {
+    /// The configuration is invalid.
     #[error(transparent)]
     Config(#[from] ConfigError),
+    /// The dataset could not be loaded or read.
     #[error(transparent)]
     Dataset(#[from] crate::dataset::DatasetError),
+    /// The Gaussian splatter failed.
     #[error(transparent)]
     Splat(#[from] crate::splat::SplatError),
+    /// A GPU operation failed.
     #[error(transparent)]
     Gpu(#[from] crate::gpu::GpuError),
+    /// An evaluation metric (PSNR, SSIM, ...) failed.
     #[error(transparent)]
     Eval(#[from] crate::eval::EvalError),
+    /// The mesh rasterizer failed.
     #[error(transparent)]
     Raster(#[from] crate::raster::RasterError),
+    /// A regularizer failed.
     #[error(transparent)]
     Regularize(#[from] crate::regularize::RegularizeError),
+    /// A topology operation failed: import, densification or pruning.
     #[error(transparent)]
     Topology(#[from] crate::topology::TopologyError),
+    /// A mesh file could not be read or written.
     #[error(transparent)]
     Mesh(#[from] crate::mesh::MeshError),
+    /// A Gaussian scene could not be read, written or built.
     #[error(transparent)]
     Scene(#[from] crate::splat::SceneError),
+    /// A mesh sequence could not be assembled or exported.
     #[error(transparent)]
     Sequence(#[from] crate::sequence::SequenceError),
+    /// The USD export failed.
     #[error(transparent)]
     Usd(#[from] crate::sequence::usd::UsdError),
+    /// An image could not be read or written.
     #[error(transparent)]
     Image(#[from] crate::io::image::ImageError),
+    /// A PLY file could not be read or written.
     #[error(transparent)]
     Ply(#[from] crate::io::ply::PlyError),
+    /// The deformation graph could not be built or solved.
     #[error(transparent)]
     Deform(#[from] crate::deform::DeformError),
+    /// The initial mesh could not be built from the masks.
     #[error("initial mesh from the masks: {0}")]
     InitMesh(#[from] crate::init::InitError),
     /// A loss went non-finite; `detail` names the iterations and the terms. The frames (or
     /// Gaussians) finished before are kept.
     #[error("{}{detail}", frame.map_or(String::new(), |t| format!("frame {t}: ")))]
-    NonFinite { frame: Option<usize>, detail: String },
+    NonFinite {
+        /// The frame being optimised (None outside a pipeline frame, and in the graph stage).
+        frame: Option<usize>,
+        /// The iterations and the loss terms' values.
+        detail: String,
+    },
     /// Nothing to train on: no view, or no view whose mask holds the subject.
     #[error("{}{problem}", frame.map_or(String::new(), |t| format!("frame {t}: ")))]
-    NoViews { frame: Option<usize>, problem: &'static str },
+    NoViews {
+        /// The frame (None for a plain fit or an initialisation).
+        frame: Option<usize>,
+        /// What is missing.
+        problem: &'static str,
+    },
     /// Initial Gaussians could not be placed (e.g. the masks do not meet in space).
     #[error("initialisation: {0}")]
     Init(String),
+    /// The requested frames are empty or run past the dataset's.
     #[error("frames {}..{}: {} has frames 0..{available}", frames.start, frames.end, data.display())]
-    FrameRange { frames: std::ops::Range<usize>, data: PathBuf, available: usize },
+    FrameRange {
+        /// The frames requested.
+        frames: std::ops::Range<usize>,
+        /// The dataset's folder.
+        data: PathBuf,
+        /// The dataset's frame count.
+        available: usize,
+    },
     /// A frame cannot start before the frame it continues from is complete in the output.
     #[error("frame {frame} needs frame {needs} in {}; run from an earlier frame", out.display())]
-    MissingFrame { frame: usize, needs: usize, out: PathBuf },
+    MissingFrame {
+        /// The frame that was to start.
+        frame: usize,
+        /// The frame it needs complete.
+        needs: usize,
+        /// The output folder.
+        out: PathBuf,
+    },
     /// A file that reads but does not fit: faces that differ between frames, a bad point cloud.
     #[error("{}: {problem}", path.display())]
-    Invalid { path: PathBuf, problem: String },
+    Invalid {
+        /// The file at fault.
+        path: PathBuf,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// A file or folder could not be written (or, for a run's log and report, opened or read).
     #[error("cannot write {}: {error}", path.display())]
-    Io { path: PathBuf, error: std::io::Error },
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The I/O error.
+        error: std::io::Error,
+    },
 }

@@ -16,6 +16,8 @@ pub fn mesh_path(root: &Path, t: usize) -> PathBuf {
     root.join("meshes").join(format!("{}.ply", frame_name(t)))
 }
 
+/// A pipeline output folder (see the module docs): per-frame Gaussians and meshes, then the
+/// sequence exports.
 pub struct SequenceOutput {
     root: PathBuf,
 }
@@ -33,14 +35,17 @@ impl SequenceOutput {
         Ok(Self { root: root.to_owned() })
     }
 
+    /// The folder itself.
     pub fn root(&self) -> &Path {
         &self.root
     }
 
+    /// `root/meshes/<t>.ply`: frame `t`'s mesh (`<t>` six digits).
     pub fn mesh_path(&self, t: usize) -> PathBuf {
         mesh_path(&self.root, t)
     }
 
+    /// `root/gaussians/<t>.ply`: frame `t`'s Gaussians (`<t>` six digits).
     pub fn gaussians_path(&self, t: usize) -> PathBuf {
         self.root.join("gaussians").join(format!("{}.ply", frame_name(t)))
     }

@@ -41,12 +41,16 @@ pub fn sh_degree_at(max: u32, increase_every: u32, it: u32) -> u32 {
 /// last `every` iterations of the run to settle what the last densification made.
 #[derive(Clone, Copy, Debug)]
 pub struct DensifyWindow {
+    /// Densification runs only after this iteration.
     pub from: u32,
+    /// Densification runs at no iteration after this one.
     pub until: u32,
+    /// Iterations between runs (and the run's last iterations kept free of them).
     pub every: u32,
 }
 
 impl DensifyWindow {
+    /// Whether densification runs at 1-based iteration `it` of a run of `iterations`.
     #[inline]
     pub fn due(&self, it: u32, iterations: u32) -> bool {
         it > self.from

@@ -36,6 +36,8 @@ impl GaussianState {
     }
 }
 
+/// A set of Gaussians being optimised against a fixed set of training views, on the GPU: the
+/// parameters, their gradients, Adam's moments and the views' targets (see the module docs).
 pub struct Trainer {
     ctx: Arc<GpuContext>,
     splatter: Splatter,
@@ -96,10 +98,12 @@ impl Trainer {
         Ok(())
     }
 
+    /// The number of Gaussians.
     pub fn gaussians(&self) -> usize {
         self.state.params.len()
     }
 
+    /// The SH degree stored per Gaussian.
     pub fn sh_degree(&self) -> u32 {
         self.state.params.sh_degree()
     }
@@ -209,6 +213,7 @@ impl Trainer {
         &self.targets[view]
     }
 
+    /// Training view `view`'s camera.
     pub fn camera(&self, view: usize) -> &Camera {
         &self.cameras[view]
     }
@@ -231,10 +236,13 @@ impl Trainer {
         Ok(())
     }
 
+    /// Reads the current parameters back as a scene.
     pub fn scene(&self) -> Result<GaussianScene, TrainError> {
         Ok(self.state.params.to_scene()?)
     }
 
+    /// Reads back the parameters kept by the last [`Self::checkpoint`], or the scene given to
+    /// [`Self::new`] or [`Self::replace`] when that came later.
     pub fn last_good_scene(&self) -> Result<GaussianScene, TrainError> {
         Ok(self.state.last_good.to_scene()?)
     }

@@ -6,8 +6,11 @@ use crate::camera::Camera;
 use crate::dataset::Dataset;
 use crate::io::image::Image;
 
+/// One view of one frame as a training target (see the module docs).
 pub struct ViewTarget {
+    /// The camera's name.
     pub name: String,
+    /// The view's camera; `target` is its width × height.
     pub camera: Camera,
     /// Per pixel, row-major: rgb · mask + background · (1 − mask), mask.
     pub target: Vec<[f32; 4]>,

@@ -32,6 +32,8 @@ push_layout!(
     [world_to_camera, intrinsics, width, height, vertices, radius, scale, near]
 );
 
+/// The coverage kernels and their scratch (projected vertices, per-pixel seeds) sized for a
+/// vertex count and the largest view, and the buffer its weighted value is summed in.
 pub struct CoverageTerm {
     seed: ComputePipeline,
     pull: ComputePipeline,

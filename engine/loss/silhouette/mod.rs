@@ -45,7 +45,10 @@ struct GpuView {
 
 /// A view's camera and its mask's distance field (`None`: the mask is empty).
 pub struct SilhouetteView {
+    /// The view's camera; its size is the field's size.
     pub camera: Camera,
+    /// The mask's distance field ([`mask_distance`]): row-major, in pixels; `None` for an
+    /// empty mask.
     pub field: Option<Vec<f32>>,
 }
 
@@ -56,6 +59,8 @@ impl SilhouetteView {
     }
 }
 
+/// The silhouette kernel with every view's camera and distance field uploaded, and the
+/// buffer its weighted value is summed in.
 pub struct SilhouetteTerm {
     pipeline: ComputePipeline,
     views: GpuBuffer<GpuView>,

@@ -14,22 +14,32 @@ use glam::{DMat3, DVec3};
 /// A mesh in f64: world positions, faces, vertex colours, and [`super::edge_adjacency`].
 #[derive(Clone, Copy, Debug)]
 pub struct ReferenceMesh<'a> {
+    /// Vertex positions, world units.
     pub positions: &'a [[f64; 3]],
+    /// Triangles as vertex indices, counter-clockwise.
     pub faces: &'a [[u32; 3]],
+    /// Linear RGB colour per vertex.
     pub colors: &'a [[f64; 3]],
+    /// Per face and edge, the face across it or -1 ([`super::edge_adjacency`] of `faces`).
     pub adjacency: &'a [i32],
 }
 
 /// The reference's images (row-major); see [`super::RasterFrame`] for their meaning.
 #[derive(Clone, Debug, Default)]
 pub struct ReferenceFrame {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Triangle per pixel, [`super::NO_TRIANGLE`] where uncovered.
     pub ids: Vec<u32>,
+    /// Perspective-correct barycentrics (b0, b1, b2); 0 where uncovered.
     pub barycentrics: Vec<[f64; 3]>,
     /// Resolved (rgb, mask) before anti-aliasing.
     pub resolved: Vec<[f64; 4]>,
+    /// Interpolated camera-space depth z; 0 where uncovered.
     pub depth: Vec<f64>,
+    /// World-space unit face normals; 0 where uncovered.
     pub normals: Vec<[f64; 3]>,
     /// Anti-aliased (rgb, mask).
     pub antialiased: Vec<[f64; 4]>,

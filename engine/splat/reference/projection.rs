@@ -14,7 +14,9 @@ pub struct Projected {
     pub mean: [f64; 2],
     /// Inverse of the dilated 2D covariance: (Q00, Q01, Q11).
     pub conic: [f64; 3],
+    /// Opacity `o = sigmoid(ℓ)` (1 in mask mode).
     pub opacity: f64,
+    /// RGB `max(0, 0.5 + SH(d))` per channel ((1, 1, 1) in mask mode).
     pub color: [f64; 3],
     /// View depth `v.z`.
     pub depth: f64,

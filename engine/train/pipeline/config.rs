@@ -7,18 +7,24 @@ use crate::train::config::{
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The `tagsplat train` configuration (the whole pipeline); every key has a default.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TrainConfig {
     /// SH degree per Gaussian (its colour's view dependence); the active degree rises by one
     /// every `sh_increase_every` canonical iterations.
     pub sh_degree: u32,
+    /// Canonical iterations between rises of the active SH degree (default 500).
     pub sh_increase_every: u32,
     /// Colour behind the subject; targets are composited over it with their masks.
     pub background: [f32; 3],
+    /// Seeds each frame's view order (mixed with the frame index) and the graph stage.
     pub seed: u64,
+    /// Frame 0's optimisation.
     pub canonical: CanonicalConfig,
+    /// Every later frame's optimisation.
     pub temporal: TemporalConfig,
+    /// Loss and regularizer weights.
     pub loss: PipelineWeights,
     /// The 3DGS learning rates (positions × scene extent, decaying over each frame's iterations).
     pub learning_rates: LearningRateConfig,
@@ -27,7 +33,9 @@ pub struct TrainConfig {
     /// tracking RMSE from 0.090 to 0.059 and raised the last frame's PSNR from 23 to 30 dB;
     /// ×25 gained nothing more).
     pub position_lr_scale: f32,
+    /// The initial mesh built from the masks when none is given.
     pub init: InitMeshConfig,
+    /// How often losses are read back.
     pub report: PipelineReportConfig,
 }
 
@@ -35,9 +43,14 @@ pub struct TrainConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CanonicalConfig {
+    /// Frame 0's iterations, all run (default 1000).
     pub iterations: u32,
+    /// Densification runs only after this iteration (default 200).
     pub densify_from: u32,
+    /// Densification runs at no iteration after this one (default 700), nor in the last
+    /// `densify_every` iterations.
     pub densify_until: u32,
+    /// Iterations between densify-and-prune steps (default 100).
     pub densify_every: u32,
     /// A face splits when the mean view-space gradient of its corners (NDC units, as 3DGS's
     /// 2e-4) passes this.
@@ -45,6 +58,7 @@ pub struct CanonicalConfig {
     /// Most Gaussians densification may reach; 0: the covered pixels of the median training
     /// view (one Gaussian per pixel the subject covers: model only what the images resolve).
     pub budget: u32,
+    /// A Gaussian whose opacity is below this is merged away (default 0.005).
     pub prune_opacity: f32,
     /// Largest scale, as a fraction of the mesh's bounding-box diagonal, beyond which a
     /// Gaussian is merged away.
@@ -71,9 +85,12 @@ pub struct TemporalConfig {
     /// Weight of the coverage term (mask pixels the render leaves uncovered pull the nearest
     /// vertex; 0: off) and how far it searches, pixels at the level's resolution.
     pub coverage: f32,
+    /// How far the coverage term searches for a vertex, pixels at the level's resolution
+    /// (default 24).
     pub coverage_radius: u32,
     /// The pose the temporal regularizers (edge length, rigidity, rotation) compare against.
     pub regularizer_reference: ReferencePose,
+    /// The deformation graph stage.
     pub graph: GraphConfig,
 }
 
@@ -92,10 +109,12 @@ pub struct GraphConfig {
     pub levels: Vec<u32>,
     /// Most and fewest iterations per level.
     pub iterations: u32,
+    /// Fewest iterations per level (default 30).
     pub min_iterations: u32,
     /// Adam step of node translations, × the mesh's bounding-box diagonal, and of node
     /// rotations (quaternion units); both decay tenfold over a level's cap.
     pub translation_lr: f32,
+    /// Adam step of node rotations, quaternion units (default 5e-3); decays as `translation_lr`.
     pub rotation_lr: f32,
     /// Weight of the as-rigid-as-possible term (mean squared residual in node spacings).
     pub arap: f32,
@@ -145,16 +164,27 @@ impl ReferencePose {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PipelineWeights {
+    /// Gaussian render's colour against the image (default 1).
     pub gaussian_color: f32,
+    /// Gaussian render's alpha against the mask (default 3).
     pub gaussian_mask: f32,
+    /// Mesh render's colour against the image (default 1).
     pub mesh_color: f32,
+    /// Mesh render's alpha against the mask (default 3).
     pub mesh_mask: f32,
+    /// Flatness term (default 1).
     pub scale_2d: f32,
+    /// Laplacian smoothness term (default 5).
     pub laplacian: f32,
+    /// Normal-consistency term (default 1).
     pub normal: f32,
+    /// Temporal edge-length term (default 0.4).
     pub edge_length: f32,
+    /// Temporal local-rigidity term (default 0.4).
     pub rigidity: f32,
+    /// Temporal rotation-similarity term (default 2).
     pub rotation: f32,
+    /// Falloff λ_w of the temporal neighbour weights, per mean edge length (default 1).
     pub lambda_w: f32,
 }
 
@@ -164,9 +194,11 @@ pub struct PipelineWeights {
 pub struct InitMeshConfig {
     /// Target vertex count; 0: an edge length of `edge_pixels` pixels of the typical view.
     pub vertices: u32,
+    /// Target edge length, pixels of the typical view, when `vertices` is 0 (default 3).
     pub edge_pixels: f64,
 }
 
+/// How often the pipeline reads its losses back.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PipelineReportConfig {
@@ -291,6 +323,8 @@ impl PipelineWeights {
 }
 
 impl TrainConfig {
+    /// Reads and checks a TOML config; missing keys take their defaults. Errors name the file and
+    /// the key.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         load_toml(path, Self::check)
     }

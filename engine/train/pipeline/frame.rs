@@ -27,6 +27,7 @@ use std::time::Instant;
 /// What a frame's optimisation reports.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct FrameReport {
+    /// The frame index.
     pub frame: usize,
     /// Per-vertex iterations (the graph stage's are in `graph`).
     pub iterations: u32,
@@ -38,13 +39,17 @@ pub struct FrameReport {
     pub lost_views: Vec<String>,
     /// Optimisation wall time (evaluation excluded), seconds.
     pub wall_s: f64,
+    /// Gaussians at the end of the frame.
     pub gaussians: usize,
     /// Held-out (or training, see the run report) PSNR and SSIM of the Gaussian and mesh renders.
     pub psnr_gs: f64,
+    /// Mean SSIM of the Gaussian renders.
     pub ssim_gs: f64,
+    /// Mean PSNR of the mesh renders, dB.
     pub psnr_mesh: f64,
     /// Mean weighted losses of the last statistics interval.
     pub loss_gs: f32,
+    /// The mesh renders' loss (`loss_gs` is the Gaussian renders').
     pub loss_mesh: f32,
     /// Silhouette and coverage terms, weighted, mean per iteration (later frames).
     pub loss_silhouette: f32,
@@ -54,14 +59,20 @@ pub struct FrameReport {
     pub passes_ms: BTreeMap<String, f64>,
     /// (iteration, faces split, Gaussians pruned, Gaussians after) per topology step.
     pub topology_steps: Vec<(u32, usize, usize, usize)>,
+    /// Per-vertex iterations whose intersections outgrew the splatter's buffers (rendered without
+    /// the excess; see [`Trainer::finish_step`](crate::train::Trainer::finish_step)).
     pub truncated_steps: u32,
 }
 
 /// A frame to optimise: its views, where it starts, and what it keeps fixed.
 pub struct FrameTask<'a> {
+    /// The frame index.
     pub frame: usize,
+    /// The training views.
     pub train: &'a [ViewTarget],
+    /// The views the report's PSNR and SSIM are measured on (held-out, or the training views).
     pub eval: &'a [ViewTarget],
+    /// The Gaussians it starts from: on the initial mesh (frame 0), or frame t − 1 extrapolated.
     pub start: GaussianScene,
     /// The topology (positions are overwritten by the Gaussians'); frame 0 changes it.
     pub mesh: &'a mut ManifoldMesh,

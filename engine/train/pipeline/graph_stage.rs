@@ -27,17 +27,22 @@ pub struct LevelReport {
     /// Graph nodes of the level.
     #[serde(default)]
     pub nodes: usize,
+    /// Iterations run.
     pub iterations: u32,
+    /// Why the level stopped.
     pub stop_reason: StopReason,
+    /// Wall time of the level (its graph building included), seconds.
     pub wall_s: f64,
     /// Mean total loss over the level's last pass through the views.
     pub loss: f64,
 }
 
+/// What a later frame's graph stage reports.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct GraphReport {
     /// Nodes of the last level's graph.
     pub nodes: usize,
+    /// Every level run, coarse first.
     pub levels: Vec<LevelReport>,
 }
 

@@ -23,11 +23,15 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
+/// A reconstruction run (`tagsplat train`); see [`run_train`].
 pub struct TrainJob {
+    /// The dataset folder.
     pub data: PathBuf,
+    /// The output folder (see [`SequenceOutput`]); a run into one with complete frames resumes.
     pub out: PathBuf,
     /// The frame-0 mesh (PLY or OBJ); without one it is built from the masks.
     pub mesh: Option<PathBuf>,
+    /// The pipeline configuration.
     pub config: TrainConfig,
     /// Frames to produce (default: all). Frames before the range must be complete already.
     pub frames: Option<Range<usize>>,
@@ -36,17 +40,24 @@ pub struct TrainJob {
 /// Where the run is, for a progress display.
 #[derive(Clone, Copy, Debug)]
 pub struct TrainProgress {
+    /// The frame being optimised.
     pub frame: usize,
     /// One past the last frame of the run.
     pub frames_end: usize,
+    /// The frame's last finished iteration, 1-based (the graph stage reports none).
     pub iteration: u32,
+    /// The frame's iteration cap (a later frame may stop before it).
     pub iterations: u32,
 }
 
+/// What a run reports (`OUT/report.json`, rewritten after every frame).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct TrainReport {
+    /// The GPU's name.
     pub device: String,
+    /// The dataset folder.
     pub data: PathBuf,
+    /// This run's wall time so far, seconds.
     pub total_wall_s: f64,
     /// What the PSNR/SSIM figures are measured on: "held-out" views or "training" views.
     pub eval_views: &'static str,
@@ -54,7 +65,9 @@ pub struct TrainReport {
     pub resumed_frames: Vec<usize>,
     /// Every frame of the run so far, those finished by earlier runs (from their report) too.
     pub frames: Vec<FrameReport>,
+    /// Mesh vertices.
     pub vertices: usize,
+    /// Live mesh faces (the topology after frame 0's densification and pruning).
     pub faces: usize,
     /// The files written: per-frame folders and the sequence exports.
     pub outputs: Vec<PathBuf>,
