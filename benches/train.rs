@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::time::Duration;
 use tagsplat::bench::random_scene;
 use tagsplat::gpu::{ContextOptions, GpuBuffer, GpuContext, Recorder};
-use tagsplat::loss::{ImageLoss, LossParams};
+use tagsplat::loss::{ImageLoss, LossParams, LossTerms};
 use tagsplat::optim::{Adam, AdamParams, LearningRates};
 use tagsplat::rng::SplitMix64;
 use tagsplat::splat::GaussianBuffers;
@@ -38,7 +38,7 @@ fn bench_kernels(
         || (0..pixels).map(|_| [0; 4].map(|_| rng.next_f64() as f32)).collect::<Vec<[f32; 4]>>();
     let render = GpuBuffer::from_slice(ctx, "render", &image())?;
     let target = GpuBuffer::from_slice(ctx, "target", &image())?;
-    let terms = GpuBuffer::<f32>::new(ctx, "terms", 8)?;
+    let terms = LossTerms::sums(ctx, "terms")?;
     let gradient = GpuBuffer::<[f32; 4]>::new(ctx, "gradient", pixels)?;
     let mut loss = ImageLoss::new(ctx)?;
     loss.reserve(pixels)?;

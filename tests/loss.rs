@@ -41,15 +41,15 @@ fn gpu_loss(
     let render = GpuBuffer::from_slice(ctx, "render", &images.render).unwrap();
     let target = GpuBuffer::from_slice(ctx, "target", &images.target).unwrap();
     let weight = images.weight.as_ref().map(|w| GpuBuffer::from_slice(ctx, "weight", w).unwrap());
-    let terms = GpuBuffer::<f32>::new(ctx, "terms", 8).unwrap();
+    let terms = LossTerms::sums(ctx, "terms").unwrap();
     let gradient = GpuBuffer::<[f32; 4]>::new(ctx, "gradient", pixels).unwrap();
     let params =
         LossParams::new(images.width as u32, images.height as u32, lambda, weight.is_some());
     let mut rec = Recorder::new(ctx).unwrap();
-    rec.fill_buffer(&terms, 0);
+    terms.clear(&mut rec);
     loss.record(&mut rec, &params, &render, &target, weight.as_ref(), &terms, &gradient).unwrap();
     rec.submit_and_wait().unwrap();
-    (LossTerms::from_floats(&terms.read().unwrap()), gradient.read().unwrap())
+    (LossTerms::from_sums(&terms.read().unwrap()), gradient.read().unwrap())
 }
 
 fn reference(images: &Images, lambda: [f32; 4]) -> ReferenceLoss {
@@ -216,7 +216,7 @@ fn short_buffers_are_refused_by_name() {
     loss.reserve(100).unwrap();
     let render = GpuBuffer::<[f32; 4]>::new(ctx, "render", 100).unwrap();
     let target = GpuBuffer::<[f32; 4]>::new(ctx, "target of view 3", 99).unwrap();
-    let terms = GpuBuffer::<f32>::new(ctx, "terms", 8).unwrap();
+    let terms = LossTerms::sums(ctx, "terms").unwrap();
     let params = LossParams::new(10, 10, [1.0; 4], false);
     let mut rec = Recorder::new(ctx).unwrap();
     let error = loss

@@ -122,8 +122,11 @@ fn a_sequence_is_reconstructed_then_resumed_with_one_face_list() {
     }
     beats_the_unchanged_mesh(&dir.join("data"), &meshes);
 
-    // An uninterrupted run writes the same files, and its surfaces match the resumed run's up
-    // to the run-to-run noise of the GPU's float atomics (runs are not yet bit-identical).
+    // An uninterrupted run writes the same files as the run that was stopped after frame 1
+    // and resumed, bit for bit: gradients and loss totals are order-independent sums, and the
+    // temporal stage starts from the topology as written. Only timings, the output paths and
+    // the list of resumed frames may differ in report.json; run.log and report.html carry
+    // times.
     let whole = run_train(
         g.ctx(),
         &job(&dir.join("data"), &dir.join("whole"), quick_config(), None),
@@ -132,33 +135,23 @@ fn a_sequence_is_reconstructed_then_resumed_with_one_face_list() {
     .unwrap();
     assert_eq!(whole.frames.iter().map(|f| f.frame).collect::<Vec<_>>(), vec![0, 1, 2]);
     assert_eq!(file_names(&dir.join("whole")), file_names(&out));
-    let truth = TriMesh::read_ply(&dir.join("data/meshes/000002.ply")).unwrap();
-    let whole2 = TriMesh::read_ply(&dir.join("whole/meshes/000002.ply")).unwrap();
-    let (between, to_truth) = (
-        chamfer_meshes(
-            (&whole2.positions, &whole2.faces),
-            (&meshes[2].positions, &meshes[2].faces),
-            5000,
-            1,
-        )
-        .unwrap()
-        .mean,
-        chamfer_meshes(
-            (&meshes[2].positions, &meshes[2].faces),
-            (&truth.positions, &truth.faces),
-            5000,
-            1,
-        )
-        .unwrap()
-        .mean,
-    );
-    eprintln!(
-        "frame 2: Chamfer between the two runs {between}, resumed run to the truth {to_truth}"
-    );
-    assert!(
-        between < to_truth,
-        "frame 2: the runs differ by {between}, the truth is {to_truth} away"
-    );
+    for name in file_names(&out) {
+        let read = |root: &Path| std::fs::read(root.join(&name)).unwrap();
+        match name.to_str().unwrap() {
+            "run.log" | "report.html" => {}
+            "report.json" => {
+                let json = |root: &Path| {
+                    without_run_specifics(serde_json::from_slice(&read(root)).unwrap())
+                };
+                assert_eq!(json(&dir.join("whole")), json(&out), "report.json");
+            }
+            _ => assert!(
+                read(&dir.join("whole")) == read(&out),
+                "{} differs between the runs",
+                name.display()
+            ),
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -355,6 +348,26 @@ fn frames_that_lose_the_subject_keep_going_and_say_where() {
         "a run over frames 3..4 did not continue from frames 1 and 2"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A report without what differs between two runs of the same job: times (keys ending in
+/// `_s` or `_ms`), the output paths and the frames found complete on disk.
+fn without_run_specifics(value: serde_json::Value) -> serde_json::Value {
+    use serde_json::Value;
+    match value {
+        Value::Object(map) => Value::Object(
+            map.into_iter()
+                .filter(|(key, _)| {
+                    !(key.ends_with("_s") || key.ends_with("_ms"))
+                        && key != "outputs"
+                        && key != "resumed_frames"
+                })
+                .map(|(key, v)| (key, without_run_specifics(v)))
+                .collect(),
+        ),
+        Value::Array(items) => Value::Array(items.into_iter().map(without_run_specifics).collect()),
+        other => other,
+    }
 }
 
 /// Every file under `dir`, relative to it, sorted.

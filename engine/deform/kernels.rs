@@ -5,7 +5,8 @@
 use super::graph::{DeformGraph, NODES_PER_VERTEX};
 use super::reference::NodeTransforms;
 use crate::gpu::{
-    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder,
+    push_layout, ComputePipeline, FixedSums, GpuBuffer, GpuContext, GpuResult, PipelineDesc,
+    Recorder,
 };
 use crate::optim::{Adam, AdamParams, LearningRates};
 use crate::shaders;
@@ -70,7 +71,7 @@ pub struct GraphDeformer {
     nodes: GaussianBuffers,
     node_grads: GaussianBuffers,
     adam: Adam,
-    losses: GpuBuffer<f32>,
+    loss_sum: FixedSums,
     push: Push,
 }
 
@@ -147,7 +148,7 @@ impl GraphDeformer {
             node_grads,
             adam: Adam::new(ctx, &nodes)?,
             nodes,
-            losses: GpuBuffer::from_slice(ctx, "deform ARAP loss", &[0.0])?,
+            loss_sum: FixedSums::new(ctx, "deform ARAP loss", 1)?,
             push: Push {
                 vertices: n as u32,
                 nodes: m as u32,
@@ -208,7 +209,7 @@ impl GraphDeformer {
             ("grad_positions", grad_positions.binding()),
             ("node_grad_translations", self.node_grads.positions.binding()),
             ("node_grad_rotations", self.node_grads.rotations.binding()),
-            ("losses", self.losses.binding()),
+            ("loss_sum", self.loss_sum.binding()),
         ];
         rec.dispatch_1d(
             &self.node_gradients,
@@ -244,7 +245,7 @@ impl GraphDeformer {
 
     /// The ARAP energy summed since the last call (which restarts the sum).
     pub fn take_arap_loss(&self) -> GpuResult<f32> {
-        Ok(self.losses.take()?[0])
+        Ok(self.loss_sum.take()?[0] as f32)
     }
 
     /// The node transforms and their last gradients, read back.

@@ -379,15 +379,9 @@ unsafe fn create_device(
     let mut extensions: Vec<*const i8> = REQUIRED_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
     let core = vk::PhysicalDeviceFeatures::default().shader_int64(true);
     let mut vk12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
-    let mut atomic_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
-        .shader_buffer_float32_atomics(true)
-        .shader_buffer_float32_atomic_add(true);
     let mut size_control =
         vk::PhysicalDeviceSubgroupSizeControlFeatures::default().compute_full_subgroups(true);
-    let mut features = vk::PhysicalDeviceFeatures2::default()
-        .features(core)
-        .push_next(&mut vk12)
-        .push_next(&mut atomic_float);
+    let mut features = vk::PhysicalDeviceFeatures2::default().features(core).push_next(&mut vk12);
     if full_subgroups {
         extensions.push(ash::ext::subgroup_size_control::NAME.as_ptr());
         features = features.push_next(&mut size_control);

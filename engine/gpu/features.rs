@@ -14,8 +14,6 @@ pub struct DeviceCapabilities {
     pub shader_int64: bool,
     /// `shaderBufferInt64Atomics`: 64-bit atomics on storage buffers (required).
     pub buffer_int64_atomics: bool,
-    /// `shaderBufferFloat32AtomicAdd` of VK_EXT_shader_atomic_float (required).
-    pub buffer_float32_atomic_add: bool,
     /// VK_KHR_push_descriptor is available (required).
     pub push_descriptor: bool,
     /// The default subgroup size; required to be a power of two in 4..=128. 0 below Vulkan 1.2.
@@ -39,8 +37,7 @@ pub struct DeviceCapabilities {
 }
 
 /// Device extensions the engine enables.
-pub const REQUIRED_EXTENSIONS: [&CStr; 2] =
-    [ash::khr::push_descriptor::NAME, ash::ext::shader_atomic_float::NAME];
+pub const REQUIRED_EXTENSIONS: [&CStr; 1] = [ash::khr::push_descriptor::NAME];
 
 impl DeviceCapabilities {
     /// Names of the required features this device lacks; empty when it has them all.
@@ -50,10 +47,6 @@ impl DeviceCapabilities {
             (self.has_compute_queue, "a compute queue"),
             (self.shader_int64, "shaderInt64"),
             (self.buffer_int64_atomics, "shaderBufferInt64Atomics (64-bit buffer atomics)"),
-            (
-                self.buffer_float32_atomic_add,
-                "shaderBufferFloat32AtomicAdd (VK_EXT_shader_atomic_float)",
-            ),
             (self.push_descriptor, "VK_KHR_push_descriptor"),
             (self.subgroup_in_compute, "subgroup operations in compute shaders"),
             (self.subgroup_arithmetic, "subgroup arithmetic"),
@@ -83,7 +76,6 @@ impl DeviceCapabilities {
             api_version: properties.api_version,
             shader_int64: false,
             buffer_int64_atomics: false,
-            buffer_float32_atomic_add: false,
             push_descriptor: has_extension(ash::khr::push_descriptor::NAME),
             subgroup_size: 0,
             subgroup_in_compute: false,
@@ -117,20 +109,14 @@ impl DeviceCapabilities {
         capabilities.subgroup_shuffle = ops.contains(vk::SubgroupFeatureFlags::SHUFFLE);
 
         let mut vk12 = vk::PhysicalDeviceVulkan12Features::default();
-        let mut atomic_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
         let mut size_control_features = vk::PhysicalDeviceSubgroupSizeControlFeatures::default();
         let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut vk12);
-        if has_extension(ash::ext::shader_atomic_float::NAME) {
-            features2 = features2.push_next(&mut atomic_float);
-        }
         if has_size_control {
             features2 = features2.push_next(&mut size_control_features);
         }
         instance.get_physical_device_features2(physical_device, &mut features2);
         capabilities.shader_int64 = features2.features.shader_int64 == vk::TRUE;
         capabilities.buffer_int64_atomics = vk12.shader_buffer_int64_atomics == vk::TRUE;
-        capabilities.buffer_float32_atomic_add =
-            atomic_float.shader_buffer_float32_atomic_add == vk::TRUE;
         capabilities.full_subgroups = size_control_features.compute_full_subgroups == vk::TRUE;
         capabilities
     }
@@ -145,7 +131,6 @@ mod tests {
             api_version: vk::API_VERSION_1_3,
             shader_int64: true,
             buffer_int64_atomics: true,
-            buffer_float32_atomic_add: true,
             push_descriptor: true,
             subgroup_size: 32,
             subgroup_in_compute: true,
@@ -165,10 +150,9 @@ mod tests {
 
     #[test]
     fn each_missing_feature_is_named() {
-        let cases: [(fn(&mut DeviceCapabilities), &str); 5] = [
+        let cases: [(fn(&mut DeviceCapabilities), &str); 4] = [
             (|c| c.api_version = vk::API_VERSION_1_1, "Vulkan 1.2"),
             (|c| c.buffer_int64_atomics = false, "64-bit buffer atomics"),
-            (|c| c.buffer_float32_atomic_add = false, "shaderBufferFloat32AtomicAdd"),
             (|c| c.subgroup_ballot = false, "subgroup ballot"),
             (|c| c.subgroup_size = 24, "subgroup size"),
         ];

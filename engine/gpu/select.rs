@@ -96,7 +96,6 @@ mod tests {
             api_version: vk::API_VERSION_1_2,
             shader_int64: true,
             buffer_int64_atomics: usable,
-            buffer_float32_atomic_add: true,
             push_descriptor: true,
             subgroup_size: 32,
             subgroup_in_compute: true,

@@ -21,7 +21,7 @@ pub mod silhouette;
 pub use params::{LossParams, LOSS_SHARE_L1, LOSS_SHARE_SSIM};
 
 use crate::gpu::{
-    ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder,
+    ComputePipeline, FixedSums, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder,
 };
 use crate::shaders;
 use std::sync::Arc;
@@ -39,21 +39,24 @@ pub struct LossTerms {
 }
 
 impl LossTerms {
-    /// Unpacks the 8 floats of the terms buffer.
-    pub fn from_floats(terms: &[f32]) -> Self {
+    /// Unpacks the 8 sums of a terms buffer.
+    pub fn from_sums(sums: &[f64]) -> Self {
         let mut out = Self::default();
-        out.l1.copy_from_slice(&terms[0..4]);
-        out.dssim.copy_from_slice(&terms[4..8]);
+        for c in 0..4 {
+            out.l1[c] = sums[c] as f32;
+            out.dssim[c] = sums[4 + c] as f32;
+        }
         out
     }
 
-    /// Reads the terms summed in `buffer` and zeroes it, so the next sum starts afresh.
-    pub fn take(buffer: &GpuBuffer<f32>) -> GpuResult<Self> {
-        let terms = Self::from_floats(&buffer.read()?);
-        let mut rec = Recorder::new(buffer.context())?;
-        rec.fill_buffer(buffer, 0);
-        rec.submit_and_wait()?;
-        Ok(terms)
+    /// A terms buffer for [`ImageLoss::record`]: 8 order-independent sums, zero.
+    pub fn sums(ctx: &Arc<GpuContext>, name: &str) -> GpuResult<FixedSums> {
+        FixedSums::new(ctx, name, 8)
+    }
+
+    /// Reads the terms summed in `sums` and zeroes them, so the next sum starts afresh.
+    pub fn take(sums: &FixedSums) -> GpuResult<Self> {
+        Ok(Self::from_sums(&sums.take()?))
     }
 
     /// `Σ_c λ_c (0.8 l1_c + 0.2 dssim_c)`.
@@ -126,8 +129,8 @@ impl ImageLoss {
     }
 
     /// Records the loss of `render` against `target` (vec4 per pixel, row-major, `width ×
-    /// height` of them): ADDS the terms to `terms` (8 floats, see [`LossTerms`]; zero it first
-    /// to read one run) and WRITES dL/drender to `gradient`. `weight` is one float per pixel.
+    /// height` of them): ADDS the terms to `terms` (8 sums from [`LossTerms::sums`]; zero them
+    /// first to read one run) and WRITES dL/drender to `gradient`. `weight` is one float per pixel.
     #[allow(clippy::too_many_arguments)]
     pub fn record<'a>(
         &'a self,
@@ -136,7 +139,7 @@ impl ImageLoss {
         render: &'a GpuBuffer<[f32; 4]>,
         target: &'a GpuBuffer<[f32; 4]>,
         weight: Option<&'a GpuBuffer<f32>>,
-        terms: &'a GpuBuffer<f32>,
+        terms: &'a FixedSums,
         gradient: &'a GpuBuffer<[f32; 4]>,
     ) -> GpuResult<()> {
         let pixels = params.pixels();
@@ -172,7 +175,7 @@ impl ImageLoss {
         let derivatives = [("d_mean_x", dx), ("d_mean_xx", dxx), ("d_mean_xy", dxy)];
         let filtered = [("blur_x", fx), ("blur_xx", fxx), ("blur_xy", fxy)];
         rec.dispatch_1d(&self.blur_moments, &[&images[..], &moments].concat(), params, groups)?;
-        let terms = ("terms", terms.binding());
+        let terms = ("term_sums", terms.binding());
         let fused = [&images[..], &[weight], &moments, &derivatives, &[terms]].concat();
         rec.dispatch_1d(&self.ssim_forward, &fused, params, groups)?;
         rec.dispatch_1d(&self.blur_gradients, &[derivatives, filtered].concat(), params, groups)?;

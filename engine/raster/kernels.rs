@@ -2,7 +2,7 @@
 //! (with the small-triangle raster) → large-triangle raster → resolve → anti-aliasing
 //! crossings → anti-aliasing blend. Backward: anti-aliasing backward → interior backward.
 
-use crate::gpu::{ComputePipeline, GpuContext, GpuResult, PipelineDesc, Shader};
+use crate::gpu::{ComputePipeline, FixedResolve, GpuContext, GpuResult, PipelineDesc, Shader};
 use crate::shaders;
 use std::sync::Arc;
 
@@ -19,6 +19,8 @@ pub(crate) struct Kernels {
     pub aa_forward: ComputePipeline,
     pub aa_backward: ComputePipeline,
     pub interior_backward: ComputePipeline,
+    /// Fixed-point gradient sums into the caller's float gradients.
+    pub resolve_sums: FixedResolve,
 }
 
 impl Kernels {
@@ -42,6 +44,7 @@ impl Kernels {
                 &shaders::RASTER_INTERIOR_BACKWARD,
                 &[],
             )?,
+            resolve_sums: FixedResolve::new(ctx)?,
         })
     }
 }

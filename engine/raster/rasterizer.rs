@@ -7,7 +7,7 @@ use super::mesh::{check_positions, edge_adjacency, RasterMesh};
 use super::params::{RasterParams, RasterSettings, SubTriangle, TILE_LIST_CAPACITY, TILE_SIZE};
 use super::RasterError;
 use crate::camera::Camera;
-use crate::gpu::{GpuBuffer, GpuContext, GpuResult};
+use crate::gpu::{FixedSums, GpuBuffer, GpuContext, GpuResult};
 use std::sync::Arc;
 
 /// Everything one forward pass produced, read back (row-major, `width × height` pixels).
@@ -46,6 +46,9 @@ pub(super) struct MeshBuffers {
     pub(super) large: GpuBuffer<u32>,
     /// [large sub-triangles, sub-triangles dropped at the guard band].
     pub(super) counters: GpuBuffer<u32>,
+    /// The backward's gradients per vertex (3 each) as order-independent sums.
+    pub(super) grad_position_sums: FixedSums,
+    pub(super) grad_color_sums: FixedSums,
 }
 
 pub(super) struct ImageBuffers {
@@ -86,7 +89,7 @@ fn flat3(values: &[[f32; 3]]) -> &[f32] {
 impl MeshBuffers {
     fn new(ctx: &Arc<GpuContext>, mesh: &RasterMesh) -> GpuResult<Self> {
         let faces: &[u32] = bytemuck::cast_slice(&mesh.faces);
-        let t = mesh.faces.len();
+        let (t, n) = (mesh.faces.len(), mesh.positions.len());
         Ok(Self {
             positions: GpuBuffer::from_slice(ctx, "mesh positions", flat3(&mesh.positions))?,
             colors: GpuBuffer::from_slice(ctx, "mesh colours", flat3(&mesh.colors))?,
@@ -97,6 +100,8 @@ impl MeshBuffers {
             subs: GpuBuffer::new(ctx, "raster sub-triangles", 2 * t)?,
             large: GpuBuffer::new(ctx, "raster large list", 2 * t)?,
             counters: GpuBuffer::new(ctx, "raster counters", 2)?,
+            grad_position_sums: FixedSums::new(ctx, "raster position gradient sums", 3 * n)?,
+            grad_color_sums: FixedSums::new(ctx, "raster colour gradient sums", 3 * n)?,
         })
     }
 }

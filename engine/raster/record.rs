@@ -172,7 +172,7 @@ impl MeshRasterizer {
             ("grad_color", grad_color.binding()),
             ("grad_mask", grad_mask.binding()),
             ("grad_rgba", im.grad_rgba.binding()),
-            ("grad_positions", grad_positions.binding()),
+            ("grad_position_sums", m.grad_position_sums.binding()),
         ];
         rec.dispatch(&k.aa_backward, &aa, params, params.tiles());
         rec.end_pass();
@@ -183,10 +183,13 @@ impl MeshRasterizer {
             ("colors", m.colors.binding()),
             ("ids", im.ids.binding()),
             ("grad_rgba", im.grad_rgba.binding()),
-            ("grad_positions", grad_positions.binding()),
-            ("grad_colors", grad_colors.binding()),
+            ("grad_position_sums", m.grad_position_sums.binding()),
+            ("grad_color_sums", m.grad_color_sums.binding()),
         ];
         rec.dispatch(&k.interior_backward, &interior, params, params.tiles());
+        let count = 3 * self.vertices;
+        k.resolve_sums.record(rec, &m.grad_position_sums, grad_positions, count)?;
+        k.resolve_sums.record(rec, &m.grad_color_sums, grad_colors, count)?;
         rec.end_pass();
         Ok(())
     }

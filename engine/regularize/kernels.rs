@@ -4,7 +4,8 @@
 
 use super::{Losses, Neighbourhoods, RegularizeError, Weights, LOSS_SLOTS};
 use crate::gpu::{
-    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder,
+    push_layout, ComputePipeline, FixedSums, GpuBuffer, GpuContext, GpuResult, PipelineDesc,
+    Recorder,
 };
 use crate::shaders;
 use crate::splat::GaussianBuffers;
@@ -70,7 +71,7 @@ pub struct Regularizers {
     ring: GpuBuffer<u32>,
     deltas: GpuBuffer<[f32; 4]>,
     normal_grads: GpuBuffer<[f32; 4]>,
-    losses: GpuBuffer<f32>,
+    loss_sums: FixedSums,
     count: usize,
     mean_edge_length: f32,
 }
@@ -89,7 +90,7 @@ impl Regularizers {
             ring: GpuBuffer::new(ctx, "regularize ring", 0)?,
             deltas: GpuBuffer::new(ctx, "regularize deltas", 0)?,
             normal_grads: GpuBuffer::new(ctx, "regularize normal gradients", 0)?,
-            losses: GpuBuffer::new(ctx, "regularize losses", LOSS_SLOTS)?,
+            loss_sums: FixedSums::new(ctx, "regularize losses", LOSS_SLOTS)?,
             count: 0,
             mean_edge_length: 1.0,
         })
@@ -108,7 +109,7 @@ impl Regularizers {
 
     /// Records both passes: zeroes the loss buffer, then ADDS the weighted gradients of every
     /// term into `grads` (positions, log-scales, rotations) and writes the unweighted losses to
-    /// [`Self::losses`]. Temporal terms run only with `previous`. Nothing is read back.
+    /// [`Self::read_losses`]. Temporal terms run only with `previous`. Nothing is read back.
     pub fn record<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
@@ -131,7 +132,7 @@ impl Regularizers {
             w_rotation: weights.rotation,
         };
         let groups = self.count.div_ceil(WORKGROUP as usize) as u64;
-        rec.fill_buffer(&self.losses, 0);
+        self.loss_sums.clear(rec);
         let vertex = [
             ("positions", params.positions.binding()),
             ("log_scales", params.log_scales.binding()),
@@ -142,7 +143,7 @@ impl Regularizers {
             ("grad_rotations", grads.rotations.binding()),
             ("deltas", self.deltas.binding()),
             ("normal_grads", self.normal_grads.binding()),
-            ("losses", self.losses.binding()),
+            ("loss_sums", self.loss_sums.binding()),
         ];
         rec.dispatch_1d(&self.vertex, &vertex, &push, groups)?;
         // Without a previous frame the kernel never reads these; bind the current ones.
@@ -159,7 +160,7 @@ impl Regularizers {
             ("normal_grads", self.normal_grads.binding()),
             ("grad_positions", grads.positions.binding()),
             ("grad_rotations", grads.rotations.binding()),
-            ("losses", self.losses.binding()),
+            ("loss_sums", self.loss_sums.binding()),
         ];
         rec.dispatch_1d(&self.gather, &gather, &push, groups)?;
         Ok(())
@@ -185,14 +186,9 @@ impl Regularizers {
         }
     }
 
-    /// The GPU buffer of the unweighted losses (slots in the order of [`Losses`]).
-    pub fn losses(&self) -> &GpuBuffer<f32> {
-        &self.losses
-    }
-
     /// Reads the losses back (after the recorder was submitted).
     pub fn read_losses(&self) -> GpuResult<Losses<f32>> {
-        let v = self.losses.read()?;
+        let v: Vec<f32> = self.loss_sums.read()?.into_iter().map(|sum| sum as f32).collect();
         Ok(Losses::from_slots([v[0], v[1], v[2], v[3], v[4], v[5]]))
     }
 

@@ -14,7 +14,9 @@ use super::frame::{tile_grid, FrameParams, Splat, GRAD2D_STRIDE};
 use super::stages::{Kernels, RasterInputs, RasterOutputs};
 use super::{RenderSettings, SplatError};
 use crate::camera::Camera;
-use crate::gpu::{GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes, Recorder};
+use crate::gpu::{
+    FixedResolve, FixedSums, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes, Recorder,
+};
 use crate::sort::{PrefixScan, RadixSort};
 use bytemuck::Pod;
 use std::sync::Arc;
@@ -30,6 +32,9 @@ pub struct Splatter {
     tile_offsets: GpuBuffer<u32>,
     scan: PrefixScan,
     grad2d: GpuBuffer<f32>,
+    /// `grad2d` as the backward accumulates it: order-independent sums, resolved into floats.
+    grad2d_sums: FixedSums,
+    resolve: FixedResolve,
     /// Per intersection slot: exactly the capacity (the emit kernel reads its length), at
     /// least [`MIN_INTERSECTIONS`].
     keys: GpuBuffer<u64>,
@@ -78,6 +83,8 @@ impl Splatter {
             tile_offsets: GpuBuffer::new(ctx, "splat tile offsets", 1)?,
             scan: PrefixScan::new(ctx, 1)?,
             grad2d: GpuBuffer::new(ctx, "splat 2D gradients", 0)?,
+            grad2d_sums: FixedSums::new(ctx, "splat 2D gradient sums", 0)?,
+            resolve: FixedResolve::new(ctx)?,
             keys: GpuBuffer::new(ctx, "splat intersection keys", MIN_INTERSECTIONS)?,
             ids: GpuBuffer::new(ctx, "splat intersection ids", MIN_INTERSECTIONS)?,
             sort: intersection_sort(ctx, MIN_INTERSECTIONS)?,
@@ -94,6 +101,10 @@ impl Splatter {
     fn ensure_scene(&mut self, gaussians: usize) -> GpuResult<()> {
         ensure(&self.ctx, &mut self.splats, gaussians)?;
         ensure(&self.ctx, &mut self.grad2d, gaussians * GRAD2D_STRIDE)?;
+        if self.grad2d_sums.len() < self.grad2d.len() {
+            self.grad2d_sums =
+                FixedSums::new(&self.ctx, "splat 2D gradient sums", self.grad2d.len())?;
+        }
         if self.tile_offsets.len() < gaussians + 1 {
             ensure(&self.ctx, &mut self.tile_offsets, gaussians + 1)?;
             self.scan = PrefixScan::new(&self.ctx, self.tile_offsets.len())?;
@@ -289,8 +300,9 @@ impl Splatter {
             frame,
             (&self.raster_inputs(), &self.raster_outputs()),
             image_grads,
-            &self.grad2d,
+            &self.grad2d_sums,
         );
+        self.resolve.record(rec, &self.grad2d_sums, &self.grad2d, n * GRAD2D_STRIDE)?;
         rec.end_pass();
         rec.begin_pass("project backward");
         self.kernels.project_backward(rec, frame, scene, &self.grad2d, grads, densify_stats)?;

@@ -5,7 +5,8 @@
 use super::buffers::GaussianBuffers;
 use super::frame::{FrameParams, Splat};
 use crate::gpu::{
-    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder, Shader,
+    push_layout, ComputePipeline, FixedSums, GpuBuffer, GpuContext, GpuResult, PipelineDesc,
+    Recorder, Shader,
 };
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
@@ -172,7 +173,7 @@ impl Kernels {
         rec.dispatch(&self.rasterize, &bindings, frame, [tiles_x, tiles_y, 1]);
     }
 
-    /// Adds 2D gradients per Gaussian (`grad2d` must be zeroed first) from the per-pixel loss
+    /// Adds 2D gradients per Gaussian to `grad2d_sums` (zeroed first) from the per-pixel loss
     /// gradients `(dL/d(colour, alpha), dL/ddepth)`.
     pub(crate) fn rasterize_backward<'a>(
         &'a self,
@@ -180,18 +181,17 @@ impl Kernels {
         frame: &FrameParams,
         (inputs, outputs): (&RasterInputs<'a>, &RasterOutputs<'a>),
         (grad_rgba, grad_depth): (&'a GpuBuffer<[f32; 4]>, &'a GpuBuffer<f32>),
-        grad2d: &'a GpuBuffer<f32>,
+        grad2d_sums: &'a FixedSums,
     ) {
         let bindings = [
             ("splats", inputs.splats.binding()),
             ("tile_ranges", inputs.ranges.binding()),
             ("gaussian_ids", inputs.ids.binding()),
-            ("rgba", outputs.rgba.binding()),
             ("depth_out", outputs.depth.binding()),
             ("pixel_state", outputs.pixel_state.binding()),
             ("grad_rgba", grad_rgba.binding()),
             ("grad_depth", grad_depth.binding()),
-            ("grad2d", grad2d.binding()),
+            ("grad2d_sums", grad2d_sums.binding()),
         ];
         let (tiles_x, tiles_y) = frame.tiles();
         rec.dispatch(&self.rasterize_backward, &bindings, frame, [tiles_x, tiles_y, 1]);

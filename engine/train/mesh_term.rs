@@ -6,7 +6,9 @@
 
 use super::TrainError;
 use crate::camera::Camera;
-use crate::gpu::{push_layout, ComputePipeline, GpuBuffer, GpuContext, PipelineDesc, Recorder};
+use crate::gpu::{
+    push_layout, ComputePipeline, FixedSums, GpuBuffer, GpuContext, PipelineDesc, Recorder,
+};
 use crate::loss::{ImageLoss, LossParams, LossTerms};
 use crate::raster::{MeshRasterizer, RasterMesh, RasterSettings};
 use crate::shaders;
@@ -50,7 +52,7 @@ pub struct MeshTerm {
     /// Per vertex (3 floats).
     vertex_color_grads: GpuBuffer<f32>,
     /// Loss terms summed since the last [`MeshTerm::take_terms`].
-    terms: GpuBuffer<f32>,
+    terms: FixedSums,
 }
 
 impl MeshTerm {
@@ -90,10 +92,10 @@ impl MeshTerm {
                 "mesh vertex colour gradients",
                 3 * positions.len(),
             )?,
-            terms: GpuBuffer::new(ctx, "mesh loss terms", 8)?,
+            terms: LossTerms::sums(ctx, "mesh loss terms")?,
         };
         let mut rec = Recorder::new(ctx)?;
-        rec.fill_buffer(&term.terms, 0);
+        term.terms.clear(&mut rec);
         rec.submit_and_wait()?;
         Ok(term)
     }

@@ -5,7 +5,7 @@
 use super::views::ViewTarget;
 use super::TrainError;
 use crate::camera::Camera;
-use crate::gpu::{GpuBuffer, GpuContext, PassTimes, Recorder};
+use crate::gpu::{FixedSums, GpuBuffer, GpuContext, PassTimes, Recorder};
 use crate::loss::{ImageLoss, LossParams, LossTerms};
 use crate::optim::{Adam, AdamParams};
 use crate::splat::{FrameParams, GaussianBuffers, GaussianScene, RenderSettings, Splatter};
@@ -48,7 +48,7 @@ pub struct Trainer {
     /// Zero: no depth loss.
     grad_depth: GpuBuffer<f32>,
     /// The loss terms summed since the last [`Trainer::take_terms`].
-    terms: GpuBuffer<f32>,
+    terms: FixedSums,
     state: GaussianState,
     /// Its moments follow the Gaussian set through [`Trainer::replace`].
     adam: Adam,
@@ -77,13 +77,13 @@ impl Trainer {
                 .collect::<Result<_, _>>()?,
             grad_rgba: GpuBuffer::new(ctx, "loss gradient", max_pixels)?,
             grad_depth: GpuBuffer::new(ctx, "depth gradient (unused)", max_pixels)?,
-            terms: GpuBuffer::new(ctx, "loss terms", 8)?,
+            terms: LossTerms::sums(ctx, "loss terms")?,
             adam: Adam::new(ctx, &state.params)?,
             state,
         };
         let mut rec = Recorder::new(ctx)?;
         rec.fill_buffer(&trainer.grad_depth, 0);
-        rec.fill_buffer(&trainer.terms, 0);
+        trainer.terms.clear(&mut rec);
         rec.submit_and_wait()?;
         trainer.size_for_views()?;
         Ok(trainer)

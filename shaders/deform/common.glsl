@@ -4,7 +4,6 @@
 #ifndef DEFORM_COMMON_GLSL
 #define DEFORM_COMMON_GLSL
 
-#extension GL_EXT_shader_atomic_float : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 

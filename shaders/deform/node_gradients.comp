@@ -8,6 +8,7 @@
 //   the terms of its neighbours in which k is the neighbour (−2c r_jk on t_k).
 // Vertex rotation gradients do not reach the nodes: a Gaussian's rotation follows its nodes.
 #include "common.glsl"
+#include "../common/fixed_sum.glsl"
 layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) readonly buffer RestPositions { float rest_positions[]; };
@@ -22,7 +23,7 @@ layout(std430, binding = 8) readonly buffer Neighbours { uint neighbours[]; };
 layout(std430, binding = 9) readonly buffer GradPositions { float grad_positions[]; };
 layout(std430, binding = 10) writeonly buffer NodeGradTranslations { float node_grad_translations[]; };
 layout(std430, binding = 11) writeonly buffer NodeGradRotations { vec4 node_grad_rotations[]; };
-layout(std430, binding = 12) buffer Losses { float losses[]; };
+layout(std430, binding = 12) buffer LossSum { int64_t loss_sum[]; };
 
 vec3 translation(uint k) {
     return vec3(node_translations[3u * k], node_translations[3u * k + 1u], node_translations[3u * k + 2u]);
@@ -61,7 +62,7 @@ void main() {
         node_grad_rotations[k] = normalize_backward(node_rotations[k], rotation_backward(q, gr));
     }
     float total = subgroupAdd(energy);
-    if (subgroupElect() && total != 0.0) {
-        atomicAdd(losses[0], total);
+    if (subgroupElect()) {
+        FIXED_ADD(loss_sum, 0u, total); // order-independent, so runs repeat bit for bit
     }
 }

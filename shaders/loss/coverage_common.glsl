@@ -3,7 +3,6 @@
 #ifndef LOSS_COVERAGE_COMMON_GLSL
 #define LOSS_COVERAGE_COMMON_GLSL
 
-#extension GL_EXT_shader_atomic_float : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #include "../common/grid.glsl"

@@ -2,10 +2,12 @@
 // Coverage term, pass 2: one invocation per pixel p. Where the mask covers p (> 0.5) but the
 // render does not (alpha < 0.5), the nearest seed vertex s within `radius` pixels is pulled
 // towards p's centre:  E = scale Σ_p ‖uv_s − p‖²,  the gradient chained through the
-// projection and added to s's position gradient (float atomics: pixels share vertices).
+// projection and added to s's position gradient (fixed-point atomics: pixels share vertices,
+// and the sum must not depend on their order).
 // The search walks square rings outwards and stops once no nearer seed can exist: a seed in
 // ring r lies in its pixel, at least r − 0.5 pixels from p's centre. Ties go to the lower id.
 #include "coverage_common.glsl"
+#include "../common/fixed_sum.glsl"
 layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) readonly buffer Positions { float positions[]; };
@@ -13,8 +15,8 @@ layout(std430, binding = 1) readonly buffer Projected { vec2 projected[]; };
 layout(std430, binding = 2) readonly buffer Seeds { uint seeds[]; };
 layout(std430, binding = 3) readonly buffer Target { vec4 target[]; };
 layout(std430, binding = 4) readonly buffer Render { vec4 render[]; };
-layout(std430, binding = 5) buffer GradPositions { float grad_positions[]; };
-layout(std430, binding = 6) buffer Losses { float losses[]; };
+layout(std430, binding = 5) buffer GradPositionSums { int64_t grad_position_sums[]; };
+layout(std430, binding = 6) buffer LossSum { int64_t loss_sum[]; };
 
 // Nearest seed to `centre` within the radius: (vertex, squared distance), NO_SEED if none.
 uvec2 nearest_seed(ivec2 pixel, vec2 centre) {
@@ -66,13 +68,13 @@ void main() {
             vec4 k = pc.intrinsics;
             vec3 dc = vec3(g.x * k.x / c.z, g.y * k.y / c.z, -(g.x * k.x * c.x + g.y * k.y * c.y) / (c.z * c.z));
             vec3 dx = transpose(mat3(pc.world_to_camera)) * dc;
-            atomicAdd(grad_positions[3u * s], dx.x);
-            atomicAdd(grad_positions[3u * s + 1u], dx.y);
-            atomicAdd(grad_positions[3u * s + 2u], dx.z);
+            for (uint k = 0u; k < 3u; k++) {
+                FIXED_ADD(grad_position_sums, 3u * s + k, dx[k]);
+            }
         }
     }
     float total = subgroupAdd(energy);
-    if (subgroupElect() && total != 0.0) {
-        atomicAdd(losses[0], total);
+    if (subgroupElect()) {
+        FIXED_ADD(loss_sum, 0u, total);
     }
 }

@@ -5,11 +5,12 @@
 // D_v the mask's distance field (engine/loss/silhouette/distance.rs) sampled bilinearly at pixel
 // centres, continued outside the image by the distance to its border; s = weight / (vertices ·
 // views with a mask). The gradient pulls a vertex outside a mask towards it from any distance.
-// Each invocation writes only its own gradient row (adds to it), so no atomics but the loss's.
-#extension GL_EXT_shader_atomic_float : require
+// Each invocation writes only its own gradient row (adds to it), so no atomics but the loss's
+// (a fixed-point sum: order-independent, so runs repeat bit for bit).
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #include "../common/grid.glsl"
+#include "../common/fixed_sum.glsl"
 layout(local_size_x_id = 0) in;
 
 // Mirrors engine/loss/silhouette/mod.rs (`GpuView`).
@@ -30,7 +31,7 @@ layout(std430, binding = 0) readonly buffer Positions { float positions[]; };
 layout(std430, binding = 1) readonly buffer Views { View views[]; };
 layout(std430, binding = 2) readonly buffer Fields { float fields[]; };
 layout(std430, binding = 3) buffer GradPositions { float grad_positions[]; };
-layout(std430, binding = 4) buffer Losses { float losses[]; };
+layout(std430, binding = 4) buffer LossSum { int64_t loss_sum[]; };
 
 // D at index coordinates q (pixel centres at integers) and dD/dq.
 vec3 field_at(View view, vec2 q) {
@@ -80,7 +81,7 @@ void main() {
         grad_positions[3u * i + 2u] += grad.z;
     }
     float total = subgroupAdd(energy);
-    if (subgroupElect() && total != 0.0) {
-        atomicAdd(losses[0], total);
+    if (subgroupElect()) {
+        FIXED_ADD(loss_sum, 0u, total);
     }
 }

@@ -2,10 +2,11 @@
 // SSIM forward, pass 2 of 2, fused with the loss value and the first half of the backward:
 // the vertical filter completes the moments; S and its partial derivatives with respect to
 // the filtered moments μx, E[x²], E[xy] (scaled by dL/dS) go to the backward; the L1 and SSIM
-// terms of the loss are summed per channel, one atomic per subgroup.
-#extension GL_EXT_shader_atomic_float : require
+// terms of the loss are summed per channel, one fixed-point add per subgroup (order-independent,
+// so runs repeat bit for bit).
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #include "loss.glsl"
+#include "../common/fixed_sum.glsl"
 layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) readonly buffer Render { vec4 render[]; };
@@ -20,7 +21,7 @@ layout(std430, binding = 8) writeonly buffer DMeanX { vec4 d_mean_x[]; };
 layout(std430, binding = 9) writeonly buffer DMeanXX { vec4 d_mean_xx[]; };
 layout(std430, binding = 10) writeonly buffer DMeanXY { vec4 d_mean_xy[]; };
 // Per channel: [0..4) the mean absolute error, [4..8) the mean of 1 − S (unweighted by λ).
-layout(std430, binding = 11) buffer Terms { float terms[8]; };
+layout(std430, binding = 11) buffer TermSums { int64_t term_sums[]; };  // fixed_sum.glsl: 8 sums
 
 void main() {
     uint p = gl_GlobalInvocationID.x;
@@ -65,8 +66,8 @@ void main() {
     vec4 ssim_sum = subgroupAdd(dissimilarity);
     if (subgroupElect()) {
         for (int c = 0; c < 4; c++) {
-            atomicAdd(terms[c], l1_sum[c] * params.scales.z);
-            atomicAdd(terms[4 + c], ssim_sum[c] * params.scales.w);
+            FIXED_ADD(term_sums, uint(c), l1_sum[c] * params.scales.z);
+            FIXED_ADD(term_sums, uint(4 + c), ssim_sum[c] * params.scales.w);
         }
     }
 }

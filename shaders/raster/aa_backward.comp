@@ -1,9 +1,10 @@
 #version 460
 // Anti-aliasing, backward: one invocation per pixel, reading the crossings aa_pairs.comp
 // stored. Writes dL/d(resolved rgb, mask) of its pixel (the identity plus the blends of its four pairs), and for the pairs it owns (right and
-// down neighbour) adds dL/dt through the crossing edge to that edge's two vertex positions.
-#extension GL_EXT_shader_atomic_float : require
+// down neighbour) adds dL/dt through the crossing edge to that edge's two vertex positions
+// (fixed-point sums: order-independent, so runs repeat bit for bit).
 #include "raster.glsl"
+#include "../common/fixed_sum.glsl"
 
 layout(local_size_x = 16, local_size_y = 16) in;
 
@@ -13,7 +14,7 @@ layout(std430, binding = 3) readonly buffer Rgba { vec4 rgba[]; };
 layout(std430, binding = 4) readonly buffer GradColor { float grad_color[]; };
 layout(std430, binding = 5) readonly buffer GradMask { float grad_mask[]; };
 layout(std430, binding = 6) writeonly buffer GradRgba { vec4 grad_rgba[]; };
-layout(std430, binding = 7) buffer GradPositions { float grad_positions[]; };
+layout(std430, binding = 7) buffer GradPositionSums { int64_t grad_position_sums[]; };
 
 #include "triangle.glsl"
 #include "blend.glsl"
@@ -34,7 +35,7 @@ void add_screen_gradient(uint v, vec2 g) {
     vec3 g_camera = vec3(gf, -dot(gf, c.xy) / c.z);
     vec3 g_world = transpose(view_rotation()) * g_camera;
     for (uint k = 0u; k < 3u; k++) {
-        atomicAdd(grad_positions[3u * v + k], g_world[k]);
+        FIXED_ADD(grad_position_sums, 3u * v + k, g_world[k]);
     }
 }
 

@@ -3,12 +3,13 @@
 // vertex colour gradients b_k g and vertex position gradients through the perspective-correct
 // barycentrics b_k = s_k / sum(s), s_0 = d.(v1 x v2) and cyclic (the mask is 1 inside, so it
 // has no interior gradient). Lanes of a subgroup on the same triangle sum their gradients
-// first and one of them adds them, so a large triangle does not serialize on its 18 floats.
-#extension GL_EXT_shader_atomic_float : require
+// first and one of them adds them, so a large triangle does not serialize on its 18 sums
+// (fixed point: order-independent, so runs repeat bit for bit).
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_shuffle : require
 #include "raster.glsl"
+#include "../common/fixed_sum.glsl"
 
 layout(local_size_x = 16, local_size_y = 16) in;
 
@@ -17,8 +18,8 @@ layout(std430, binding = 1) readonly buffer CameraPositions { vec4 camera_positi
 layout(std430, binding = 2) readonly buffer Colors { float colors[]; };
 layout(std430, binding = 3) readonly buffer Ids { uint ids[]; };
 layout(std430, binding = 4) readonly buffer GradRgba { vec4 grad_rgba[]; };
-layout(std430, binding = 5) buffer GradPositions { float grad_positions[]; };
-layout(std430, binding = 6) buffer GradColors { float grad_colors[]; };
+layout(std430, binding = 5) buffer GradPositionSums { int64_t grad_position_sums[]; };
+layout(std430, binding = 6) buffer GradColorSums { int64_t grad_color_sums[]; };
 
 #include "triangle.glsl"
 
@@ -29,9 +30,9 @@ vec3 vertex_color(uint v) {
 void add3(uint v, vec3 g, bool to_colors) {
     for (uint k = 0u; k < 3u; k++) {
         if (to_colors) {
-            atomicAdd(grad_colors[3u * v + k], g[k]);
+            FIXED_ADD(grad_color_sums, 3u * v + k, g[k]);
         } else {
-            atomicAdd(grad_positions[3u * v + k], g[k]);
+            FIXED_ADD(grad_position_sums, 3u * v + k, g[k]);
         }
     }
 }

@@ -3,7 +3,6 @@
 #ifndef REGULARIZE_COMMON_GLSL
 #define REGULARIZE_COMMON_GLSL
 
-#extension GL_EXT_shader_atomic_float : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
@@ -30,14 +29,16 @@ const uint LOSS_ROTATION = 5u;
 const uint BOUNDARY_BIT = 0x80000000u;
 
 #include "../common/quaternion.glsl"
+#include "../common/fixed_sum.glsl"
 
-// Adds `value` (0 from inactive invocations) to losses[slot]: one atomic per subgroup.
-// Must be reached by every invocation of the subgroup.
+// Adds `value` (0 from inactive invocations) to loss sum `slot`: one fixed-point add per
+// subgroup (order-independent, so runs repeat bit for bit). Must be reached by every
+// invocation of the subgroup.
 #define ADD_LOSS(slot, value)                         \
     {                                                 \
         float total_ = subgroupAdd(value);            \
-        if (subgroupElect() && total_ != 0.0) {       \
-            atomicAdd(losses[slot], total_);          \
+        if (subgroupElect()) {                        \
+            FIXED_ADD(loss_sums, slot, total_);       \
         }                                             \
     }
 

@@ -22,7 +22,7 @@ layout(std430, binding = 6) readonly buffer Deltas { vec4 deltas[]; };
 layout(std430, binding = 7) readonly buffer NormalGrads { vec4 normal_grads[]; };
 layout(std430, binding = 8) buffer GradPositions { float grad_positions[]; };
 layout(std430, binding = 9) buffer GradRotations { vec4 grad_rotations[]; };
-layout(std430, binding = 10) buffer Losses { float losses[]; };
+layout(std430, binding = 10) buffer LossSums { int64_t loss_sums[]; };
 
 vec3 position(uint i) {
     return vec3(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);

@@ -17,7 +17,7 @@ layout(std430, binding = 5) buffer GradLogScales { float grad_log_scales[]; };
 layout(std430, binding = 6) buffer GradRotations { vec4 grad_rotations[]; };
 layout(std430, binding = 7) writeonly buffer Deltas { vec4 deltas[]; };
 layout(std430, binding = 8) writeonly buffer NormalGrads { vec4 normal_grads[]; };
-layout(std430, binding = 9) buffer Losses { float losses[]; };
+layout(std430, binding = 9) buffer LossSums { int64_t loss_sums[]; };
 
 vec3 position(uint i) {
     return vec3(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);

@@ -4,17 +4,17 @@
 // colour, alpha and expected depth with respect to every Gaussian's 2D mean, conic, opacity,
 // colour and depth. Per Gaussian, the subgroup sums its pixels' gradients and the sum is kept
 // by the lane that loaded that Gaussian; after each chunk every lane adds its Gaussian's sums
-// to the global row with float atomics, all lanes in one instruction.
-#extension GL_EXT_shader_atomic_float : require
+// to the global row in fixed point (order-independent, so runs repeat bit for bit), all lanes
+// in one instruction. fixed_resolve.comp turns the rows into floats.
 #include "raster_common.glsl"
 #include "grad2d.glsl"
+#include "../common/fixed_sum.glsl"
 
-layout(std430, binding = 3) readonly buffer Rgba { vec4 rgba[]; };
 layout(std430, binding = 4) readonly buffer Depth { float depth_out[]; };
 layout(std430, binding = 5) readonly buffer PixelState { uvec2 pixel_state[]; };
 layout(std430, binding = 6) readonly buffer GradRgba { vec4 grad_rgba[]; };    // dL/dcolour, dL/dalpha
 layout(std430, binding = 7) readonly buffer GradDepth { float grad_depth[]; };
-layout(std430, binding = 8) buffer Grad2d { float grad2d[]; };                // GRAD2D_STRIDE per Gaussian
+layout(std430, binding = 8) buffer Grad2dSums { int64_t grad2d_sums[]; };       // GRAD2D_STRIDE sums per Gaussian
 
 // What a pixel's back-to-front walk knows: its loss gradients and its own compositing.
 struct PixelGrads {
@@ -109,9 +109,7 @@ void walk_chunk(uint chunk, uint steps, uvec2 range, uint walked, PixelGrads p, 
     if (start + gl_SubgroupInvocationID < end) {
         uint id = floatBitsToUint(mine.conic_id.w);
         for (uint k = 0u; k < GRAD2D_STRIDE; k++) {
-            if (sums[k] != 0.0) {
-                atomicAdd(grad2d[id * GRAD2D_STRIDE + k], sums[k]);
-            }
+            FIXED_ADD(grad2d_sums, id * GRAD2D_STRIDE + k, sums[k]);
         }
     }
 }

@@ -6,7 +6,8 @@
 
 use crate::camera::Camera;
 use crate::gpu::{
-    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder,
+    push_layout, ComputePipeline, FixedResolve, FixedSums, GpuBuffer, GpuContext, GpuResult,
+    PipelineDesc, Recorder,
 };
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
@@ -39,7 +40,10 @@ pub struct CoverageTerm {
     pull: ComputePipeline,
     projected: GpuBuffer<[f32; 2]>,
     seeds: GpuBuffer<u32>,
-    losses: GpuBuffer<f32>,
+    /// The gradient (3 per vertex) and the loss as order-independent sums.
+    grad_position_sums: FixedSums,
+    resolve: FixedResolve,
+    loss_sum: FixedSums,
     radius: u32,
 }
 
@@ -59,7 +63,9 @@ impl CoverageTerm {
             pull: pipeline("coverage pull", &shaders::LOSS_COVERAGE_PULL)?,
             projected: GpuBuffer::new(ctx, "coverage projected vertices", vertices)?,
             seeds: GpuBuffer::new(ctx, "coverage seeds", pixels)?,
-            losses: GpuBuffer::from_slice(ctx, "coverage loss", &[0.0])?,
+            grad_position_sums: FixedSums::new(ctx, "coverage gradient sums", 3 * vertices)?,
+            resolve: FixedResolve::new(ctx)?,
+            loss_sum: FixedSums::new(ctx, "coverage loss", 1)?,
             radius,
         })
     }
@@ -83,9 +89,11 @@ impl CoverageTerm {
         if weight == 0.0 || vertices == 0 || pixels == 0 {
             return Ok(());
         }
-        // Both buffers were sized at construction; a larger mesh or view would overrun them.
+        // The buffers were sized at construction; a larger mesh or view would overrun them.
         for (name, len, capacity) in [
             (self.projected.name(), vertices, self.projected.len()),
+            (self.grad_position_sums.name(), 3 * vertices, self.grad_position_sums.len()),
+            (grad_positions.name(), 3 * vertices, grad_positions.len()),
             (self.seeds.name(), pixels, self.seeds.len().min(target.len()).min(render.len())),
         ] {
             if len > capacity {
@@ -124,14 +132,15 @@ impl CoverageTerm {
             ("seeds", self.seeds.binding()),
             ("target", target.binding()),
             ("render", render.binding()),
-            ("grad_positions", grad_positions.binding()),
-            ("losses", self.losses.binding()),
+            ("grad_position_sums", self.grad_position_sums.binding()),
+            ("loss_sum", self.loss_sum.binding()),
         ];
-        rec.dispatch_1d(&self.pull, &pull, &push, (pixels as u64).div_ceil(WORKGROUP as u64))
+        rec.dispatch_1d(&self.pull, &pull, &push, (pixels as u64).div_ceil(WORKGROUP as u64))?;
+        self.resolve.record(rec, &self.grad_position_sums, grad_positions, 3 * vertices)
     }
 
     /// The weighted loss summed since the last call (which restarts the sum).
     pub fn take_loss(&self) -> GpuResult<f32> {
-        Ok(self.losses.take()?[0])
+        Ok(self.loss_sum.take()?[0] as f32)
     }
 }

@@ -15,7 +15,8 @@ pub use distance::mask_distance;
 
 use crate::camera::Camera;
 use crate::gpu::{
-    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuResult, PipelineDesc, Recorder,
+    push_layout, ComputePipeline, FixedSums, GpuBuffer, GpuContext, GpuResult, PipelineDesc,
+    Recorder,
 };
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
@@ -65,7 +66,7 @@ pub struct SilhouetteTerm {
     pipeline: ComputePipeline,
     views: GpuBuffer<GpuView>,
     fields: GpuBuffer<f32>,
-    losses: GpuBuffer<f32>,
+    loss_sum: FixedSums,
     view_count: usize,
     with_mask: usize,
     without_mask: Vec<usize>,
@@ -104,7 +105,7 @@ impl SilhouetteTerm {
             )?,
             views: GpuBuffer::from_slice(ctx, "silhouette views", &gpu_views)?,
             fields: GpuBuffer::from_slice(ctx, "silhouette distance fields", &fields)?,
-            losses: GpuBuffer::from_slice(ctx, "silhouette loss", &[0.0])?,
+            loss_sum: FixedSums::new(ctx, "silhouette loss", 1)?,
             view_count: views.len(),
             with_mask: views.len() - without_mask.len(),
             without_mask,
@@ -142,7 +143,7 @@ impl SilhouetteTerm {
             ("views", self.views.binding()),
             ("fields", self.fields.binding()),
             ("grad_positions", grad_positions.binding()),
-            ("losses", self.losses.binding()),
+            ("loss_sum", self.loss_sum.binding()),
         ];
         rec.dispatch_1d(
             &self.pipeline,
@@ -154,6 +155,6 @@ impl SilhouetteTerm {
 
     /// The weighted loss summed since the last call (which restarts the sum).
     pub fn take_loss(&self) -> GpuResult<f32> {
-        Ok(self.losses.take()?[0])
+        Ok(self.loss_sum.take()?[0] as f32)
     }
 }

@@ -311,6 +311,11 @@ fn canonical_start(
         })?;
     write_frame(out, 0, &mesh, &scene)?;
     report.frames.push(frame_report);
+    // Later frames start from the topology as written, exactly as a resumed run reads it back
+    // (after densification the in-memory mesh orders its 1-rings differently, and the
+    // regularizers sum in that order), so resuming gives the same bits as running through.
+    let mesh = ManifoldMesh::new(scene.positions.clone(), mesh.live_faces())
+        .map_err(|e| TopologyError::InFile { path: out.mesh_path(0), source: Box::new(e) })?;
     Ok((mesh, scene))
 }
 
