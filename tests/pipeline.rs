@@ -226,6 +226,8 @@ fn a_non_finite_frame_stops_the_run_and_keeps_finished_frames() {
     assert!(matches!(error, TrainError::NonFinite { frame: Some(1), .. }), "{error:?}");
     let error = error.to_string();
     assert!(error.contains("frame 1") && error.contains("non-finite"), "{error}");
+    // The one policy of the shared loop (train/optimize.rs), as `fit` reports it.
+    assert!(error.contains("non-finite parameters:"), "{error}");
     assert!(out.join("meshes/000000.ply").is_file() && !out.join("meshes/000001.ply").exists());
     let log = std::fs::read_to_string(out.join("run.log")).unwrap();
     let last = log.lines().last().unwrap();

@@ -95,6 +95,7 @@ fn a_non_finite_loss_stops_and_keeps_the_last_good_gaussians() {
         fit(g.ctx(), &train, &held_out, true, initial.clone(), &config, &mut |_| {}).unwrap();
     let stopped = outcome.report.stopped.as_deref().expect("the run stops");
     assert!(stopped.contains("non-finite between iterations 1 and 25"), "{stopped}");
+    assert!(stopped.contains("non-finite parameters:"), "{stopped}");
     assert_eq!(outcome.report.iterations, 25);
     assert_eq!(outcome.scene, initial, "no finite check passed, so the initial Gaussians are kept");
     let _ = std::fs::remove_dir_all(&dir);

@@ -1,18 +1,20 @@
-//! The single-frame fit loop.
+//! `tagsplat fit`: plain 3DGS on one frame, the splatting loss alone with 3DGS densification,
+//! run by the loop every stage shares (optimize.rs).
 
 use super::config::{FitConfig, LearningRateConfig};
 use super::densify::{densify_and_prune, DensifyRules};
+use super::optimize::{optimize, Schedule, Stage};
+use super::plateau::Plateau;
 use super::report::{CurvePoint, DensifyEvent, FitReport};
-use super::schedule::{channel_weights, sh_degree_at, DensifyWindow, ViewCycle};
+use super::schedule::{channel_weights, DensifyWindow};
 use super::step::Trainer;
 use super::views::ViewTarget;
 use super::TrainError;
 use crate::camera::Camera;
 use crate::eval::{psnr, ssim};
-use crate::gpu::{GpuContext, PassTimes};
+use crate::gpu::{GpuContext, PassTimes, Recorder};
 use crate::io::image::Image;
-use crate::loss::LossTerms;
-use crate::optim::{exponential_decay, AdamParams, LearningRates};
+use crate::optim::{exponential_decay, LearningRates};
 use crate::rng::SplitMix64;
 use crate::splat::{GaussianScene, RenderSettings};
 use std::collections::BTreeMap;
@@ -73,78 +75,40 @@ pub fn fit(
         &RenderSettings { sh_degree: config.sh_degree, ..settings },
         false,
     )?;
-    let lambda = channel_weights(config.loss.color, config.loss.mask);
+    let d = &config.densify;
+    let schedule = Schedule {
+        iterations: config.iterations,
+        sh_ramp: Some((config.sh_degree, config.sh_increase_every)),
+        densify: d.enabled.then_some(DensifyWindow {
+            from: d.from,
+            until: d.until,
+            every: d.every,
+        }),
+        splat_weights: channel_weights(config.loss.color, config.loss.mask),
+    };
+    let stats_every = config.report.stats_every as usize;
+    let plateau = Plateau::new(config.iterations, config.iterations, stats_every, 0.0);
+    let mut stage = FitStage {
+        config,
+        extent,
+        eval,
+        densify_camera: train[0].camera,
+        last_loss: None,
+        loss_log: Vec::new(),
+        curve: Vec::new(),
+        densify_log: Vec::new(),
+        progress,
+    };
     let mut rng = SplitMix64::new(config.seed);
-    let mut views = ViewCycle::default();
-    let mut passes: BTreeMap<String, f64> = BTreeMap::new();
-    let (mut train_s, mut loss_log, mut curve, mut densify_log) =
-        (0.0, Vec::new(), Vec::new(), Vec::new());
-    let (mut last_loss, mut stopped, mut interval_start, mut done, mut truncated_steps) =
-        (None, None, 1, 0, 0);
-    for it in 1..=config.iterations {
-        let step_start = Instant::now();
-        let view = views.next(train.len(), &mut rng);
-        settings.sh_degree = sh_degree_at(config.sh_degree, config.sh_increase_every, it);
-        let adam = AdamParams::new(
-            &learning_rates(&config.learning_rates, extent, it, config.iterations),
-            it,
-            trainer.gaussians(),
-            trainer.sh_degree(),
-        );
-        let (times, complete) = trainer.step(view, &settings, lambda, &adam)?;
-        add_times(&mut passes, &times);
-        truncated_steps += (!complete) as u32;
-        train_s += step_start.elapsed().as_secs_f64();
-        done = it;
-
-        if it % config.report.stats_every == 0 || it == config.iterations {
-            let terms = trainer.take_terms()?;
-            let mean = terms.total(lambda) / (it - interval_start + 1) as f32;
-            if !mean.is_finite() {
-                stopped = Some(non_finite_message(&trainer.scene()?, interval_start, it, &terms));
-                break;
-            }
-            trainer.checkpoint()?;
-            (last_loss, interval_start) = (Some(mean), it + 1);
-            loss_log.push((it, mean));
-        }
-        let d = &config.densify;
-        let window = DensifyWindow { from: d.from, until: d.until, every: d.every };
-        if d.enabled && window.due(it, config.iterations) {
-            let t = Instant::now();
-            densify_log.push(densify(
-                &mut trainer,
-                config,
-                extent,
-                &train[0].camera,
-                it,
-                &mut rng,
-            )?);
-            train_s += t.elapsed().as_secs_f64();
-        }
-        if it % config.report.eval_every == 0 || it == config.iterations {
-            let (psnr, ssim, _) = evaluate(&mut trainer, eval, &settings, false)?;
-            curve.push(CurvePoint {
-                iteration: it,
-                wall_s: train_s,
-                psnr,
-                ssim,
-                gaussians: trainer.gaussians(),
-            });
-        }
-        progress(Progress {
-            iteration: it,
-            iterations: config.iterations,
-            loss: last_loss,
-            gaussians: trainer.gaussians(),
-        });
-    }
-
+    let run = optimize(&mut trainer, &mut stage, &schedule, plateau, &mut settings, &mut rng)?;
+    let stopped = run.non_finite.map(|detail| {
+        format!("{detail}; the Gaussians of iteration {} are kept", run.checkpoint_iteration)
+    });
+    let FitStage { loss_log, curve, densify_log, .. } = stage;
+    let (done, train_s, passes, truncated_steps) =
+        (run.iterations, run.train_s, run.passes_ms, run.truncated_steps);
     let (psnr, ssim, renders) = evaluate(&mut trainer, eval, &settings, stopped.is_some())?;
     let scene = if stopped.is_some() { trainer.last_good_scene()? } else { trainer.scene()? };
-    for ms in passes.values_mut() {
-        *ms /= done.max(1) as f64;
-    }
     let report = FitReport {
         device: ctx.info().name.clone(),
         frame: 0, // the caller knows which frame its views show
@@ -166,6 +130,83 @@ pub fn fit(
     };
     let names = eval.iter().map(|v| v.name.clone());
     Ok(FitOutcome { scene, report, renders: names.zip(renders).collect() })
+}
+
+/// `fit`'s part of the loop: the splatting loss alone, 3DGS densification, an evaluation curve.
+struct FitStage<'a> {
+    config: &'a FitConfig,
+    extent: f64,
+    eval: &'a [ViewTarget],
+    densify_camera: Camera,
+    last_loss: Option<f32>,
+    loss_log: Vec<(u32, f32)>,
+    curve: Vec<CurvePoint>,
+    densify_log: Vec<DensifyEvent>,
+    progress: &'a mut dyn FnMut(Progress),
+}
+
+impl Stage for FitStage<'_> {
+    fn rates(&self, it: u32, iterations: u32) -> LearningRates {
+        learning_rates(&self.config.learning_rates, self.extent, it, iterations)
+    }
+
+    fn record_terms<'a>(
+        &'a self,
+        _trainer: &'a Trainer,
+        _rec: &mut Recorder<'a>,
+        _view: usize,
+    ) -> Result<(), TrainError> {
+        Ok(())
+    }
+
+    fn read_losses(
+        &mut self,
+        trainer: &Trainer,
+        first: u32,
+        last: u32,
+    ) -> Result<Result<f64, String>, TrainError> {
+        let terms = trainer.take_terms()?;
+        let weights = channel_weights(self.config.loss.color, self.config.loss.mask);
+        let mean = terms.total(weights) / (last - first + 1) as f32;
+        if !mean.is_finite() {
+            return Ok(Err(format!("L1 terms {:?}, SSIM terms {:?}", terms.l1, terms.dssim)));
+        }
+        self.last_loss = Some(mean);
+        self.loss_log.push((last, mean));
+        Ok(Ok(mean as f64))
+    }
+
+    fn densify(
+        &mut self,
+        trainer: &mut Trainer,
+        it: u32,
+        rng: &mut SplitMix64,
+    ) -> Result<(), TrainError> {
+        let event = densify(trainer, self.config, self.extent, &self.densify_camera, it, rng)?;
+        self.densify_log.push(event);
+        Ok(())
+    }
+
+    fn iteration_done(
+        &mut self,
+        trainer: &mut Trainer,
+        settings: &RenderSettings,
+        (it, iterations): (u32, u32),
+        train_s: f64,
+    ) -> Result<(), TrainError> {
+        if it % self.config.report.eval_every == 0 || it == iterations {
+            let (psnr, ssim, _) = evaluate(trainer, self.eval, settings, false)?;
+            let gaussians = trainer.gaussians();
+            self.curve.push(CurvePoint { iteration: it, wall_s: train_s, psnr, ssim, gaussians });
+        }
+        (self.progress)(Progress {
+            iteration: it,
+            iterations,
+            loss: self.last_loss,
+            gaussians: trainer.gaussians(),
+        });
+        Ok(())
+    }
 }
 
 /// One 3DGS densification step on the trainer's Gaussians.
@@ -256,25 +297,4 @@ pub(crate) fn add_times(total: &mut BTreeMap<String, f64>, times: &PassTimes) {
     for pass in times.passes.iter().filter(|p| p.depth == 0) {
         *total.entry(pass.name.clone()).or_default() += pass.ms;
     }
-}
-
-/// Names the iterations and what went non-finite: the loss terms, and any parameter group.
-fn non_finite_message(scene: &GaussianScene, first: u32, last: u32, terms: &LossTerms) -> String {
-    let bad = |values: &mut dyn Iterator<Item = f32>| values.filter(|v| !v.is_finite()).count();
-    let groups = [
-        ("positions", bad(&mut scene.positions.iter().flatten().copied())),
-        ("log-scales", bad(&mut scene.log_scales.iter().flatten().copied())),
-        ("rotations", bad(&mut scene.rotations.iter().flatten().copied())),
-        ("opacity logits", bad(&mut scene.opacity_logits.iter().copied())),
-        ("SH", bad(&mut scene.sh.iter().copied())),
-    ];
-    let params: Vec<String> =
-        groups.iter().filter(|(_, n)| *n > 0).map(|(g, n)| format!("{n} {g} values")).collect();
-    let which = if params.is_empty() { "no parameter yet".to_string() } else { params.join(", ") };
-    format!(
-        "the loss went non-finite between iterations {first} and {last} (L1 terms {:?}, SSIM terms {:?}; non-finite parameters: {which}); the Gaussians of iteration {} are kept",
-        terms.l1,
-        terms.dssim,
-        first - 1
-    )
 }

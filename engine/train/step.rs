@@ -98,6 +98,16 @@ impl Trainer {
         Ok(())
     }
 
+    /// The number of training views.
+    pub fn views(&self) -> usize {
+        self.cameras.len()
+    }
+
+    /// The GPU context it runs on.
+    pub fn context(&self) -> &Arc<GpuContext> {
+        &self.ctx
+    }
+
     /// The number of Gaussians.
     pub fn gaussians(&self) -> usize {
         self.state.params.len()

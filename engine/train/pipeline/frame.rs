@@ -5,20 +5,22 @@
 
 use super::config::TrainConfig;
 use super::graph_stage::{solve_graph, GraphInput, GraphReport, ImageWeights};
-use super::plateau::{Plateau, StopReason};
+use crate::camera::Camera;
 use crate::eval::psnr;
 use crate::gpu::{GpuContext, Recorder};
 use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm, SilhouetteView};
-use crate::optim::{AdamParams, LearningRates};
+use crate::optim::LearningRates;
 use crate::regularize::{Losses, Neighbourhoods, Regularizers, Temporal};
 use crate::rng::SplitMix64;
 use crate::splat::{GaussianBuffers, GaussianScene, RenderSettings};
 use crate::topology::{
     compose, densify, face_scores, prune, DensifyConfig, ManifoldMesh, PruneConfig,
 };
-use crate::train::fit::{self, add_times, learning_rates, scene_extent};
+use crate::train::fit::{self, learning_rates, scene_extent};
 use crate::train::mesh_term::MeshTerm;
-use crate::train::schedule::{channel_weights, sh_degree_at, DensifyWindow, ViewCycle};
+use crate::train::optimize::{optimize, Schedule, Stage};
+use crate::train::plateau::{Plateau, StopReason};
+use crate::train::schedule::{channel_weights, DensifyWindow};
 use crate::train::{TrainError, Trainer, ViewTarget};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -154,7 +156,7 @@ pub fn optimize_frame(
 
     let mut trainer = Trainer::new(ctx, &start, task.train)?;
     task.mesh.positions = start.positions.clone();
-    let mut mesh_term = MeshTerm::new(
+    let mesh_term = MeshTerm::new(
         ctx,
         &start.positions,
         &task.mesh.live_faces(),
@@ -174,155 +176,179 @@ pub fn optimize_frame(
     } else {
         Some(CoverageTerm::new(ctx, start.len(), pixels, t.coverage_radius)?)
     };
-
+    let c = &config.canonical;
+    let schedule = Schedule {
+        iterations,
+        sh_ramp: canonical.then_some((config.sh_degree, config.sh_increase_every)),
+        densify: canonical.then_some(DensifyWindow {
+            from: c.densify_from,
+            until: c.densify_until,
+            every: c.densify_every,
+        }),
+        splat_weights: weights.gaussians,
+    };
     // Frame 0 runs all its iterations (min = max), reading the losses every `stats_every`.
-    let mut plateau = if canonical {
+    let plateau = if canonical {
         Plateau::new(iterations, iterations, config.report.stats_every as usize, 0.0)
     } else {
         Plateau::new(t.min_iterations, iterations, task.train.len(), t.tolerance)
     };
-    let (mut views, mut passes) = (ViewCycle::default(), BTreeMap::new());
-    let (mut interval_start, mut done) = (1, 0);
-    for it in 1..=iterations {
-        let t0 = Instant::now();
-        let view = views.next(task.train.len(), &mut rng);
-        if canonical {
-            settings.sh_degree = sh_degree_at(config.sh_degree, config.sh_increase_every, it);
-        }
-        let rates = frame_rates(config, extent, it, iterations, canonical);
-        let adam = AdamParams::new(&rates, it, trainer.gaussians(), trainer.sh_degree());
-        let frame = trainer.prepare_step(view, &settings)?;
-        let mut rec = Recorder::new(ctx)?;
-        trainer.record_splat(&mut rec, view, &frame, weights.gaussians)?;
-        mesh_term.record(
-            &mut rec,
-            trainer.params(),
-            trainer.grads(),
-            trainer.camera(view),
-            trainer.target(view),
-            weights.mesh,
-            bg,
-        )?;
-        rec.begin_pass("regularizers");
-        regs.record(
-            &mut rec,
-            trainer.params(),
-            trainer.grads(),
-            &w.regularizers(trainer.gaussians()),
-            reference.as_ref().map(Temporal::of),
-        )?;
-        if let Some(s) = &silhouette {
-            s.record(
-                &mut rec,
-                &trainer.params().positions,
-                &trainer.grads().positions,
-                t.silhouette,
-                settings.near,
-            )?;
-        }
-        if let Some(c) = &coverage {
-            c.record(
-                &mut rec,
-                trainer.camera(view),
-                (trainer.target(view), trainer.rendered()),
-                &trainer.params().positions,
-                &trainer.grads().positions,
-                t.coverage,
-                settings.near,
-            )?;
-        }
-        rec.end_pass();
-        trainer.record_adam(&mut rec, &adam)?;
-        add_times(&mut passes, &rec.submit_and_wait()?);
-        report.truncated_steps += (!trainer.finish_step(frame)?) as u32;
-        train_s += t0.elapsed().as_secs_f64();
-
-        let pass_loss = if plateau.pass_ends(it) {
-            let silhouettes = (silhouette.as_ref(), coverage.as_ref());
-            let mean = read_losses(
-                &trainer,
-                &mesh_term,
-                &regs,
-                silhouettes,
-                weights,
-                (interval_start, it),
-                &mut report,
-            )?;
-            interval_start = it + 1;
-            Some(mean)
-        } else {
-            None
-        };
-        let c = &config.canonical;
-        let window =
-            DensifyWindow { from: c.densify_from, until: c.densify_until, every: c.densify_every };
-        if canonical && window.due(it, iterations) {
-            let t0 = Instant::now();
-            let budget = if c.budget > 0 { c.budget as usize } else { covered_pixels(task.train) };
-            report.topology_steps.push(topology_step(
-                &mut trainer,
-                (&mut mesh_term, &mut regs),
-                task.mesh,
-                config,
-                (&first.camera, budget),
-                it,
-            )?);
-            train_s += t0.elapsed().as_secs_f64();
-        }
-        progress(it, iterations);
-        done = it;
-        if let Some(reason) = plateau.check(it, pass_loss) {
-            report.stop_reason = reason;
-            break;
-        }
+    let budget = if c.budget > 0 { c.budget as usize } else { covered_pixels(task.train) };
+    let mut stage = FrameStage {
+        config,
+        extent,
+        near: settings.near,
+        canonical,
+        weights,
+        terms: FrameTerms { mesh_term, regs, reference, silhouette, coverage },
+        mesh: task.mesh,
+        densify_camera: (first.camera, budget),
+        report: &mut report,
+        progress,
+    };
+    let run = optimize(&mut trainer, &mut stage, &schedule, plateau, &mut settings, &mut rng)?;
+    if let Some(detail) = run.non_finite {
+        let detail = format!("{detail}; the finished frames are kept");
+        return Err(TrainError::NonFinite { frame: Some(task.frame), detail });
     }
-    for ms in passes.values_mut() {
-        *ms /= done.max(1) as f64;
-    }
+    let FrameStage { terms, mesh, .. } = stage;
     let scene = trainer.scene()?;
-    task.mesh.positions = scene.positions.clone();
+    mesh.positions = scene.positions.clone();
+    report.stop_reason = run.stop_reason;
+    report.truncated_steps = run.truncated_steps;
     (report.iterations, report.wall_s, report.gaussians, report.passes_ms) =
-        (done, train_s, scene.len(), passes);
+        (run.iterations, train_s + run.train_s, scene.len(), run.passes_ms);
     (report.psnr_gs, report.ssim_gs, report.psnr_mesh) =
-        evaluate(&mut trainer, &mesh_term, task.eval, &settings)?;
+        evaluate(&mut trainer, &terms.mesh_term, task.eval, &settings)?;
     Ok((scene, report))
 }
 
+/// The terms a frame adds to the splatting loss, on the GPU.
+struct FrameTerms {
+    mesh_term: MeshTerm,
+    regs: Regularizers,
+    /// The pose the temporal regularizers compare against (later frames).
+    reference: Option<GaussianBuffers>,
+    silhouette: Option<SilhouetteTerm>,
+    coverage: Option<CoverageTerm>,
+}
+
+/// A frame's part of the loop: the mesh, regularizer, silhouette and coverage terms, frame 0's
+/// densification through the topology, and the report's losses.
+struct FrameStage<'a, 'm> {
+    config: &'a TrainConfig,
+    extent: f64,
+    /// The render settings' near plane, which the silhouette and coverage terms share.
+    near: f32,
+    canonical: bool,
+    weights: ImageWeights,
+    terms: FrameTerms,
+    mesh: &'m mut ManifoldMesh,
+    /// The camera whose size turns the densification statistic into NDC units, and the most
+    /// Gaussians densification may reach.
+    densify_camera: (Camera, usize),
+    report: &'a mut FrameReport,
+    progress: &'a mut dyn FnMut(u32, u32),
+}
+
+impl Stage for FrameStage<'_, '_> {
+    fn rates(&self, it: u32, iterations: u32) -> LearningRates {
+        frame_rates(self.config, self.extent, it, iterations, self.canonical)
+    }
+
+    fn record_terms<'a>(
+        &'a self,
+        trainer: &'a Trainer,
+        rec: &mut Recorder<'a>,
+        view: usize,
+    ) -> Result<(), TrainError> {
+        let (terms, config) = (&self.terms, self.config);
+        let (camera, target) = (trainer.camera(view), trainer.target(view));
+        let (params, grads) = (trainer.params(), trainer.grads());
+        let bg = config.background;
+        terms.mesh_term.record(rec, params, grads, camera, target, self.weights.mesh, bg)?;
+        rec.begin_pass("regularizers");
+        let regularizers = config.loss.regularizers(trainer.gaussians());
+        let reference = terms.reference.as_ref().map(Temporal::of);
+        terms.regs.record(rec, params, grads, &regularizers, reference)?;
+        let (t, near) = (&config.temporal, self.near);
+        if let Some(s) = &terms.silhouette {
+            s.record(rec, &params.positions, &grads.positions, t.silhouette, near)?;
+        }
+        if let Some(c) = &terms.coverage {
+            let images = (target, trainer.rendered());
+            c.record(rec, camera, images, &params.positions, &grads.positions, t.coverage, near)?;
+        }
+        rec.end_pass();
+        Ok(())
+    }
+
+    fn read_losses(
+        &mut self,
+        trainer: &Trainer,
+        first: u32,
+        last: u32,
+    ) -> Result<Result<f64, String>, TrainError> {
+        read_losses(trainer, &self.terms, self.weights, (first, last), self.report)
+    }
+
+    fn densify(
+        &mut self,
+        trainer: &mut Trainer,
+        it: u32,
+        _rng: &mut SplitMix64,
+    ) -> Result<(), TrainError> {
+        let terms = (&mut self.terms.mesh_term, &mut self.terms.regs);
+        let (camera, budget) = self.densify_camera;
+        let step = topology_step(trainer, terms, self.mesh, self.config, (&camera, budget), it)?;
+        self.report.topology_steps.push(step);
+        Ok(())
+    }
+
+    fn iteration_done(
+        &mut self,
+        _trainer: &mut Trainer,
+        _settings: &RenderSettings,
+        (it, iterations): (u32, u32),
+        _train_s: f64,
+    ) -> Result<(), TrainError> {
+        (self.progress)(it, iterations);
+        Ok(())
+    }
+}
+
 /// Reads back the losses summed over iterations `first..=last` into the report (mean weighted
-/// image terms, silhouette and coverage, unweighted regularizers) and returns their weighted mean total;
-/// a non-finite value is an error naming the frame, the iterations and the terms.
+/// image terms, silhouette and coverage, unweighted regularizers) and returns their weighted
+/// mean total, or the terms when one is not finite.
 fn read_losses(
     trainer: &Trainer,
-    mesh_term: &MeshTerm,
-    regs: &Regularizers,
-    (silhouette, coverage): (Option<&SilhouetteTerm>, Option<&CoverageTerm>),
+    terms: &FrameTerms,
     weights: ImageWeights,
     (first, last): (u32, u32),
     report: &mut FrameReport,
-) -> Result<f64, TrainError> {
+) -> Result<Result<f64, String>, TrainError> {
     let steps = (last - first + 1) as f32;
     let (gs, mesh) = (
         trainer.take_terms()?.total(weights.gaussians) / steps,
-        mesh_term.take_terms()?.total(weights.mesh) / steps,
+        terms.mesh_term.take_terms()?.total(weights.mesh) / steps,
     );
-    let sil = (silhouette.map(|s| s.take_loss()).transpose()?.unwrap_or(0.0)
-        + coverage.map(|c| c.take_loss()).transpose()?.unwrap_or(0.0))
+    let sil = (terms.silhouette.as_ref().map(|s| s.take_loss()).transpose()?.unwrap_or(0.0)
+        + terms.coverage.as_ref().map(|c| c.take_loss()).transpose()?.unwrap_or(0.0))
         / steps;
-    let regularizers: Losses<f32> = regs.read_losses()?;
+    let regularizers: Losses<f32> = terms.regs.read_losses()?;
     if !(gs.is_finite()
         && mesh.is_finite()
         && sil.is_finite()
         && regularizers.slots().iter().all(|v| v.is_finite()))
     {
-        let detail = format!(
-            "the loss went non-finite between iterations {first} and {last} (Gaussian {gs}, mesh {mesh}, silhouette {sil}, regularizers {:?}); the finished frames are kept",
-            regularizers.slots()
-        );
-        return Err(TrainError::NonFinite { frame: Some(report.frame), detail });
+        let slots = regularizers.slots();
+        return Ok(Err(format!(
+            "Gaussian {gs}, mesh {mesh}, silhouette {sil}, regularizers {slots:?}"
+        )));
     }
     (report.loss_gs, report.loss_mesh, report.loss_silhouette, report.regularizers) =
         (gs, mesh, sil, regularizers.slots());
-    Ok((gs + mesh + sil) as f64)
+    Ok(Ok((gs + mesh + sil) as f64))
 }
 
 impl FrameReport {
@@ -381,7 +407,7 @@ fn topology_step(
     (mesh_term, regs): (&mut MeshTerm, &mut Regularizers),
     mesh: &mut ManifoldMesh,
     config: &TrainConfig,
-    (camera, budget): (&crate::camera::Camera, usize),
+    (camera, budget): (&Camera, usize),
     it: u32,
 ) -> Result<(u32, usize, usize, usize), TrainError> {
     let c = &config.canonical;

@@ -5,7 +5,6 @@
 //! every level stops at its plateau.
 
 use super::config::{ReferencePose, TrainConfig};
-use super::plateau::{Plateau, StopReason};
 use crate::deform::{build_graph, fit_nodes, GraphDeformer};
 use crate::gpu::{GpuContext, Recorder};
 use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm};
@@ -14,6 +13,7 @@ use crate::regularize::Neighbourhoods;
 use crate::rng::SplitMix64;
 use crate::splat::{GaussianScene, RenderSettings};
 use crate::train::mesh_term::MeshTerm;
+use crate::train::plateau::{Plateau, StopReason};
 use crate::train::schedule::ViewCycle;
 use crate::train::{TrainError, Trainer, ViewTarget};
 use std::sync::Arc;

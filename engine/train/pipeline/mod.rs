@@ -8,13 +8,12 @@ pub mod config;
 mod frame;
 mod graph_stage;
 mod html_report;
-mod plateau;
 mod run;
 mod run_log;
 
+pub use crate::train::plateau::StopReason;
 pub use config::{ReferencePose, TrainConfig};
 pub use frame::{optimize_frame, FrameReport, FrameTask};
 pub use graph_stage::{GraphReport, LevelReport};
 pub use html_report::write_html_report;
-pub use plateau::StopReason;
 pub use run::{run_train, TrainJob, TrainProgress, TrainReport};
