@@ -662,3 +662,34 @@ fn read_depth_exr(path: &std::path::Path) -> Vec<f32> {
     assert_eq!(channels.len(), 1, "{}: one channel", path.display());
     channels[0].sample_data.values_as_f32().collect()
 }
+
+/// The walked-pair count `bench splat` measures the backward by. Gaussians that cover the whole
+/// 64² image, each contributing at every pixel but too faint to use up the transmittance: every
+/// pixel walks all of them, so there are 256 pairs per (tile, Gaussian) intersection and 40 × 16
+/// intersections. Opaque ones stop each pixel early: fewer pairs.
+#[test]
+fn walked_pairs_count_each_pixel_of_each_intersection() {
+    let g = common::gpu();
+    let ctx = g.ctx();
+    let camera = front_camera(64, 64);
+    let settings = RenderSettings::default();
+    for (opacity_logit, faint) in [(-3.0, true), (4.0, false)] {
+        let mut scene = random_scene(40, 0, 3);
+        scene.opacity_logits.iter_mut().for_each(|o| *o = opacity_logit);
+        scene.log_scales.iter_mut().for_each(|s| *s = [3f32.ln(); 3]);
+        let buffers = GaussianBuffers::from_scene(ctx, &scene).unwrap();
+        let mut splatter = Splatter::new(ctx).unwrap();
+        splatter.forward(&buffers, &camera, &settings).unwrap();
+        let (pairs, intersections) =
+            (splatter.walked_pairs().unwrap(), splatter.intersections().unwrap() as u64);
+        assert_eq!(intersections, 40 * 16, "every Gaussian covers every tile");
+        if faint {
+            assert_eq!(pairs, 256 * intersections, "faint Gaussians: every pixel walks all");
+        } else {
+            assert!(
+                pairs < 256 * intersections / 4,
+                "{pairs} pairs, {intersections} intersections"
+            );
+        }
+    }
+}

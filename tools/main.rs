@@ -429,6 +429,20 @@ fn print_splat_report(r: &SplatBenchReport) {
         r.fwd_bwd_per_s
     );
     println!("intersections       {:.0} per view", r.intersections_per_view);
+    println!(
+        "walked pairs        {:.0} pixel-Gaussian pairs per view ({:.1} per pixel)",
+        r.walked_pairs_per_view,
+        r.walked_pairs_per_view / (c.resolution as f64).powi(2)
+    );
+    println!("copy bandwidth      {:.2} GB/s compute kernel", r.copy.compute_bytes_per_s * 1e-9);
+    println!(
+        "rasterize backward  {:.2} MB per view: {:.3} ms bound at copy bandwidth; measured {:.1}x \
+         the bound, {:.2} ns per walked pair",
+        r.backward_bytes_per_view * 1e-6,
+        r.backward_bound_ms,
+        r.backward_over_bound,
+        r.backward_ns_per_pair
+    );
     println!("GPU passes (median ms per view):");
     for (name, ms) in &r.passes_ms {
         println!("  {name:<20}{ms:.2}");

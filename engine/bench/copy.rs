@@ -99,3 +99,13 @@ impl CopyProbe {
         }
     }
 }
+
+/// Compute and transfer copy bandwidth of `bytes`, the fastest of four copies in one submission.
+pub fn measure_copy(ctx: &Arc<GpuContext>, bytes: u64) -> GpuResult<CopyBandwidth> {
+    let probe = CopyProbe::new(ctx, bytes)?;
+    let mut rec = Recorder::new(ctx)?;
+    for _ in 0..4 {
+        probe.record(&mut rec)?;
+    }
+    Ok(probe.bandwidth(&rec.submit_and_wait()?))
+}

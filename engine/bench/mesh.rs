@@ -3,7 +3,7 @@
 //! the GPU time of every pass, and the per-pixel passes against the copy bandwidth measured in
 //! the same run.
 
-use super::copy::{CopyBandwidth, CopyProbe};
+use super::copy::{measure_copy, CopyBandwidth};
 use super::splat::ring_cameras;
 use crate::gpu::{GpuBuffer, GpuContext, PassTimes, Recorder};
 use crate::raster::{MeshRasterizer, RasterError, RasterMesh, RasterSettings};
@@ -167,16 +167,6 @@ pub fn bench_mesh(
         pixel_passes_bound_ms: bound_ms,
         pixel_passes_over_bound: if bound_ms > 0.0 { pixel_ms / bound_ms } else { 0.0 },
     })
-}
-
-/// Compute and transfer copy bandwidth of `bytes`, fastest of a few copies after a warm-up.
-fn measure_copy(ctx: &Arc<GpuContext>, bytes: u64) -> Result<CopyBandwidth, RasterError> {
-    let probe = CopyProbe::new(ctx, bytes)?;
-    let mut rec = Recorder::new(ctx)?;
-    for _ in 0..4 {
-        probe.record(&mut rec)?;
-    }
-    Ok(probe.bandwidth(&rec.submit_and_wait()?))
 }
 
 /// GPU ms per pass name, summed over the submissions of one view.

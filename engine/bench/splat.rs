@@ -1,12 +1,16 @@
 //! `tagsplat bench splat`: forward and backward of the splatting renderer on a deterministic
 //! scene (the issue's: 8 cameras on a ring, 256², 20 000 Gaussians in a unit ball, SH degree 3),
-//! wall time per view and the GPU time of every pass.
+//! wall time per view and the GPU time of every pass, and the rasterize backward against two
+//! measures of its work: the bytes it must move at the copy bandwidth of the same run, and the
+//! pixel–Gaussian pairs it walks.
 
+use super::copy::{measure_copy, CopyBandwidth};
 use crate::camera::Camera;
 use crate::gpu::{GpuBuffer, GpuContext, PassTimes, Recorder};
 use crate::rng::SplitMix64;
 use crate::splat::{
-    sh_coefficients, GaussianBuffers, GaussianScene, RenderSettings, SplatError, Splatter,
+    sh_coefficients, GaussianBuffers, GaussianScene, RenderSettings, Splat, SplatError, Splatter,
+    GRAD2D_STRIDE,
 };
 use glam::DVec3;
 use std::collections::BTreeMap;
@@ -54,7 +58,26 @@ pub struct SplatBenchReport {
     pub passes_ms: BTreeMap<String, f64>,
     /// Mean (tile, Gaussian) intersections per view.
     pub intersections_per_view: f64,
+    /// Mean pixel–Gaussian pairs per view: the Gaussians each pixel walks until its
+    /// transmittance runs out, summed over pixels (the backward walks them all again).
+    pub walked_pairs_per_view: f64,
+    /// Copy bandwidth measured after the timed views.
+    pub copy: CopyBandwidth,
+    /// The least bytes the rasterize backward moves per view: each pixel's loss gradients and
+    /// state (28 bytes), each intersection's id and projected Gaussian, each Gaussian's 2D
+    /// gradient row (float) once.
+    pub backward_bytes_per_view: f64,
+    /// Those bytes at the compute copy bandwidth (a copy of B bytes moves 2 B), ms.
+    pub backward_bound_ms: f64,
+    /// Median GPU ms of the rasterize backward over `backward_bound_ms` (0 when the bound is 0).
+    pub backward_over_bound: f64,
+    /// Median GPU ns of the rasterize backward per walked pair.
+    pub backward_ns_per_pair: f64,
 }
+
+/// Bytes of one pixel's inputs to the rasterize backward: dL/d(colour, alpha), dL/ddepth and
+/// the forward's (transmittance, walked) state.
+const BACKWARD_PIXEL_BYTES: f64 = 16.0 + 4.0 + 8.0;
 
 /// `n` Gaussians uniformly in the unit ball: scales around the mean spacing, random rotations,
 /// opacities and SH (DC broad, higher bands small). Deterministic for a seed.
@@ -180,8 +203,8 @@ pub fn bench_splat(
     )?;
     let mut splatter = Splatter::new(ctx)?;
     let settings = RenderSettings { sh_degree: config.sh_degree, ..Default::default() };
-    let (mut fwd, mut bwd, mut passes, mut intersections) =
-        (Vec::new(), Vec::new(), Vec::new(), 0usize);
+    let (mut fwd, mut bwd, mut passes, mut intersections, mut pairs) =
+        (Vec::new(), Vec::new(), Vec::new(), 0usize, 0u64);
     for round in 0..config.rounds.max(2) {
         for camera in &cameras {
             let start = Instant::now();
@@ -193,6 +216,7 @@ pub fn bench_splat(
                 bwd.push(middle.elapsed().as_secs_f64());
                 passes.push(top_level_ms(&[forward_times, backward_times]));
                 intersections += splatter.intersections()?;
+                pairs += splatter.walked_pairs()?;
             }
         }
     }
@@ -208,15 +232,33 @@ pub fn bench_splat(
         let samples = passes.iter().map(|p| p.get(&name).copied().unwrap_or(0.0)).collect();
         (name, super::median(samples))
     });
+    let passes_ms: BTreeMap<String, f64> = passes_ms.collect();
+    let views = timed_views.max(1) as f64;
+    let (intersections_per_view, walked_pairs_per_view) =
+        (intersections as f64 / views, pairs as f64 / views);
+    let pixels = (config.resolution as f64).powi(2);
+    let backward_bytes_per_view = BACKWARD_PIXEL_BYTES * pixels
+        + (4 + size_of::<Splat>()) as f64 * intersections_per_view
+        + (4 * GRAD2D_STRIDE * config.gaussians) as f64;
+    let copy = measure_copy(ctx, (backward_bytes_per_view as u64).max(1 << 20))?;
+    let backward_bound_ms = backward_bytes_per_view / (2.0 * copy.compute_bytes_per_s) * 1e3;
+    let backward_ms = passes_ms.get("rasterize backward").copied().unwrap_or(0.0);
+    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
     Ok(SplatBenchReport {
         device: ctx.info().name.clone(),
         config: *config,
         fwd_s,
         bwd_s,
         fwd_bwd_s,
-        fwd_bwd_per_s: if fwd_bwd_s > 0.0 { 1.0 / fwd_bwd_s } else { 0.0 },
-        passes_ms: passes_ms.collect(),
-        intersections_per_view: intersections as f64 / timed_views.max(1) as f64,
+        fwd_bwd_per_s: ratio(1.0, fwd_bwd_s),
+        passes_ms,
+        intersections_per_view,
+        walked_pairs_per_view,
+        copy,
+        backward_bytes_per_view,
+        backward_bound_ms,
+        backward_over_bound: ratio(backward_ms, backward_bound_ms),
+        backward_ns_per_pair: ratio(backward_ms * 1e6, walked_pairs_per_view),
     })
 }
 

@@ -343,6 +343,13 @@ impl Splatter {
         Ok(self.splats.read_prefix(self.frame()?.gaussians())?)
     }
 
+    /// The last forward's pixel–Gaussian pairs: summed over pixels, the Gaussians each walked
+    /// front to back until its transmittance ran out (what the backward walks again).
+    pub fn walked_pairs(&self) -> Result<u64, SplatError> {
+        let states = self.pixel_state.read_prefix(self.frame()?.pixels())?;
+        Ok(states.iter().map(|&[_, walked]| walked as u64).sum())
+    }
+
     /// The last forward's number of (tile, Gaussian) intersections.
     pub fn intersections(&self) -> Result<usize, SplatError> {
         self.frame()?;
