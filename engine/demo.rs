@@ -190,7 +190,7 @@ pub fn paper_ablations() -> Vec<Ablation> {
         Ablation { name: "full model", apply: |_| {} },
         Ablation {
             name: "w/o mesh loss",
-            apply: |c| (c.loss.mesh_color, c.loss.mesh_mask) = (0.0, 0.0),
+            apply: |c| (c.loss.mesh.color, c.loss.mesh.mask) = (0.0, 0.0),
         },
         Ablation { name: "w/o normal loss", apply: |c| c.loss.normal = 0.0 },
         Ablation { name: "w/o smoothness loss", apply: |c| c.loss.laplacian = 0.0 },

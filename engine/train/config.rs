@@ -31,7 +31,8 @@ pub struct FitConfig {
     pub report: ReportConfig,
 }
 
-/// λ of the image loss per target (0.8 L1 + 0.2 (1 − SSIM) each).
+/// λ of one render's image loss (0.8 L1 + 0.2 (1 − SSIM) each): `fit`'s Gaussian render, and
+/// each of `train`'s two renders (`loss.gaussians`, `loss.mesh`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LossWeights {
@@ -128,6 +129,14 @@ impl Default for FitConfig {
 impl Default for LossWeights {
     fn default() -> Self {
         Self { color: 1.0, mask: 3.0 }
+    }
+}
+
+impl LossWeights {
+    /// λ per rgba channel of the render ([`channel_weights`](super::schedule::channel_weights)).
+    #[inline]
+    pub fn channels(&self) -> [f32; 4] {
+        super::schedule::channel_weights(self.color, self.mask)
     }
 }
 

@@ -6,7 +6,7 @@ use super::densify::{densify_and_prune, DensifyRules};
 use super::optimize::{optimize, Schedule, Stage};
 use super::plateau::Plateau;
 use super::report::{CurvePoint, DensifyEvent, FitReport};
-use super::schedule::{channel_weights, DensifyWindow};
+use super::schedule::DensifyWindow;
 use super::step::Trainer;
 use super::views::ViewTarget;
 use super::TrainError;
@@ -84,7 +84,7 @@ pub fn fit(
             until: d.until,
             every: d.every,
         }),
-        splat_weights: channel_weights(config.loss.color, config.loss.mask),
+        splat_weights: config.loss.channels(),
     };
     let stats_every = config.report.stats_every as usize;
     let plateau = Plateau::new(config.iterations, config.iterations, stats_every, 0.0);
@@ -166,7 +166,7 @@ impl Stage for FitStage<'_> {
         last: u32,
     ) -> Result<Result<f64, String>, TrainError> {
         let terms = trainer.take_terms()?;
-        let weights = channel_weights(self.config.loss.color, self.config.loss.mask);
+        let weights = self.config.loss.channels();
         let mean = terms.total(weights) / (last - first + 1) as f32;
         if !mean.is_finite() {
             return Ok(Err(format!("L1 terms {:?}, SSIM terms {:?}", terms.l1, terms.dssim)));

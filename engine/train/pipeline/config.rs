@@ -3,6 +3,7 @@
 
 use crate::train::config::{
     check_appearance, check_ranges, load_toml, value_error, ConfigError, LearningRateConfig,
+    LossWeights,
 };
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -164,14 +165,11 @@ impl ReferencePose {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PipelineWeights {
-    /// Gaussian render's colour against the image (default 1).
-    pub gaussian_color: f32,
-    /// Gaussian render's alpha against the mask (default 3).
-    pub gaussian_mask: f32,
-    /// Mesh render's colour against the image (default 1).
-    pub mesh_color: f32,
-    /// Mesh render's alpha against the mask (default 3).
-    pub mesh_mask: f32,
+    /// The Gaussian render's colour against the image and alpha against the mask (default 1
+    /// and 3), the same weights `fit` has.
+    pub gaussians: LossWeights,
+    /// The mesh render's (default 1 and 3).
+    pub mesh: LossWeights,
     /// Flatness term (default 1).
     pub scale_2d: f32,
     /// Laplacian smoothness term (default 5).
@@ -274,10 +272,8 @@ impl Default for GraphConfig {
 impl Default for PipelineWeights {
     fn default() -> Self {
         Self {
-            gaussian_color: 1.0,
-            gaussian_mask: 3.0,
-            mesh_color: 1.0,
-            mesh_mask: 3.0,
+            gaussians: LossWeights { color: 1.0, mask: 3.0 },
+            mesh: LossWeights { color: 1.0, mask: 3.0 },
             scale_2d: 1.0,
             laplacian: 5.0,
             normal: 1.0,
@@ -352,10 +348,10 @@ impl TrainConfig {
         ];
         let non_negative = [
             ("canonical.prune_opacity", c.prune_opacity),
-            ("loss.gaussian_color", l.gaussian_color),
-            ("loss.gaussian_mask", l.gaussian_mask),
-            ("loss.mesh_color", l.mesh_color),
-            ("loss.mesh_mask", l.mesh_mask),
+            ("loss.gaussians.color", l.gaussians.color),
+            ("loss.gaussians.mask", l.gaussians.mask),
+            ("loss.mesh.color", l.mesh.color),
+            ("loss.mesh.mask", l.mesh.mask),
             ("loss.scale_2d", l.scale_2d),
             ("loss.laplacian", l.laplacian),
             ("loss.normal", l.normal),

@@ -20,7 +20,7 @@ use crate::train::fit::{self, learning_rates, scene_extent};
 use crate::train::mesh_term::MeshTerm;
 use crate::train::optimize::{optimize, Schedule, Stage};
 use crate::train::plateau::{Plateau, StopReason};
-use crate::train::schedule::{channel_weights, DensifyWindow};
+use crate::train::schedule::DensifyWindow;
 use crate::train::{TrainError, Trainer, ViewTarget};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -97,10 +97,7 @@ pub fn optimize_frame(
     let canonical = task.previous.is_none();
     let (w, bg, t) = (&config.loss, config.background, &config.temporal);
     let iterations = if canonical { config.canonical.iterations } else { t.iterations };
-    let weights = ImageWeights {
-        gaussians: channel_weights(w.gaussian_color, w.gaussian_mask),
-        mesh: channel_weights(w.mesh_color, w.mesh_mask),
-    };
+    let weights = ImageWeights { gaussians: w.gaussians.channels(), mesh: w.mesh.channels() };
     let extent = scene_extent(&task.train.iter().map(|v| &v.camera).collect::<Vec<_>>());
     let first = task
         .train
