@@ -226,3 +226,23 @@ fn short_buffers_are_refused_by_name() {
     assert!(error.contains("target of view 3"), "{error}");
     drop(rec);
 }
+
+/// The loss totals are order-independent fixed-point sums with a dropped count per sum: a NaN
+/// in one pixel's red channel and a value past the sums' range in another pixel's alpha make
+/// exactly those channels' terms NaN (the training loop then names them), and leave green and
+/// blue equal to the f64 reference.
+#[test]
+fn a_bad_pixel_makes_only_its_channel_nan() {
+    let g = gpu();
+    let mut images = random_images(32, 24, false, 9);
+    let clean = reference(&images, [1.0; 4]);
+    images.render[100][0] = f32::NAN;
+    images.render[400][3] = 1e30;
+    let (terms, _) = gpu_loss(g.ctx(), &images, [1.0; 4]);
+    assert!(terms.l1[0].is_nan() && terms.dssim[0].is_nan(), "{terms:?}");
+    assert!(terms.l1[3].is_nan(), "{terms:?}");
+    for c in 1..3 {
+        assert!((terms.l1[c] as f64 - clean.l1[c]).abs() < 1e-5, "{terms:?}");
+        assert!((terms.dssim[c] as f64 - clean.dssim[c]).abs() < 1e-5, "{terms:?}");
+    }
+}

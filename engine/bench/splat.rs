@@ -63,9 +63,10 @@ pub struct SplatBenchReport {
     pub walked_pairs_per_view: f64,
     /// Copy bandwidth measured after the timed views.
     pub copy: CopyBandwidth,
-    /// The least bytes the rasterize backward moves per view: each pixel's loss gradients and
-    /// state (28 bytes), each intersection's id and projected Gaussian, each Gaussian's 2D
-    /// gradient row (float) once.
+    /// The bytes the rasterize backward pass moves at least, per view: each pixel's loss
+    /// gradients and state (28 bytes), each intersection's id and projected Gaussian once, and
+    /// per value of each Gaussian's 2D gradient row the fixed-point sum's atomic add, its
+    /// resolve into the float row and the clears (60 bytes per value).
     pub backward_bytes_per_view: f64,
     /// Those bytes at the compute copy bandwidth (a copy of B bytes moves 2 B), ms.
     pub backward_bound_ms: f64,
@@ -78,6 +79,11 @@ pub struct SplatBenchReport {
 /// Bytes of one pixel's inputs to the rasterize backward: dL/d(colour, alpha), dL/ddepth and
 /// the forward's (transmittance, walked) state.
 const BACKWARD_PIXEL_BYTES: f64 = 16.0 + 4.0 + 8.0;
+
+/// Bytes per value of a Gaussian's 2D gradient row in the rasterize backward pass: the sum's
+/// 64-bit atomic add (read and write, 16), the resolve reading the sum and its dropped count
+/// (16) and adding to the float (8), the float's fill (4) and the sums' clear (16).
+const BACKWARD_GRADIENT_VALUE_BYTES: f64 = 16.0 + 16.0 + 8.0 + 4.0 + 16.0;
 
 /// `n` Gaussians uniformly in the unit ball: scales around the mean spacing, random rotations,
 /// opacities and SH (DC broad, higher bands small). Deterministic for a seed.
@@ -239,7 +245,7 @@ pub fn bench_splat(
     let pixels = (config.resolution as f64).powi(2);
     let backward_bytes_per_view = BACKWARD_PIXEL_BYTES * pixels
         + (4 + size_of::<Splat>()) as f64 * intersections_per_view
-        + (4 * GRAD2D_STRIDE * config.gaussians) as f64;
+        + BACKWARD_GRADIENT_VALUE_BYTES * (GRAD2D_STRIDE * config.gaussians) as f64;
     let copy = measure_copy(ctx, (backward_bytes_per_view as u64).max(1 << 20))?;
     let backward_bound_ms = backward_bytes_per_view / (2.0 * copy.compute_bytes_per_s) * 1e3;
     let backward_ms = passes_ms.get("rasterize backward").copied().unwrap_or(0.0);

@@ -5,8 +5,8 @@
 use super::graph::{DeformGraph, NODES_PER_VERTEX};
 use super::reference::NodeTransforms;
 use crate::gpu::{
-    push_layout, ComputePipeline, FixedSums, GpuBuffer, GpuContext, GpuResult, PipelineDesc,
-    Recorder,
+    push_layout, ComputePipeline, FixedPrecision, FixedSums, GpuBuffer, GpuContext, GpuResult,
+    PipelineDesc, Recorder,
 };
 use crate::optim::{Adam, AdamParams, LearningRates};
 use crate::shaders;
@@ -148,7 +148,7 @@ impl GraphDeformer {
             node_grads,
             adam: Adam::new(ctx, &nodes)?,
             nodes,
-            loss_sum: FixedSums::new(ctx, "deform ARAP loss", 1)?,
+            loss_sum: FixedSums::new(ctx, "deform ARAP loss", 1, FixedPrecision::Total)?,
             push: Push {
                 vertices: n as u32,
                 nodes: m as u32,

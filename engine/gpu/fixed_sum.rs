@@ -1,34 +1,56 @@
 //! Order-independent sums on the GPU (shaders/common/fixed_sum.glsl). Kernels that add many
 //! contributions to one value (gradients of shared parameters, loss totals) add them in 64-bit
-//! fixed point with integer atomics (`shaderBufferInt64Atomics`) instead of float atomics, so the total has the same bits
-//! whatever order the device ran them in, and a run repeats bit for bit. [`FixedSums`] owns
-//! such a buffer and decodes it; [`FixedResolve`] adds its sums into a float buffer on the GPU
-//! for the kernels that read gradients as floats.
+//! fixed point with integer atomics (`shaderBufferInt64Atomics`) instead of float atomics, so
+//! the total has the same bits whatever order the device ran them in, and a run repeats bit
+//! for bit. [`FixedSums`] owns such a buffer and decodes it; [`FixedResolve`] adds its sums into
+//! a float buffer on the GPU for the kernels that read gradients as floats.
 
 use super::{ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder};
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
 
-/// Fraction bits of the fixed-point sums: a step of 2^-40 (about 9.1e-13); a sum must stay
-/// within ±2^23 and one contribution within ±2^22 (fixed_sum.glsl `FIXED_LIMIT`).
-pub const FIXED_FRACTION_BITS: u32 = 40;
+/// The step of a buffer's sums (fixed_sum.glsl `FIXED_GRADIENT_ONE`, `FIXED_TOTAL_ONE`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FixedPrecision {
+    /// Gradients, which the next kernel reads ([`FixedResolve`]): steps of 2^-40 (about
+    /// 9.1e-13), totals within ±2^23.
+    Gradient,
+    /// Loss totals, which the host reads: steps of 2^-24 (about 6e-8), totals within ±2^39.
+    Total,
+}
+
+impl FixedPrecision {
+    /// Fraction bits of the 64-bit fixed-point value.
+    pub const fn fraction_bits(self) -> u32 {
+        match self {
+            Self::Gradient => 40,
+            Self::Total => 24,
+        }
+    }
+}
 
 const WORKGROUP: u32 = 256;
 
-/// `len` sums on the GPU, each a 64-bit fixed-point integer, then one counting dropped
-/// (non-finite or out-of-range) contributions. Kernels bind it by its shader name and add
-/// with `FIXED_ADD`.
+/// `len` sums on the GPU, each two `i64`: the fixed-point value and the count of contributions
+/// it dropped (non-finite, out of range, or overflowing the total). Kernels bind it by its
+/// shader name and add with `FIXED_ADD_GRADIENT` or `FIXED_ADD_TOTAL`, as its precision says.
 pub struct FixedSums {
     words: GpuBuffer<i64>,
     len: usize,
+    precision: FixedPrecision,
 }
 
 impl FixedSums {
-    /// `len` sums, all zero.
-    pub fn new(ctx: &Arc<GpuContext>, name: &str, len: usize) -> GpuResult<Self> {
-        let words = GpuBuffer::from_slice(ctx, name, &vec![0i64; len + 1])?;
-        Ok(Self { words, len })
+    /// `len` sums of `precision`, all zero.
+    pub fn new(
+        ctx: &Arc<GpuContext>,
+        name: &str,
+        len: usize,
+        precision: FixedPrecision,
+    ) -> GpuResult<Self> {
+        let words = GpuBuffer::from_slice(ctx, name, &vec![0i64; 2 * len])?;
+        Ok(Self { words, len, precision })
     }
 
     /// Number of sums.
@@ -41,6 +63,11 @@ impl FixedSums {
         self.len == 0
     }
 
+    /// The step of its sums.
+    pub fn precision(&self) -> FixedPrecision {
+        self.precision
+    }
+
     /// The buffer's name, as given to [`Self::new`].
     pub fn name(&self) -> &str {
         self.words.name()
@@ -51,15 +78,16 @@ impl FixedSums {
         self.words.binding()
     }
 
-    /// Records zeroing every sum and the dropped count.
+    /// Records zeroing every sum and its dropped count.
     pub fn clear<'a>(&'a self, rec: &mut Recorder<'a>) {
         rec.fill_buffer(&self.words, 0);
     }
 
-    /// The sums (after the recorder that added them was submitted); every one NaN when a
-    /// contribution was dropped.
+    /// The sums (after the recorder that added them was submitted); NaN for a sum that dropped
+    /// a contribution.
     pub fn read(&self) -> GpuResult<Vec<f64>> {
-        Ok(decode_fixed_sums(&self.words.read()?))
+        let words = self.words.read_prefix(2 * self.len)?;
+        Ok(decode_fixed_sums(&words, self.precision))
     }
 
     /// The sums, then zeroes them so the next sum starts afresh.
@@ -72,13 +100,12 @@ impl FixedSums {
     }
 }
 
-/// The sums held in `words` (the sums, then the dropped count), as [`FixedSums::read`].
-pub fn decode_fixed_sums(words: &[i64]) -> Vec<f64> {
-    let Some((&dropped, sums)) = words.split_last() else {
-        return Vec::new();
-    };
-    let step = (-(FIXED_FRACTION_BITS as f64)).exp2();
-    sums.iter().map(|&sum| if dropped == 0 { sum as f64 * step } else { f64::NAN }).collect()
+/// The sums held in `words` (value and dropped count per sum) of `precision`, as
+/// [`FixedSums::read`] gives them.
+pub fn decode_fixed_sums(words: &[i64], precision: FixedPrecision) -> Vec<f64> {
+    let step = (-(precision.fraction_bits() as f64)).exp2();
+    let sum = |w: &[i64]| if w[1] == 0 { w[0] as f64 * step } else { f64::NAN };
+    words.chunks_exact(2).map(sum).collect()
 }
 
 /// Push constants of shaders/common/fixed_resolve.comp.
@@ -86,8 +113,10 @@ pub fn decode_fixed_sums(words: &[i64]) -> Vec<f64> {
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct Push {
     count: u32,
+    /// 2^fraction bits of the sums' precision.
+    one: f32,
 }
-crate::gpu::push_layout!(Push: [COMMON_FIXED_RESOLVE], [count]);
+crate::gpu::push_layout!(Push: [COMMON_FIXED_RESOLVE], [count, one]);
 
 /// The kernel that adds [`FixedSums`] into a float buffer.
 pub struct FixedResolve {
@@ -105,8 +134,8 @@ impl FixedResolve {
         Ok(Self { pipeline: ComputePipeline::new(ctx, &desc)? })
     }
 
-    /// Records `target[i] += sums[i]` for the first `count` sums (NaN in all of them when a
-    /// contribution was dropped), then zeroes every sum.
+    /// Records `target[i] += sums[i]` for the first `count` sums (NaN where a sum dropped a
+    /// contribution), then zeroes every sum.
     pub fn record<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
@@ -124,7 +153,8 @@ impl FixedResolve {
         if count > 0 {
             let bindings = [("sums", sums.binding()), ("target", target.binding())];
             let groups = (count as u64).div_ceil(WORKGROUP as u64);
-            rec.dispatch_1d(&self.pipeline, &bindings, &Push { count: count as u32 }, groups)?;
+            let one = (sums.precision().fraction_bits() as f32).exp2();
+            rec.dispatch_1d(&self.pipeline, &bindings, &Push { count: count as u32, one }, groups)?;
         }
         sums.clear(rec);
         Ok(())

@@ -18,7 +18,7 @@ pub use buffer::{BufferBinding, GpuBuffer};
 pub use context::{ContextOptions, DeviceLimits, GpuContext, FORCE_STAGING_ENV};
 pub use error::{GpuError, GpuResult};
 pub use features::DeviceCapabilities;
-pub use fixed_sum::{decode_fixed_sums, FixedResolve, FixedSums, FIXED_FRACTION_BITS};
+pub use fixed_sum::{decode_fixed_sums, FixedPrecision, FixedResolve, FixedSums};
 pub use pipeline::{ComputePipeline, PipelineDesc};
 pub use recorder::Recorder;
 pub use select::{choose_device, DeviceInfo, DEVICE_ENV};

@@ -21,7 +21,8 @@ pub mod silhouette;
 pub use params::{LossParams, LOSS_SHARE_L1, LOSS_SHARE_SSIM};
 
 use crate::gpu::{
-    ComputePipeline, FixedSums, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc, Recorder,
+    ComputePipeline, FixedPrecision, FixedSums, GpuBuffer, GpuContext, GpuError, GpuResult,
+    PipelineDesc, Recorder,
 };
 use crate::shaders;
 use std::sync::Arc;
@@ -51,7 +52,7 @@ impl LossTerms {
 
     /// A terms buffer for [`ImageLoss::record`]: 8 order-independent sums, zero.
     pub fn sums(ctx: &Arc<GpuContext>, name: &str) -> GpuResult<FixedSums> {
-        FixedSums::new(ctx, name, 8)
+        FixedSums::new(ctx, name, 8, FixedPrecision::Total)
     }
 
     /// Reads the terms summed in `sums` and zeroes them, so the next sum starts afresh.

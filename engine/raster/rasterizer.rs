@@ -7,7 +7,7 @@ use super::mesh::{check_positions, edge_adjacency, RasterMesh};
 use super::params::{RasterParams, RasterSettings, SubTriangle, TILE_LIST_CAPACITY, TILE_SIZE};
 use super::RasterError;
 use crate::camera::Camera;
-use crate::gpu::{FixedSums, GpuBuffer, GpuContext, GpuResult};
+use crate::gpu::{FixedPrecision, FixedSums, GpuBuffer, GpuContext, GpuResult};
 use std::sync::Arc;
 
 /// Everything one forward pass produced, read back (row-major, `width × height` pixels).
@@ -100,8 +100,18 @@ impl MeshBuffers {
             subs: GpuBuffer::new(ctx, "raster sub-triangles", 2 * t)?,
             large: GpuBuffer::new(ctx, "raster large list", 2 * t)?,
             counters: GpuBuffer::new(ctx, "raster counters", 2)?,
-            grad_position_sums: FixedSums::new(ctx, "raster position gradient sums", 3 * n)?,
-            grad_color_sums: FixedSums::new(ctx, "raster colour gradient sums", 3 * n)?,
+            grad_position_sums: FixedSums::new(
+                ctx,
+                "raster position gradient sums",
+                3 * n,
+                FixedPrecision::Gradient,
+            )?,
+            grad_color_sums: FixedSums::new(
+                ctx,
+                "raster colour gradient sums",
+                3 * n,
+                FixedPrecision::Gradient,
+            )?,
         })
     }
 }

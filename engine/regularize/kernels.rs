@@ -4,8 +4,8 @@
 
 use super::{Losses, Neighbourhoods, RegularizeError, Weights, LOSS_SLOTS};
 use crate::gpu::{
-    push_layout, ComputePipeline, FixedSums, GpuBuffer, GpuContext, GpuResult, PipelineDesc,
-    Recorder,
+    push_layout, ComputePipeline, FixedPrecision, FixedSums, GpuBuffer, GpuContext, GpuResult,
+    PipelineDesc, Recorder,
 };
 use crate::shaders;
 use crate::splat::GaussianBuffers;
@@ -90,7 +90,7 @@ impl Regularizers {
             ring: GpuBuffer::new(ctx, "regularize ring", 0)?,
             deltas: GpuBuffer::new(ctx, "regularize deltas", 0)?,
             normal_grads: GpuBuffer::new(ctx, "regularize normal gradients", 0)?,
-            loss_sums: FixedSums::new(ctx, "regularize losses", LOSS_SLOTS)?,
+            loss_sums: FixedSums::new(ctx, "regularize losses", LOSS_SLOTS, FixedPrecision::Total)?,
             count: 0,
             mean_edge_length: 1.0,
         })

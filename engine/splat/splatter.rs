@@ -15,7 +15,8 @@ use super::stages::{Kernels, RasterInputs, RasterOutputs};
 use super::{RenderSettings, SplatError};
 use crate::camera::Camera;
 use crate::gpu::{
-    FixedResolve, FixedSums, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes, Recorder,
+    FixedPrecision, FixedResolve, FixedSums, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes,
+    Recorder,
 };
 use crate::sort::{PrefixScan, RadixSort};
 use bytemuck::Pod;
@@ -83,7 +84,12 @@ impl Splatter {
             tile_offsets: GpuBuffer::new(ctx, "splat tile offsets", 1)?,
             scan: PrefixScan::new(ctx, 1)?,
             grad2d: GpuBuffer::new(ctx, "splat 2D gradients", 0)?,
-            grad2d_sums: FixedSums::new(ctx, "splat 2D gradient sums", 0)?,
+            grad2d_sums: FixedSums::new(
+                ctx,
+                "splat 2D gradient sums",
+                0,
+                FixedPrecision::Gradient,
+            )?,
             resolve: FixedResolve::new(ctx)?,
             keys: GpuBuffer::new(ctx, "splat intersection keys", MIN_INTERSECTIONS)?,
             ids: GpuBuffer::new(ctx, "splat intersection ids", MIN_INTERSECTIONS)?,
@@ -102,8 +108,12 @@ impl Splatter {
         ensure(&self.ctx, &mut self.splats, gaussians)?;
         ensure(&self.ctx, &mut self.grad2d, gaussians * GRAD2D_STRIDE)?;
         if self.grad2d_sums.len() < self.grad2d.len() {
-            self.grad2d_sums =
-                FixedSums::new(&self.ctx, "splat 2D gradient sums", self.grad2d.len())?;
+            self.grad2d_sums = FixedSums::new(
+                &self.ctx,
+                "splat 2D gradient sums",
+                self.grad2d.len(),
+                FixedPrecision::Gradient,
+            )?;
         }
         if self.tile_offsets.len() < gaussians + 1 {
             ensure(&self.ctx, &mut self.tile_offsets, gaussians + 1)?;

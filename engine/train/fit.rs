@@ -12,12 +12,11 @@ use super::views::ViewTarget;
 use super::TrainError;
 use crate::camera::Camera;
 use crate::eval::{psnr, ssim};
-use crate::gpu::{GpuContext, PassTimes, Recorder};
+use crate::gpu::{GpuContext, Recorder};
 use crate::io::image::Image;
 use crate::optim::{exponential_decay, LearningRates};
 use crate::rng::SplitMix64;
 use crate::splat::{GaussianScene, RenderSettings};
-use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -85,6 +84,7 @@ pub fn fit(
             every: d.every,
         }),
         splat_weights: config.loss.channels(),
+        checkpoint: true,
     };
     let stats_every = config.report.stats_every as usize;
     let plateau = Plateau::new(config.iterations, config.iterations, stats_every, 0.0);
@@ -166,8 +166,7 @@ impl Stage for FitStage<'_> {
         last: u32,
     ) -> Result<Result<f64, String>, TrainError> {
         let terms = trainer.take_terms()?;
-        let weights = self.config.loss.channels();
-        let mean = terms.total(weights) / (last - first + 1) as f32;
+        let mean = terms.total(self.config.loss.channels()) / (last - first + 1) as f32;
         if !mean.is_finite() {
             return Ok(Err(format!("L1 terms {:?}, SSIM terms {:?}", terms.l1, terms.dssim)));
         }
@@ -291,10 +290,4 @@ pub(crate) fn evaluate(
     }
     let n = views.len().max(1) as f64;
     Ok((psnr_sum / n, ssim_sum / n, renders))
-}
-
-pub(crate) fn add_times(total: &mut BTreeMap<String, f64>, times: &PassTimes) {
-    for pass in times.passes.iter().filter(|p| p.depth == 0) {
-        *total.entry(pass.name.clone()).or_default() += pass.ms;
-    }
 }

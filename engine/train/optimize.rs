@@ -5,16 +5,19 @@
 //! splatting loss, how their losses are read, how the Gaussians densify, what is measured along
 //! the way) is a [`Stage`].
 //!
-//! One non-finite policy for every stage: the trainer checkpoints its Gaussians after every
-//! interval whose loss is finite; at the first one that is not, the loop stops and the outcome
-//! names the iterations, the terms and the non-finite parameter groups, while the checkpoint
-//! keeps the Gaussians of the last finite interval. The caller decides what to keep.
+//! One non-finite policy for every stage: at the first statistics interval whose loss is not
+//! finite the loop stops, and the outcome names the iterations, the terms and the non-finite
+//! parameter groups. A stage that keeps the last good Gaussians (`fit`) asks for checkpoints:
+//! after every finite interval whose Gaussians are all finite (the interval's loss saw them
+//! before its last Adam step, not after) the trainer copies them. `train` fails the frame
+//! instead and keeps the finished ones, so it takes no checkpoints.
+//! (The deformation graph solves other parameters with its own optimiser, in
+//! pipeline/graph_stage.rs, and keeps its own loop.)
 
-use super::fit::add_times;
 use super::plateau::{Plateau, StopReason};
 use super::schedule::{sh_degree_at, DensifyWindow, ViewCycle};
 use super::{TrainError, Trainer};
-use crate::gpu::Recorder;
+use crate::gpu::{PassTimes, Recorder};
 use crate::optim::{AdamParams, LearningRates};
 use crate::rng::SplitMix64;
 use crate::splat::{GaussianScene, RenderSettings};
@@ -31,6 +34,8 @@ pub(crate) struct Schedule {
     pub densify: Option<DensifyWindow>,
     /// Weights of the splatting loss per rgba channel.
     pub splat_weights: [f32; 4],
+    /// Whether the trainer checkpoints the last finite Gaussians (see the module docs).
+    pub checkpoint: bool,
 }
 
 /// What a stage adds to the loop.
@@ -141,8 +146,11 @@ pub(crate) fn optimize(
                     break;
                 }
             }
-            trainer.checkpoint()?;
-            (outcome.checkpoint_iteration, interval_start) = (it, it + 1);
+            if schedule.checkpoint && all_finite(&trainer.scene()?) {
+                trainer.checkpoint()?;
+                outcome.checkpoint_iteration = it;
+            }
+            interval_start = it + 1;
         }
         if schedule.densify.is_some_and(|window| window.due(it, iterations)) {
             let t0 = Instant::now();
@@ -161,20 +169,36 @@ pub(crate) fn optimize(
     Ok(outcome)
 }
 
-/// Names the iterations, the terms, and any parameter group that went non-finite.
-fn non_finite_detail(scene: &GaussianScene, first: u32, last: u32, terms: &str) -> String {
+/// Per parameter group, its name and how many of its values are not finite.
+fn non_finite_counts(scene: &GaussianScene) -> [(&'static str, usize); 5] {
     let bad = |values: &mut dyn Iterator<Item = f32>| values.filter(|v| !v.is_finite()).count();
-    let groups = [
+    [
         ("positions", bad(&mut scene.positions.iter().flatten().copied())),
         ("log-scales", bad(&mut scene.log_scales.iter().flatten().copied())),
         ("rotations", bad(&mut scene.rotations.iter().flatten().copied())),
         ("opacity logits", bad(&mut scene.opacity_logits.iter().copied())),
         ("SH", bad(&mut scene.sh.iter().copied())),
-    ];
+    ]
+}
+
+fn all_finite(scene: &GaussianScene) -> bool {
+    non_finite_counts(scene).iter().all(|&(_, n)| n == 0)
+}
+
+/// Names the iterations, the terms, and any parameter group that went non-finite.
+fn non_finite_detail(scene: &GaussianScene, first: u32, last: u32, terms: &str) -> String {
+    let groups = non_finite_counts(scene);
     let params: Vec<String> =
         groups.iter().filter(|(_, n)| *n > 0).map(|(g, n)| format!("{n} {g} values")).collect();
     let which = if params.is_empty() { "no parameter yet".to_string() } else { params.join(", ") };
     format!(
         "the loss went non-finite between iterations {first} and {last} ({terms}; non-finite parameters: {which})"
     )
+}
+
+/// Adds the GPU ms of each top-level pass of one submission to `total`.
+fn add_times(total: &mut BTreeMap<String, f64>, times: &PassTimes) {
+    for pass in times.passes.iter().filter(|p| p.depth == 0) {
+        *total.entry(pass.name.clone()).or_default() += pass.ms;
+    }
 }

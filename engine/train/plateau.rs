@@ -1,6 +1,7 @@
-//! When a stage of a frame stops: its loss, averaged over one pass through the training views
-//! (every view once, so passes compare like with like), improved on the pass before by less
-//! than a tolerance, once the minimum is done; or at the cap.
+//! When an optimisation stops (`fit`, a frame's per-vertex stage, a graph level): its loss,
+//! averaged over one pass through the training views (every view once, so passes compare like
+//! with like), improved on the pass before by less than a tolerance, once the minimum is done;
+//! or at the cap. With the minimum at the cap it runs a fixed count, checking every `window`.
 
 /// Why a stage stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

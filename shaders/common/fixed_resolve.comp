@@ -1,6 +1,6 @@
 #version 460
-// Adds fixed-point sums (fixed_sum.glsl) to a float buffer: target[i] += sum i, or NaN when
-// any contribution was dropped. The host zeroes the sums after this pass.
+// Adds fixed-point sums (fixed_sum.glsl) to a float buffer: target[i] += sum i, or NaN when the
+// sum dropped a contribution. The host zeroes the sums after this pass.
 #include "fixed_sum.glsl"
 #include "grid.glsl"
 layout(local_size_x_id = 0) in;
@@ -10,6 +10,7 @@ layout(std430, binding = 1) buffer Target { float target[]; };
 
 layout(push_constant) uniform Push {
     uint count;
+    float one;   // 2^fraction bits of the sums' precision
 } pc;
 
 void main() {
@@ -17,7 +18,7 @@ void main() {
     if (i >= pc.count) {
         return;
     }
-    bool dropped = sums[sums.length() - 1] != 0;
-    float sum = fixed_value(sums[i]);
+    bool dropped = sums[2u * i + 1u] != int64_t(0);
+    float sum = float(sums[2u * i]) / pc.one;
     target[i] += dropped ? uintBitsToFloat(0x7fc00000u) : sum;
 }

@@ -1,34 +1,40 @@
 // Order-independent sums. Float atomics add in whatever order the device schedules them, so
 // two runs round differently and an optimisation amplifies the difference. Here a value is
-// rounded to 64-bit fixed point (40 fraction bits: steps of 2^-40 ≈ 9.1e-13, totals within
-// ±2^23) and added with a 64-bit integer atomic; integer addition is associative, so a sum has
-// the same bits whatever the order. Sum i is element i of its buffer; the buffer's last
-// element counts the contributions dropped for being NaN, infinite or beyond ±FIXED_LIMIT, so
-// that the reader can report NaN (engine/gpu/fixed_sum.rs decodes and resolves).
+// rounded to 64-bit fixed point and added with a 64-bit integer atomic; integer addition is
+// associative, so a sum has the same bits whatever the order.
+// Two precisions (engine/gpu/fixed_sum.rs `FixedPrecision`): gradients, which the next kernel
+// reads, in steps of 2^-40 (≈ 9.1e-13) within ±2^23; loss totals, which the host reads, in
+// steps of 2^-24 (≈ 6e-8) within ±2^39. Sum i is two int64_t of its buffer: its value (element
+// 2i) and the count of contributions it dropped (element 2i + 1): NaN, infinite, beyond the
+// range, or an add that overflowed the total. Readers report a sum that dropped any as NaN.
 #ifndef COMMON_FIXED_SUM_GLSL
 #define COMMON_FIXED_SUM_GLSL
 
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
 
-const float FIXED_ONE = 1099511627776.0;  // 2^40
-const float FIXED_LIMIT = 4194304.0;      // 2^22, one contribution's bound
+const float FIXED_GRADIENT_ONE = 1099511627776.0;        // 2^40
+const float FIXED_TOTAL_ONE = 16777216.0;                // 2^24
+const float FIXED_SCALED_LIMIT = 4611686018427387904.0;  // 2^62: one scaled contribution
 
-// The float nearest a sum.
-float fixed_value(int64_t sum) {
-    return float(sum) / FIXED_ONE;
+// Adds `value` to sum `i` of the int64_t array `sums` in steps of 1 / `one` (a macro: GLSL
+// cannot pass a buffer). Scaling by a power of two is exact; phrased as positive so that NaN
+// lands in the dropped count. Overflow: the addends agree in sign and the total does not.
+#define FIXED_ADD(sums, i, value, one) {                                            \
+    float scaled_ = (value) * (one);                                                 \
+    uint at_ = 2u * (i);                                                             \
+    if (!(abs(scaled_) <= FIXED_SCALED_LIMIT)) {                                     \
+        atomicAdd(sums[at_ + 1u], int64_t(1));                                       \
+    } else if (scaled_ != 0.0) {                                                     \
+        int64_t add_ = int64_t(roundEven(scaled_));                                  \
+        int64_t before_ = atomicAdd(sums[at_], add_);                                \
+        int64_t after_ = before_ + add_;                                             \
+        if (((before_ ^ after_) & (add_ ^ after_)) < int64_t(0)) {                   \
+            atomicAdd(sums[at_ + 1u], int64_t(1));                                   \
+        }                                                                            \
+    }                                                                                \
 }
-
-// Adds `value` to sum `i` of the int64_t array `sums` (a macro: GLSL cannot pass a buffer).
-// Scaling by 2^40 is exact and the product stays within ±2^62; phrased as positive so that
-// NaN lands in the dropped count.
-#define FIXED_ADD(sums, i, value) {                                             \
-    float value_ = (value);                                                      \
-    if (!(abs(value_) <= FIXED_LIMIT)) {                                         \
-        atomicAdd(sums[sums.length() - 1], int64_t(1));                          \
-    } else if (value_ != 0.0) {                                                  \
-        atomicAdd(sums[i], int64_t(roundEven(value_ * FIXED_ONE)));              \
-    }                                                                            \
-}
+#define FIXED_ADD_GRADIENT(sums, i, value) FIXED_ADD(sums, i, value, FIXED_GRADIENT_ONE)
+#define FIXED_ADD_TOTAL(sums, i, value) FIXED_ADD(sums, i, value, FIXED_TOTAL_ONE)
 
 #endif

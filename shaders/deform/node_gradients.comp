@@ -63,6 +63,6 @@ void main() {
     }
     float total = subgroupAdd(energy);
     if (subgroupElect()) {
-        FIXED_ADD(loss_sum, 0u, total); // order-independent, so runs repeat bit for bit
+        FIXED_ADD_TOTAL(loss_sum, 0u, total); // order-independent, so runs repeat bit for bit
     }
 }

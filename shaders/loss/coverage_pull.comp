@@ -69,12 +69,12 @@ void main() {
             vec3 dc = vec3(g.x * k.x / c.z, g.y * k.y / c.z, -(g.x * k.x * c.x + g.y * k.y * c.y) / (c.z * c.z));
             vec3 dx = transpose(mat3(pc.world_to_camera)) * dc;
             for (uint k = 0u; k < 3u; k++) {
-                FIXED_ADD(grad_position_sums, 3u * s + k, dx[k]);
+                FIXED_ADD_GRADIENT(grad_position_sums, 3u * s + k, dx[k]);
             }
         }
     }
     float total = subgroupAdd(energy);
     if (subgroupElect()) {
-        FIXED_ADD(loss_sum, 0u, total);
+        FIXED_ADD_TOTAL(loss_sum, 0u, total);
     }
 }

@@ -82,6 +82,6 @@ void main() {
     }
     float total = subgroupAdd(energy);
     if (subgroupElect()) {
-        FIXED_ADD(loss_sum, 0u, total);
+        FIXED_ADD_TOTAL(loss_sum, 0u, total);
     }
 }

@@ -66,8 +66,8 @@ void main() {
     vec4 ssim_sum = subgroupAdd(dissimilarity);
     if (subgroupElect()) {
         for (int c = 0; c < 4; c++) {
-            FIXED_ADD(term_sums, uint(c), l1_sum[c] * params.scales.z);
-            FIXED_ADD(term_sums, uint(4 + c), ssim_sum[c] * params.scales.w);
+            FIXED_ADD_TOTAL(term_sums, uint(c), l1_sum[c] * params.scales.z);
+            FIXED_ADD_TOTAL(term_sums, uint(4 + c), ssim_sum[c] * params.scales.w);
         }
     }
 }

@@ -35,7 +35,7 @@ void add_screen_gradient(uint v, vec2 g) {
     vec3 g_camera = vec3(gf, -dot(gf, c.xy) / c.z);
     vec3 g_world = transpose(view_rotation()) * g_camera;
     for (uint k = 0u; k < 3u; k++) {
-        FIXED_ADD(grad_position_sums, 3u * v + k, g_world[k]);
+        FIXED_ADD_GRADIENT(grad_position_sums, 3u * v + k, g_world[k]);
     }
 }
 

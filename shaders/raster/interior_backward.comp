@@ -30,9 +30,9 @@ vec3 vertex_color(uint v) {
 void add3(uint v, vec3 g, bool to_colors) {
     for (uint k = 0u; k < 3u; k++) {
         if (to_colors) {
-            FIXED_ADD(grad_color_sums, 3u * v + k, g[k]);
+            FIXED_ADD_GRADIENT(grad_color_sums, 3u * v + k, g[k]);
         } else {
-            FIXED_ADD(grad_position_sums, 3u * v + k, g[k]);
+            FIXED_ADD_GRADIENT(grad_position_sums, 3u * v + k, g[k]);
         }
     }
 }

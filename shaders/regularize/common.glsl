@@ -38,7 +38,7 @@ const uint BOUNDARY_BIT = 0x80000000u;
     {                                                 \
         float total_ = subgroupAdd(value);            \
         if (subgroupElect()) {                        \
-            FIXED_ADD(loss_sums, slot, total_);       \
+            FIXED_ADD_TOTAL(loss_sums, slot, total_);       \
         }                                             \
     }
 

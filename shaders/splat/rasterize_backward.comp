@@ -109,7 +109,7 @@ void walk_chunk(uint chunk, uint steps, uvec2 range, uint walked, PixelGrads p, 
     if (start + gl_SubgroupInvocationID < end) {
         uint id = floatBitsToUint(mine.conic_id.w);
         for (uint k = 0u; k < GRAD2D_STRIDE; k++) {
-            FIXED_ADD(grad2d_sums, id * GRAD2D_STRIDE + k, sums[k]);
+            FIXED_ADD_GRADIENT(grad2d_sums, id * GRAD2D_STRIDE + k, sums[k]);
         }
     }
 }

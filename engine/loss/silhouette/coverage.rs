@@ -6,8 +6,8 @@
 
 use crate::camera::Camera;
 use crate::gpu::{
-    push_layout, ComputePipeline, FixedResolve, FixedSums, GpuBuffer, GpuContext, GpuResult,
-    PipelineDesc, Recorder,
+    push_layout, ComputePipeline, FixedPrecision, FixedResolve, FixedSums, GpuBuffer, GpuContext,
+    GpuResult, PipelineDesc, Recorder,
 };
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
@@ -63,9 +63,14 @@ impl CoverageTerm {
             pull: pipeline("coverage pull", &shaders::LOSS_COVERAGE_PULL)?,
             projected: GpuBuffer::new(ctx, "coverage projected vertices", vertices)?,
             seeds: GpuBuffer::new(ctx, "coverage seeds", pixels)?,
-            grad_position_sums: FixedSums::new(ctx, "coverage gradient sums", 3 * vertices)?,
+            grad_position_sums: FixedSums::new(
+                ctx,
+                "coverage gradient sums",
+                3 * vertices,
+                FixedPrecision::Gradient,
+            )?,
             resolve: FixedResolve::new(ctx)?,
-            loss_sum: FixedSums::new(ctx, "coverage loss", 1)?,
+            loss_sum: FixedSums::new(ctx, "coverage loss", 1, FixedPrecision::Total)?,
             radius,
         })
     }

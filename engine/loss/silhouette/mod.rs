@@ -15,8 +15,8 @@ pub use distance::mask_distance;
 
 use crate::camera::Camera;
 use crate::gpu::{
-    push_layout, ComputePipeline, FixedSums, GpuBuffer, GpuContext, GpuResult, PipelineDesc,
-    Recorder,
+    push_layout, ComputePipeline, FixedPrecision, FixedSums, GpuBuffer, GpuContext, GpuResult,
+    PipelineDesc, Recorder,
 };
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
@@ -105,7 +105,7 @@ impl SilhouetteTerm {
             )?,
             views: GpuBuffer::from_slice(ctx, "silhouette views", &gpu_views)?,
             fields: GpuBuffer::from_slice(ctx, "silhouette distance fields", &fields)?,
-            loss_sum: FixedSums::new(ctx, "silhouette loss", 1)?,
+            loss_sum: FixedSums::new(ctx, "silhouette loss", 1, FixedPrecision::Total)?,
             view_count: views.len(),
             with_mask: views.len() - without_mask.len(),
             without_mask,

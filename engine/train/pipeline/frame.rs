@@ -183,6 +183,7 @@ pub fn optimize_frame(
             every: c.densify_every,
         }),
         splat_weights: weights.gaussians,
+        checkpoint: false,
     };
     // Frame 0 runs all its iterations (min = max), reading the losses every `stats_every`.
     let plateau = if canonical {

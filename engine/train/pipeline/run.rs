@@ -314,8 +314,7 @@ fn canonical_start(
     // Later frames start from the topology as written, exactly as a resumed run reads it back
     // (after densification the in-memory mesh orders its 1-rings differently, and the
     // regularizers sum in that order), so resuming gives the same bits as running through.
-    let mesh = ManifoldMesh::new(scene.positions.clone(), mesh.live_faces())
-        .map_err(|e| TopologyError::InFile { path: out.mesh_path(0), source: Box::new(e) })?;
+    let mesh = ManifoldMesh::new(scene.positions.clone(), mesh.live_faces())?;
     Ok((mesh, scene))
 }
 
