@@ -32,8 +32,8 @@ impl FixedPrecision {
 
 const WORKGROUP: u32 = 256;
 
-/// `len` sums on the GPU, each two `i64`: the fixed-point value and the count of contributions
-/// it dropped (non-finite, out of range, or overflowing the total). Kernels bind it by its
+/// `len` sums on the GPU: `len` fixed-point `i64` values, then per sum the count of
+/// contributions it dropped (non-finite, out of range, or overflowing the total). Kernels bind it by its
 /// shader name and add with `FIXED_ADD_GRADIENT` or `FIXED_ADD_TOTAL`, as its precision says.
 pub struct FixedSums {
     words: GpuBuffer<i64>,
@@ -49,6 +49,7 @@ impl FixedSums {
         len: usize,
         precision: FixedPrecision,
     ) -> GpuResult<Self> {
+        // Exactly 2·len words: the kernels find the counts at half the bound length.
         let words = GpuBuffer::from_slice(ctx, name, &vec![0i64; 2 * len])?;
         Ok(Self { words, len, precision })
     }
@@ -100,12 +101,13 @@ impl FixedSums {
     }
 }
 
-/// The sums held in `words` (value and dropped count per sum) of `precision`, as
+/// The sums held in `words` (the values, then the dropped counts) of `precision`, as
 /// [`FixedSums::read`] gives them.
 pub fn decode_fixed_sums(words: &[i64], precision: FixedPrecision) -> Vec<f64> {
     let step = (-(precision.fraction_bits() as f64)).exp2();
-    let sum = |w: &[i64]| if w[1] == 0 { w[0] as f64 * step } else { f64::NAN };
-    words.chunks_exact(2).map(sum).collect()
+    let (values, dropped) = words.split_at(words.len() / 2);
+    let sum = |(&v, &d): (&i64, &i64)| if d == 0 { v as f64 * step } else { f64::NAN };
+    values.iter().zip(dropped).map(sum).collect()
 }
 
 /// Push constants of shaders/common/fixed_resolve.comp.

@@ -18,7 +18,7 @@ void main() {
     if (i >= pc.count) {
         return;
     }
-    bool dropped = sums[2u * i + 1u] != int64_t(0);
-    float sum = float(sums[2u * i]) / pc.one;
+    bool dropped = sums[uint(sums.length()) / 2u + i] != int64_t(0);
+    float sum = float(sums[i]) / pc.one;
     target[i] += dropped ? uintBitsToFloat(0x7fc00000u) : sum;
 }
