@@ -188,6 +188,8 @@ fn folders_compare_meshes_trajectories_and_images() {
     assert_eq!(same.tracking.as_ref().unwrap().mse, 0.0);
     assert_eq!(same.images.as_ref().unwrap().images, 4);
     assert!((same.images.as_ref().unwrap().ssim - 1.0).abs() < 1e-12);
+    // Identical images: PSNR capped at 100 dB as the trainer caps it, not infinite.
+    assert_eq!(same.images.as_ref().unwrap().psnr_db, 100.0);
 
     // Prediction: trajectories moved by (0.03, 0.04, 0): RMSE 0.05 exactly (up to f64 text).
     let shifted: Vec<_> = read_trajectories_csv(&gt.join("trajectories.csv"))

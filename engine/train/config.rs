@@ -85,8 +85,6 @@ pub struct DensifyConfig {
     pub prune_opacity: f32,
     /// Largest scale (× extent) beyond which a Gaussian is pruned.
     pub prune_scale: f32,
-    /// Opacities are reset to 0.01 this often (0: never).
-    pub opacity_reset_every: u32,
     /// Most Gaussians densification may reach.
     pub budget: u32,
 }
@@ -165,7 +163,6 @@ impl Default for DensifyConfig {
             percent_dense: 0.01,
             prune_opacity: 0.005,
             prune_scale: 0.1,
-            opacity_reset_every: 0,
             budget: 200_000,
         }
     }

@@ -127,10 +127,18 @@ pub enum TrainError {
         /// What is wrong with it.
         problem: String,
     },
-    /// A file or folder could not be written (or, for a run's log and report, opened or read).
+    /// A file or folder could not be written (or a run's log opened for appending).
     #[error("cannot write {}: {error}", path.display())]
     Io {
         /// The file or folder.
+        path: PathBuf,
+        /// The I/O error.
+        error: std::io::Error,
+    },
+    /// A file of an earlier run (its report, its evaluation) could not be read.
+    #[error("cannot read {}: {error}", path.display())]
+    Read {
+        /// The file.
         path: PathBuf,
         /// The I/O error.
         error: std::io::Error,

@@ -71,7 +71,7 @@ struct FrameScores {
 /// dataset or a frame that cannot be read.
 pub fn write_html_report(ctx: &Arc<GpuContext>, out: &Path) -> Result<PathBuf, TrainError> {
     let report = out.join("report.json");
-    let run: Run = read_json(&report)?.ok_or_else(|| TrainError::Io {
+    let run: Run = read_json(&report)?.ok_or_else(|| TrainError::Read {
         path: report,
         error: std::io::ErrorKind::NotFound.into(),
     })?;
@@ -91,7 +91,7 @@ fn read_text(path: &Path) -> Result<Option<String>, TrainError> {
     match std::fs::read_to_string(path) {
         Ok(text) => Ok(Some(text)),
         Err(error) if error.kind() == std::io::ErrorKind::NotFound => Ok(None),
-        Err(error) => Err(TrainError::Io { path: path.to_owned(), error }),
+        Err(error) => Err(TrainError::Read { path: path.to_owned(), error }),
     }
 }
 
