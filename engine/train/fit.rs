@@ -12,7 +12,7 @@ use super::views::ViewTarget;
 use super::TrainError;
 use crate::camera::Camera;
 use crate::eval::{psnr, ssim};
-use crate::gpu::{GpuContext, Recorder};
+use crate::gpu::GpuContext;
 use crate::io::image::Image;
 use crate::optim::{exponential_decay, LearningRates};
 use crate::rng::SplitMix64;
@@ -148,15 +148,6 @@ struct FitStage<'a> {
 impl Stage for FitStage<'_> {
     fn rates(&self, it: u32, iterations: u32) -> LearningRates {
         learning_rates(&self.config.learning_rates, self.extent, it, iterations)
-    }
-
-    fn record_terms<'a>(
-        &'a self,
-        _trainer: &'a Trainer,
-        _rec: &mut Recorder<'a>,
-        _view: usize,
-    ) -> Result<(), TrainError> {
-        Ok(())
     }
 
     fn read_losses(

@@ -44,13 +44,15 @@ pub(crate) trait Stage {
     fn rates(&self, it: u32, iterations: u32) -> LearningRates;
 
     /// Records the stage's terms for training view `view` after the splatting loss, adding
-    /// their gradients to the trainer's.
+    /// their gradients to the trainer's. None by default: the splatting loss alone.
     fn record_terms<'a>(
         &'a self,
-        trainer: &'a Trainer,
-        rec: &mut Recorder<'a>,
-        view: usize,
-    ) -> Result<(), TrainError>;
+        _trainer: &'a Trainer,
+        _rec: &mut Recorder<'a>,
+        _view: usize,
+    ) -> Result<(), TrainError> {
+        Ok(())
+    }
 
     /// The mean weighted loss over iterations `first..=last` (all summed on the GPU since the
     /// last call, which restarts the sums), or what went non-finite.
