@@ -9,7 +9,7 @@ use std::sync::Arc;
 use tagsplat::eval::ssim;
 use tagsplat::gpu::{GpuBuffer, GpuContext, Recorder};
 use tagsplat::loss::reference::{image_loss, ReferenceLoss};
-use tagsplat::loss::{ImageLoss, LossParams, LossTerms};
+use tagsplat::loss::{ImageLoss, LossTarget, LossTerms, ScoredRender};
 
 struct Images {
     width: usize,
@@ -35,21 +35,50 @@ fn gpu_loss(
     images: &Images,
     lambda: [f32; 4],
 ) -> (LossTerms, Vec<[f32; 4]>) {
+    gpu_losses(ctx, images, &[(&images.render, lambda)]).remove(0)
+}
+
+/// One run of the loss over `renders` (each with its λ) against `images`' target and weight.
+fn gpu_losses(
+    ctx: &Arc<GpuContext>,
+    images: &Images,
+    renders: &[(&Vec<[f32; 4]>, [f32; 4])],
+) -> Vec<(LossTerms, Vec<[f32; 4]>)> {
     let pixels = images.width * images.height;
-    let mut loss = ImageLoss::new(ctx).unwrap();
+    let mut loss = ImageLoss::new(ctx, renders.len()).unwrap();
     loss.reserve(pixels).unwrap();
-    let render = GpuBuffer::from_slice(ctx, "render", &images.render).unwrap();
-    let target = GpuBuffer::from_slice(ctx, "target", &images.target).unwrap();
+    let upload = |name, data: &[[f32; 4]]| GpuBuffer::from_slice(ctx, name, data).unwrap();
+    let target = upload("target", &images.target);
     let weight = images.weight.as_ref().map(|w| GpuBuffer::from_slice(ctx, "weight", w).unwrap());
-    let terms = LossTerms::sums(ctx, "terms").unwrap();
-    let gradient = GpuBuffer::<[f32; 4]>::new(ctx, "gradient", pixels).unwrap();
-    let params =
-        LossParams::new(images.width as u32, images.height as u32, lambda, weight.is_some());
+    let buffers: Vec<_> = renders
+        .iter()
+        .map(|(render, _)| {
+            let gradient = GpuBuffer::<[f32; 4]>::new(ctx, "gradient", pixels).unwrap();
+            (upload("render", render), LossTerms::sums(ctx, "terms").unwrap(), gradient)
+        })
+        .collect();
+    let scored: Vec<_> = buffers
+        .iter()
+        .zip(renders)
+        .map(|((image, terms, gradient), &(_, channel_weights))| ScoredRender {
+            image,
+            channel_weights,
+            terms,
+            gradient,
+        })
+        .collect();
+    let (width, height) = (images.width as u32, images.height as u32);
+    let target = LossTarget { width, height, image: &target, weight: weight.as_ref() };
     let mut rec = Recorder::new(ctx).unwrap();
-    terms.clear(&mut rec);
-    loss.record(&mut rec, &params, &render, &target, weight.as_ref(), &terms, &gradient).unwrap();
+    buffers.iter().for_each(|(_, terms, _)| terms.clear(&mut rec));
+    loss.record(&mut rec, &target, &scored).unwrap();
     rec.submit_and_wait().unwrap();
-    (LossTerms::from_sums(&terms.read().unwrap()), gradient.read().unwrap())
+    buffers
+        .iter()
+        .map(|(_, terms, gradient)| {
+            (LossTerms::from_sums(&terms.read().unwrap()), gradient.read().unwrap())
+        })
+        .collect()
 }
 
 fn reference(images: &Images, lambda: [f32; 4]) -> ReferenceLoss {
@@ -67,40 +96,64 @@ fn max_abs(values: impl Iterator<Item = f64>) -> f64 {
     values.fold(0.0, |m, v| m.max(v.abs()))
 }
 
+/// Checks one render's GPU terms and gradient against the f64 reference.
+fn assert_matches_reference(
+    what: &str,
+    (terms, gradient): &(LossTerms, Vec<[f32; 4]>),
+    expect: &ReferenceLoss,
+    lambda: [f32; 4],
+) {
+    for c in 0..4 {
+        let (l1, dssim) = (terms.l1[c] as f64, terms.dssim[c] as f64);
+        assert!(
+            (l1 - expect.l1[c]).abs() < 1e-5,
+            "{what} L1 channel {c}: {l1} vs {}",
+            expect.l1[c]
+        );
+        assert!(
+            (dssim - expect.dssim[c]).abs() < 1e-5,
+            "{what} SSIM channel {c}: {dssim} vs {}",
+            expect.dssim[c]
+        );
+    }
+    assert!((terms.total(lambda) as f64 - expect.total).abs() < 1e-5 * expect.total);
+    let scale = max_abs(expect.gradient.iter().flatten().copied());
+    let error = max_abs(
+        gradient
+            .iter()
+            .flatten()
+            .zip(expect.gradient.iter().flatten())
+            .map(|(&a, &b)| a as f64 - b),
+    );
+    assert!(error < 1e-4 * scale, "{what}: gradient error {error:e} of max {scale:e}");
+}
+
+/// One render per run, and two renders sharing the target (each with its own λ), on sizes
+/// that end in a partial run of 8 pixels along both axes.
 #[test]
 fn gpu_loss_matches_the_reference() {
     let g = gpu();
     let lambda = [0.3, 0.3, 0.3, 3.0];
+    let second_lambda = [1.0, 0.5, 0.25, 2.0];
     for (width, height, weighted) in [(37, 29, false), (23, 41, true), (16, 16, true)] {
         let images = random_images(width, height, weighted, width as u64);
-        let (terms, gradient) = gpu_loss(g.ctx(), &images, lambda);
-        let expect = reference(&images, lambda);
-        for c in 0..4 {
-            assert!(
-                (terms.l1[c] as f64 - expect.l1[c]).abs() < 1e-5,
-                "{width}×{height} L1 channel {c}: {} vs {}",
-                terms.l1[c],
-                expect.l1[c]
-            );
-            assert!(
-                (terms.dssim[c] as f64 - expect.dssim[c]).abs() < 1e-5,
-                "{width}×{height} SSIM channel {c}: {} vs {}",
-                terms.dssim[c],
-                expect.dssim[c]
-            );
-        }
-        assert!((terms.total(lambda) as f64 - expect.total).abs() < 1e-5 * expect.total);
-        let scale = max_abs(expect.gradient.iter().flatten().copied());
-        let error = max_abs(
-            gradient
-                .iter()
-                .flatten()
-                .zip(expect.gradient.iter().flatten())
-                .map(|(&a, &b)| a as f64 - b),
+        let single = gpu_loss(g.ctx(), &images, lambda);
+        assert_matches_reference(
+            &format!("{width}×{height}"),
+            &single,
+            &reference(&images, lambda),
+            lambda,
         );
-        assert!(
-            error < 1e-4 * scale,
-            "{width}×{height}: gradient error {error:e} of max {scale:e}"
+        let other = random_images(width, height, false, 77).render;
+        let pair =
+            gpu_losses(g.ctx(), &images, &[(&images.render, lambda), (&other, second_lambda)]);
+        assert!(pair[0] == single, "{width}×{height}: the first of two scores as it does alone");
+        let second = Images { render: other.clone(), ..images };
+        assert_matches_reference(
+            &format!("{width}×{height}, second of two"),
+            &pair[1],
+            &reference(&second, second_lambda),
+            second_lambda,
         );
     }
 }
@@ -212,18 +265,27 @@ fn hard_cases() {
 fn short_buffers_are_refused_by_name() {
     let g = gpu();
     let ctx = g.ctx();
-    let mut loss = ImageLoss::new(ctx).unwrap();
+    let mut loss = ImageLoss::new(ctx, 1).unwrap();
     loss.reserve(100).unwrap();
     let render = GpuBuffer::<[f32; 4]>::new(ctx, "render", 100).unwrap();
-    let target = GpuBuffer::<[f32; 4]>::new(ctx, "target of view 3", 99).unwrap();
+    let short = GpuBuffer::<[f32; 4]>::new(ctx, "target of view 3", 99).unwrap();
     let terms = LossTerms::sums(ctx, "terms").unwrap();
-    let params = LossParams::new(10, 10, [1.0; 4], false);
+    let scored = ScoredRender {
+        image: &render,
+        channel_weights: [1.0; 4],
+        terms: &terms,
+        gradient: &render,
+    };
+    let target = LossTarget { width: 10, height: 10, image: &short, weight: None };
     let mut rec = Recorder::new(ctx).unwrap();
-    let error = loss
-        .record(&mut rec, &params, &render, &target, None, &terms, &render)
-        .unwrap_err()
-        .to_string();
+    let error = loss.record(&mut rec, &target, &[scored]).unwrap_err().to_string();
     assert!(error.contains("target of view 3"), "{error}");
+    // A run scores as many renders as the kernels were built for.
+    let target = LossTarget { image: &render, ..target };
+    let error = loss.record(&mut rec, &target, &[scored, scored]).unwrap_err().to_string();
+    assert!(error.contains("renders per run"), "{error}");
+    let error = ImageLoss::new(ctx, 3).err().expect("three renders are refused").to_string();
+    assert!(error.contains("1 or 2"), "{error}");
     drop(rec);
 }
 

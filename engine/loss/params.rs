@@ -4,16 +4,19 @@ use crate::gpu::push_layout;
 use crate::ssim_window::{gaussian_weights, RADIUS, WINDOW};
 use bytemuck::{Pod, Zeroable};
 
+/// Pixels one invocation filters (`RUN` in shaders/loss/loss.glsl).
+const RUN: u32 = 8;
+
 /// Shares of the two terms of the image loss (3DGS's λ_D-SSIM = 0.2).
 pub const LOSS_SHARE_L1: f32 = 0.8;
 /// The D-SSIM term's share; [`LOSS_SHARE_L1`] is the rest.
 pub const LOSS_SHARE_SSIM: f32 = 0.2;
 
-/// One image size, the per-channel weights λ and the SSIM window.
+/// One image size, each render's per-channel weights λ and the SSIM window.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct LossParams {
-    channel_weights: [f32; 4],
+    channel_weights: [[f32; 4]; 2],
     size: [u32; 4],
     scales: [f32; 4],
     window: [f32; WINDOW],
@@ -24,8 +27,9 @@ push_layout!(
 );
 
 impl LossParams {
-    /// `has_weight`: whether a per-pixel weight image is bound.
-    pub fn new(width: u32, height: u32, channel_weights: [f32; 4], has_weight: bool) -> Self {
+    /// `channel_weights`: λ of the first and (when the run scores two renders) the second
+    /// render; `has_weight`: whether a per-pixel weight image is bound.
+    pub fn new(width: u32, height: u32, channel_weights: [[f32; 4]; 2], has_weight: bool) -> Self {
         let pixels = width as f64 * height as f64;
         let valid = |n: u32| n.saturating_sub(2 * RADIUS as u32) as f64;
         let ssim_pixels = valid(width) * valid(height);
@@ -43,9 +47,14 @@ impl LossParams {
         self.size[0] as usize * self.size[1] as usize
     }
 
-    /// The per-channel weights λ (r, g, b, alpha).
-    pub fn channel_weights(&self) -> [f32; 4] {
-        self.channel_weights
+    /// Invocations of a horizontal pass (one per run of `RUN` pixels along a row, loss.glsl).
+    pub(crate) fn row_runs(&self) -> usize {
+        self.size[0].div_ceil(RUN) as usize * self.size[1] as usize
+    }
+
+    /// Invocations of a vertical pass (one per run of `RUN` pixels down a column).
+    pub(crate) fn column_runs(&self) -> usize {
+        self.size[0] as usize * self.size[1].div_ceil(RUN) as usize
     }
 }
 
@@ -61,9 +70,16 @@ mod tests {
     }
 
     #[test]
+    fn runs_cover_every_pixel() {
+        let p = LossParams::new(17, 9, [[1.0; 4]; 2], false);
+        assert_eq!(p.row_runs(), 3 * 9);
+        assert_eq!(p.column_runs(), 17 * 2);
+    }
+
+    #[test]
     fn small_images_have_no_ssim_term() {
-        let p = LossParams::new(10, 40, [1.0; 4], false);
+        let p = LossParams::new(10, 40, [[1.0; 4]; 2], false);
         assert_eq!(p.scales[3], 0.0);
-        assert_eq!(LossParams::new(11, 11, [1.0; 4], false).scales[3], 1.0);
+        assert_eq!(LossParams::new(11, 11, [[1.0; 4]; 2], false).scales[3], 1.0);
     }
 }

@@ -9,7 +9,7 @@ use crate::camera::Camera;
 use crate::gpu::{
     push_layout, ComputePipeline, FixedSums, GpuBuffer, GpuContext, PipelineDesc, Recorder,
 };
-use crate::loss::{ImageLoss, LossParams, LossTerms};
+use crate::loss::{ImageLoss, LossTarget, LossTerms, ScoredRender};
 use crate::raster::{MeshRasterizer, RasterMesh, RasterSettings};
 use crate::shaders;
 use crate::splat::GaussianBuffers;
@@ -66,7 +66,7 @@ impl MeshTerm {
     ) -> Result<Self, TrainError> {
         let mesh = RasterMesh::uniform(positions.to_vec(), faces.to_vec(), [0.5; 3])?;
         let pixels = width as usize * height as usize;
-        let mut loss = ImageLoss::new(ctx)?;
+        let mut loss = ImageLoss::new(ctx, 1)?;
         loss.reserve(pixels)?;
         let pipeline = |name, shader| {
             ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &[WORKGROUP] })
@@ -174,8 +174,15 @@ impl MeshTerm {
         let raster = self.record_render(rec, params, camera, background)?;
         rec.end_pass();
         rec.begin_pass("mesh loss");
-        let loss = LossParams::new(camera.width, camera.height, lambda, false);
-        self.loss.record(rec, &loss, &self.packed, target, None, &self.terms, &self.packed_grad)?;
+        let target =
+            LossTarget { width: camera.width, height: camera.height, image: target, weight: None };
+        let render = ScoredRender {
+            image: &self.packed,
+            channel_weights: lambda,
+            terms: &self.terms,
+            gradient: &self.packed_grad,
+        };
+        self.loss.record(rec, &target, &[render])?;
         let pixels = self.packed_grad.len();
         let unpack = [
             ("packed_grad", self.packed_grad.binding()),

@@ -6,7 +6,7 @@ use super::views::ViewTarget;
 use super::TrainError;
 use crate::camera::Camera;
 use crate::gpu::{FixedSums, GpuBuffer, GpuContext, PassTimes, Recorder};
-use crate::loss::{ImageLoss, LossParams, LossTerms};
+use crate::loss::{ImageLoss, LossTarget, LossTerms, ScoredRender};
 use crate::optim::{Adam, AdamParams};
 use crate::splat::{FrameParams, GaussianBuffers, GaussianScene, RenderSettings, Splatter};
 use std::sync::Arc;
@@ -63,7 +63,7 @@ impl Trainer {
     ) -> Result<Self, TrainError> {
         scene.check().map_err(crate::splat::SplatError::from)?;
         let max_pixels = views.iter().map(|v| v.target.len()).max().unwrap_or(0);
-        let mut loss = ImageLoss::new(ctx)?;
+        let mut loss = ImageLoss::new(ctx, 1)?;
         loss.reserve(max_pixels)?;
         let state = GaussianState::new(ctx, scene)?;
         let mut trainer = Self {
@@ -162,16 +162,19 @@ impl Trainer {
         splatter.record_forward(rec, &state.params, frame)?;
         rec.begin_pass("loss");
         state.grads.record_zero(rec);
-        let params = LossParams::new(camera.width, camera.height, lambda, false);
-        self.loss.record(
-            rec,
-            &params,
-            splatter.rgba(),
-            &self.targets[view],
-            None,
-            &self.terms,
-            &self.grad_rgba,
-        )?;
+        let target = LossTarget {
+            width: camera.width,
+            height: camera.height,
+            image: &self.targets[view],
+            weight: None,
+        };
+        let render = ScoredRender {
+            image: splatter.rgba(),
+            channel_weights: lambda,
+            terms: &self.terms,
+            gradient: &self.grad_rgba,
+        };
+        self.loss.record(rec, &target, &[render])?;
         rec.end_pass();
         splatter.record_backward_of(
             rec,

@@ -1,36 +1,63 @@
 #version 460
-// SSIM forward, pass 1 of 2: the horizontal Gaussian filter of the five moments
-// x, y, x², y², xy of every channel, at the columns where a whole window fits.
+// SSIM forward, pass 1 of 2: the horizontal Gaussian filter of every channel's moments at the
+// columns where a whole window fits: the target's y and y² once, each render's x, x² and xy.
+#extension GL_EXT_control_flow_attributes : require
 #include "loss.glsl"
 layout(local_size_x_id = 0) in;
 
-layout(std430, binding = 0) readonly buffer Render { vec4 render[]; };
-layout(std430, binding = 1) readonly buffer Target { vec4 target[]; };
-layout(std430, binding = 2) writeonly buffer MeanX { vec4 mean_x[]; };
+layout(std430, binding = 0) readonly buffer RenderA { vec4 render_a[]; };
+layout(std430, binding = 1) readonly buffer RenderB { vec4 render_b[]; };  // RENDERS = 2 only
+layout(std430, binding = 2) readonly buffer Target { vec4 target[]; };
 layout(std430, binding = 3) writeonly buffer MeanY { vec4 mean_y[]; };
-layout(std430, binding = 4) writeonly buffer MeanXX { vec4 mean_xx[]; };
-layout(std430, binding = 5) writeonly buffer MeanYY { vec4 mean_yy[]; };
-layout(std430, binding = 6) writeonly buffer MeanXY { vec4 mean_xy[]; };
+layout(std430, binding = 4) writeonly buffer MeanYY { vec4 mean_yy[]; };
+// One plane per render (loss.glsl `plane`).
+layout(std430, binding = 5) writeonly buffer MeanX { vec4 mean_x[]; };
+layout(std430, binding = 6) writeonly buffer MeanXX { vec4 mean_xx[]; };
+layout(std430, binding = 7) writeonly buffer MeanXY { vec4 mean_xy[]; };
+
+// Pixel `i` of the run's span, clamped into the row: a clamped value reaches only outputs
+// outside the SSIM region, which are not written.
+uint span_pixel(uint row, uint x0, int i) {
+    return row + uint(clamp(int(x0) - RADIUS + i, 0, int(width()) - 1));
+}
+
+bool column_valid(uint x) { return x >= uint(RADIUS) && x + uint(RADIUS) < width(); }
 
 void main() {
-    uint p = gl_GlobalInvocationID.x;
-    if (p >= pixel_count()) return;
-    uint x = p % width();
-    if (x < uint(RADIUS) || x + uint(RADIUS) >= width()) return;
-    vec4 mx = vec4(0.0), my = vec4(0.0), mxx = vec4(0.0), myy = vec4(0.0), mxy = vec4(0.0);
-    for (int k = -RADIUS; k <= RADIUS; k++) {
-        float w = params.window[k + RADIUS];
-        vec4 a = render[p + k];
-        vec4 b = target[p + k];
-        mx += w * a;
-        my += w * b;
-        mxx += w * a * a;
-        myy += w * b * b;
-        mxy += w * a * b;
+    uint y, x0;
+    if (!row_run(gl_GlobalInvocationID.x, y, x0)) return;
+    uint row = y * width();
+    vec4 t[SPAN];
+    [[unroll]] for (int i = 0; i < SPAN; i++) t[i] = target[span_pixel(row, x0, i)];
+    [[unroll]] for (int j = 0; j < RUN; j++) {
+        if (!column_valid(x0 + uint(j))) continue;
+        vec4 my = vec4(0.0), myy = vec4(0.0);
+        [[unroll]] for (int k = 0; k < TAPS; k++) {
+            my += params.window[k] * t[j + k];
+            myy += params.window[k] * t[j + k] * t[j + k];
+        }
+        mean_y[row + x0 + uint(j)] = my;
+        mean_yy[row + x0 + uint(j)] = myy;
     }
-    mean_x[p] = mx;
-    mean_y[p] = my;
-    mean_xx[p] = mxx;
-    mean_yy[p] = myy;
-    mean_xy[p] = mxy;
+    [[unroll]] for (uint r = 0u; r < RENDERS; r++) {
+        vec4 v[SPAN];
+        [[unroll]] for (int i = 0; i < SPAN; i++) {
+            uint p = span_pixel(row, x0, i);
+            v[i] = r == 0u ? render_a[p] : render_b[p];
+        }
+        [[unroll]] for (int j = 0; j < RUN; j++) {
+            if (!column_valid(x0 + uint(j))) continue;
+            vec4 mx = vec4(0.0), mxx = vec4(0.0), mxy = vec4(0.0);
+            [[unroll]] for (int k = 0; k < TAPS; k++) {
+                float w = params.window[k];
+                mx += w * v[j + k];
+                mxx += w * v[j + k] * v[j + k];
+                mxy += w * v[j + k] * t[j + k];
+            }
+            uint q = plane(r) + row + x0 + uint(j);
+            mean_x[q] = mx;
+            mean_xx[q] = mxx;
+            mean_xy[q] = mxy;
+        }
+    }
 }

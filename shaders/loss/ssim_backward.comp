@@ -1,35 +1,52 @@
 #version 460
 // SSIM backward, pass 2 of 2, fused with the L1 gradient: the vertical filter completes the
-// adjoint, and dL/dx = Ḡ[dμx] + 2x·Ḡ[dE[x²]] + y·Ḡ[dE[xy]] + L1 term, written per pixel in the
-// layout the renderers' backward passes read (vec4: colour, alpha).
+// adjoint, and per render dL/dx = Ḡ[dμx] + 2x·Ḡ[dE[x²]] + y·Ḡ[dE[xy]] + L1 term, written per
+// pixel in the layout the renderers' backward passes read (vec4: colour, alpha).
+#extension GL_EXT_control_flow_attributes : require
 #include "loss.glsl"
 layout(local_size_x_id = 0) in;
 
-layout(std430, binding = 0) readonly buffer Render { vec4 render[]; };
-layout(std430, binding = 1) readonly buffer Target { vec4 target[]; };
-layout(std430, binding = 2) readonly buffer Weight { float weight[]; };
-layout(std430, binding = 3) readonly buffer BlurX { vec4 blur_x[]; };
-layout(std430, binding = 4) readonly buffer BlurXX { vec4 blur_xx[]; };
-layout(std430, binding = 5) readonly buffer BlurXY { vec4 blur_xy[]; };
-layout(std430, binding = 6) writeonly buffer Gradient { vec4 gradient[]; };
+layout(std430, binding = 0) readonly buffer RenderA { vec4 render_a[]; };
+layout(std430, binding = 1) readonly buffer RenderB { vec4 render_b[]; };  // RENDERS = 2 only
+layout(std430, binding = 2) readonly buffer Target { vec4 target[]; };
+layout(std430, binding = 3) readonly buffer Weight { float weight[]; };
+// One plane per render (loss.glsl `plane`).
+layout(std430, binding = 4) readonly buffer BlurX { vec4 blur_x[]; };
+layout(std430, binding = 5) readonly buffer BlurXX { vec4 blur_xx[]; };
+layout(std430, binding = 6) readonly buffer BlurXY { vec4 blur_xy[]; };
+layout(std430, binding = 7) writeonly buffer GradientA { vec4 gradient_a[]; };
+layout(std430, binding = 8) writeonly buffer GradientB { vec4 gradient_b[]; };  // RENDERS = 2 only
 
 void main() {
-    uint p = gl_GlobalInvocationID.x;
-    if (p >= pixel_count()) return;
-    int y = int(p / width());
-    vec4 a = vec4(0.0), xx = vec4(0.0), xy = vec4(0.0);
-    for (int k = -RADIUS; k <= RADIUS; k++) {
-        if (y + k >= 0 && y + k < int(height())) {
-            float g = params.window[k + RADIUS];
-            uint q = uint(int(p) + k * int(width()));
-            a += g * blur_x[q];
-            xx += g * blur_xx[q];
-            xy += g * blur_xy[q];
+    uint x, y0;
+    if (!column_run(gl_GlobalInvocationID.x, x, y0)) return;
+    [[unroll]] for (uint r = 0u; r < RENDERS; r++) {
+        vec4 a[SPAN], xx[SPAN], xy[SPAN];
+        [[unroll]] for (int i = 0; i < SPAN; i++) {
+            int y = int(y0) - RADIUS + i;
+            bool inside = y >= 0 && y < int(height());
+            uint p = plane(r) + uint(clamp(y, 0, int(height()) - 1)) * width() + x;
+            a[i] = inside ? blur_x[p] : vec4(0.0);
+            xx[i] = inside ? blur_xx[p] : vec4(0.0);
+            xy[i] = inside ? blur_xy[p] : vec4(0.0);
+        }
+        vec4 lambda = params.channel_weights[r];
+        [[unroll]] for (int j = 0; j < RUN; j++) {
+            if (y0 + uint(j) >= height()) break;
+            vec4 fa = vec4(0.0), fxx = vec4(0.0), fxy = vec4(0.0);
+            [[unroll]] for (int k = 0; k < TAPS; k++) {
+                float g = params.window[k];
+                fa += g * a[j + k];
+                fxx += g * xx[j + k];
+                fxy += g * xy[j + k];
+            }
+            uint p = (y0 + uint(j)) * width() + x;
+            vec4 render = r == 0u ? render_a[p] : render_b[p];
+            vec4 t = target[p];
+            float w = has_weight() ? weight[p] : 1.0;
+            vec4 l1 = lambda * params.scales.x * params.scales.z * w * sign(render - t);
+            vec4 gradient = fa + 2.0 * render * fxx + t * fxy + l1;
+            if (r == 0u) gradient_a[p] = gradient; else gradient_b[p] = gradient;
         }
     }
-    vec4 x = render[p];
-    vec4 t = target[p];
-    float w = has_weight() ? weight[p] : 1.0;
-    vec4 l1 = params.channel_weights * params.scales.x * params.scales.z * w * sign(x - t);
-    gradient[p] = a + 2.0 * x * xx + t * xy + l1;
 }

@@ -1,73 +1,128 @@
 #version 460
 // SSIM forward, pass 2 of 2, fused with the loss value and the first half of the backward:
-// the vertical filter completes the moments; S and its partial derivatives with respect to
-// the filtered moments μx, E[x²], E[xy] (scaled by dL/dS) go to the backward; the L1 and SSIM
-// terms of the loss are summed per channel, one fixed-point add per subgroup (order-independent,
-// so runs repeat bit for bit).
+// the vertical filter completes the moments; S of each render and its partial derivatives
+// with respect to the filtered μx, E[x²], E[xy] (scaled by dL/dS) go to the backward; each
+// render's L1 and SSIM terms are summed per channel, one fixed-point add per subgroup
+// (order-independent, so runs repeat bit for bit).
 #extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_EXT_control_flow_attributes : require
 #include "loss.glsl"
 #include "../common/fixed_sum.glsl"
 layout(local_size_x_id = 0) in;
 
-layout(std430, binding = 0) readonly buffer Render { vec4 render[]; };
-layout(std430, binding = 1) readonly buffer Target { vec4 target[]; };
-layout(std430, binding = 2) readonly buffer Weight { float weight[]; };
-layout(std430, binding = 3) readonly buffer MeanX { vec4 mean_x[]; };
+layout(std430, binding = 0) readonly buffer RenderA { vec4 render_a[]; };
+layout(std430, binding = 1) readonly buffer RenderB { vec4 render_b[]; };  // RENDERS = 2 only
+layout(std430, binding = 2) readonly buffer Target { vec4 target[]; };
+layout(std430, binding = 3) readonly buffer Weight { float weight[]; };
 layout(std430, binding = 4) readonly buffer MeanY { vec4 mean_y[]; };
-layout(std430, binding = 5) readonly buffer MeanXX { vec4 mean_xx[]; };
-layout(std430, binding = 6) readonly buffer MeanYY { vec4 mean_yy[]; };
-layout(std430, binding = 7) readonly buffer MeanXY { vec4 mean_xy[]; };
-layout(std430, binding = 8) writeonly buffer DMeanX { vec4 d_mean_x[]; };
-layout(std430, binding = 9) writeonly buffer DMeanXX { vec4 d_mean_xx[]; };
-layout(std430, binding = 10) writeonly buffer DMeanXY { vec4 d_mean_xy[]; };
-// Per channel: [0..4) the mean absolute error, [4..8) the mean of 1 − S (unweighted by λ).
-layout(std430, binding = 11) buffer TermSums { int64_t term_sums[]; };  // fixed_sum.glsl: 8 sums
+layout(std430, binding = 5) readonly buffer MeanYY { vec4 mean_yy[]; };
+// One plane per render (loss.glsl `plane`).
+layout(std430, binding = 6) readonly buffer MeanX { vec4 mean_x[]; };
+layout(std430, binding = 7) readonly buffer MeanXX { vec4 mean_xx[]; };
+layout(std430, binding = 8) readonly buffer MeanXY { vec4 mean_xy[]; };
+layout(std430, binding = 9) writeonly buffer DMeanX { vec4 d_mean_x[]; };
+layout(std430, binding = 10) writeonly buffer DMeanXX { vec4 d_mean_xx[]; };
+layout(std430, binding = 11) writeonly buffer DMeanXY { vec4 d_mean_xy[]; };
+// Per render and channel: [0..4) the mean absolute error, [4..8) the mean of 1 − S
+// (unweighted by λ); fixed_sum.glsl, 8 sums each.
+layout(std430, binding = 12) buffer TermSumsA { int64_t term_sums_a[]; };
+layout(std430, binding = 13) buffer TermSumsB { int64_t term_sums_b[]; };  // RENDERS = 2 only
+
+// Row `i` of the run's span in column x, clamped into the image: a clamped value reaches only
+// outputs outside the SSIM region.
+uint span_pixel(uint x, uint y0, int i) {
+    return uint(clamp(int(y0) - RADIUS + i, 0, int(height()) - 1)) * width() + x;
+}
+
+// The vertical filter of output j of the run from a span of moments.
+#define FILTER(span, j, out_) {                                                  \
+    out_ = vec4(0.0);                                                            \
+    [[unroll]] for (int k_ = 0; k_ < TAPS; k_++) out_ += params.window[k_] * span[(j) + k_]; \
+}
 
 void main() {
-    uint p = gl_GlobalInvocationID.x;
-    bool inside = p < pixel_count();
-    uint x = inside ? p % width() : 0u;
-    uint y = inside ? p / width() : 0u;
-    float w = (inside && has_weight()) ? weight[p] : 1.0;
-    vec4 l1 = inside ? w * abs(render[p] - target[p]) : vec4(0.0);
-    vec4 dissimilarity = vec4(0.0);
-    vec4 da = vec4(0.0), dxx = vec4(0.0), dxy = vec4(0.0);
-    if (inside && ssim_valid(x, y)) {
-        vec4 a = vec4(0.0), b = vec4(0.0), xx = vec4(0.0), yy = vec4(0.0), xy = vec4(0.0);
-        for (int k = -RADIUS; k <= RADIUS; k++) {
-            float g = params.window[k + RADIUS];
-            uint q = uint(int(p) + k * int(width()));
-            a += g * mean_x[q];
-            b += g * mean_y[q];
-            xx += g * mean_xx[q];
-            yy += g * mean_yy[q];
-            xy += g * mean_xy[q];
+    uint x, y0;
+    bool inside = column_run(gl_GlobalInvocationID.x, x, y0);
+    bool column_valid = inside && x >= uint(RADIUS) && x + uint(RADIUS) < width();
+    vec4 l1_sum[2] = vec4[2](vec4(0.0), vec4(0.0));
+    vec4 ssim_sum[2] = vec4[2](vec4(0.0), vec4(0.0));
+    // The target's filtered moments, shared by the renders.
+    vec4 b[RUN], yy[RUN];
+    if (column_valid) {
+        vec4 span_y[SPAN], span_yy[SPAN];
+        [[unroll]] for (int i = 0; i < SPAN; i++) {
+            uint p = span_pixel(x, y0, i);
+            span_y[i] = mean_y[p];
+            span_yy[i] = mean_yy[p];
         }
-        vec4 n1 = 2.0 * a * b + C1;
-        vec4 n2 = 2.0 * (xy - a * b) + C2;
-        vec4 d1 = a * a + b * b + C1;
-        vec4 d2 = (xx - a * a) + (yy - b * b) + C2;
-        vec4 d = d1 * d2;
-        vec4 s = n1 * n2 / d;
-        dissimilarity = w * (1.0 - s);
-        // dL/dS of this pixel (the SSIM term is λ · share · mean(w (1 − S))); the quotient
-        // rule is written so no factor divides by n1 or n2, which may be zero.
-        vec4 ds = -params.channel_weights * params.scales.y * params.scales.w * w;
-        da = ds * ((2.0 * b * n2 - 2.0 * b * n1) / d - s * (2.0 * a / d1 - 2.0 * a / d2));
-        dxx = ds * (-s / d2);
-        dxy = ds * (2.0 * n1 / d);
+        [[unroll]] for (int j = 0; j < RUN; j++) {
+            FILTER(span_y, j, b[j]);
+            FILTER(span_yy, j, yy[j]);
+        }
     }
-    if (inside) {
-        d_mean_x[p] = da;
-        d_mean_xx[p] = dxx;
-        d_mean_xy[p] = dxy;
+    [[unroll]] for (uint r = 0u; r < RENDERS; r++) {
+        if (!inside) break;
+        vec4 a[RUN], xx[RUN], xy[RUN];
+        if (column_valid) {
+            vec4 span_x[SPAN], span_xx[SPAN], span_xy[SPAN];
+            [[unroll]] for (int i = 0; i < SPAN; i++) {
+                uint p = plane(r) + span_pixel(x, y0, i);
+                span_x[i] = mean_x[p];
+                span_xx[i] = mean_xx[p];
+                span_xy[i] = mean_xy[p];
+            }
+            [[unroll]] for (int j = 0; j < RUN; j++) {
+                FILTER(span_x, j, a[j]);
+                FILTER(span_xx, j, xx[j]);
+                FILTER(span_xy, j, xy[j]);
+            }
+        }
+        vec4 lambda = params.channel_weights[r];
+        [[unroll]] for (int j = 0; j < RUN; j++) {
+            if (y0 + uint(j) >= height()) break;
+            uint y = y0 + uint(j);
+            uint p = y * width() + x;
+            float w = has_weight() ? weight[p] : 1.0;
+            vec4 render = r == 0u ? render_a[p] : render_b[p];
+            l1_sum[r] += w * abs(render - target[p]);
+            vec4 da = vec4(0.0), dxx = vec4(0.0), dxy = vec4(0.0);
+            if (column_valid && ssim_valid(x, y)) {
+                vec4 n1 = 2.0 * a[j] * b[j] + C1;
+                vec4 n2 = 2.0 * (xy[j] - a[j] * b[j]) + C2;
+                vec4 d1 = a[j] * a[j] + b[j] * b[j] + C1;
+                vec4 d2 = (xx[j] - a[j] * a[j]) + (yy[j] - b[j] * b[j]) + C2;
+                vec4 d = d1 * d2;
+                vec4 s = n1 * n2 / d;
+                ssim_sum[r] += w * (1.0 - s);
+                // dL/dS of this pixel (the SSIM term is λ · share · mean(w (1 − S))); the
+                // quotient rule is written so no factor divides by n1 or n2, which may be zero.
+                vec4 ds = -lambda * params.scales.y * params.scales.w * w;
+                da = ds * ((2.0 * b[j] * n2 - 2.0 * b[j] * n1) / d
+                           - s * (2.0 * a[j] / d1 - 2.0 * a[j] / d2));
+                dxx = ds * (-s / d2);
+                dxy = ds * (2.0 * n1 / d);
+            }
+            uint q = plane(r) + p;
+            d_mean_x[q] = da;
+            d_mean_xx[q] = dxx;
+            d_mean_xy[q] = dxy;
+        }
     }
-    vec4 l1_sum = subgroupAdd(l1);
-    vec4 ssim_sum = subgroupAdd(dissimilarity);
-    if (subgroupElect()) {
-        for (int c = 0; c < 4; c++) {
-            FIXED_ADD_TOTAL(term_sums, uint(c), l1_sum[c] * params.scales.z);
-            FIXED_ADD_TOTAL(term_sums, uint(4 + c), ssim_sum[c] * params.scales.w);
+    [[unroll]] for (uint r = 0u; r < RENDERS; r++) {
+        vec4 l1 = subgroupAdd(l1_sum[r]);
+        vec4 dissimilarity = subgroupAdd(ssim_sum[r]);
+        if (subgroupElect()) {
+            [[unroll]] for (int c = 0; c < 4; c++) {
+                float l1_term = l1[c] * params.scales.z;
+                float ssim_term = dissimilarity[c] * params.scales.w;
+                if (r == 0u) {
+                    FIXED_ADD_TOTAL(term_sums_a, uint(c), l1_term);
+                    FIXED_ADD_TOTAL(term_sums_a, uint(4 + c), ssim_term);
+                } else {
+                    FIXED_ADD_TOTAL(term_sums_b, uint(c), l1_term);
+                    FIXED_ADD_TOTAL(term_sums_b, uint(4 + c), ssim_term);
+                }
+            }
         }
     }
 }
