@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::time::Duration;
 use tagsplat::bench::random_scene;
 use tagsplat::gpu::{ContextOptions, GpuBuffer, GpuContext, Recorder};
-use tagsplat::loss::{ImageLoss, LossParams, LossTerms};
+use tagsplat::loss::{ImageLoss, LossTarget, LossTerms, ScoredRender};
 use tagsplat::optim::{Adam, AdamParams, LearningRates};
 use tagsplat::rng::SplitMix64;
 use tagsplat::splat::GaussianBuffers;
@@ -40,10 +40,15 @@ fn bench_kernels(
     let target = GpuBuffer::from_slice(ctx, "target", &image())?;
     let terms = LossTerms::sums(ctx, "terms")?;
     let gradient = GpuBuffer::<[f32; 4]>::new(ctx, "gradient", pixels)?;
-    let mut loss = ImageLoss::new(ctx)?;
+    let mut loss = ImageLoss::new(ctx, 1)?;
     loss.reserve(pixels)?;
-    let params =
-        LossParams::new(RESOLUTION, RESOLUTION, [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0], false);
+    let target = LossTarget { width: RESOLUTION, height: RESOLUTION, image: &target, weight: None };
+    let render = ScoredRender {
+        image: &render,
+        channel_weights: [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0],
+        terms: &terms,
+        gradient: &gradient,
+    };
 
     let scene = random_scene(GAUSSIANS, 3, 0x5EED);
     let gaussians = GaussianBuffers::from_scene(ctx, &scene)?;
@@ -66,7 +71,7 @@ fn bench_kernels(
     group.bench_function("image_loss_256", |b| {
         b.iter(|| {
             let mut rec = Recorder::new(ctx)?;
-            loss.record(&mut rec, &params, &render, &target, None, &terms, &gradient)?;
+            loss.record(&mut rec, &target, &[render])?;
             rec.submit_and_wait()
         })
     });

@@ -488,6 +488,10 @@ fn print_train_report(r: &TrainBenchReport) {
         r.splat_fwd_bwd_s * 1e3
     );
     println!("loss + Adam + rest  {:.0}% of an iteration", r.overhead_fraction * 100.0);
+    println!(
+        "image loss alone    {:.2} ms for one render, {:.2} ms for two against one target (same run)",
+        r.loss_ms[0], r.loss_ms[1]
+    );
     println!("GPU passes (median ms per iteration):");
     for (name, ms) in &r.passes_ms {
         println!("  {name:<20}{ms:.2}");

@@ -3,7 +3,8 @@
 //! measured in the same run (the floor the loss and optimizer add to).
 
 use super::splat::{bench_splat, random_scene, ring_cameras, SplatBenchConfig};
-use crate::gpu::GpuContext;
+use crate::gpu::{GpuBuffer, GpuContext, Recorder};
+use crate::loss::{ImageLoss, LossTarget, LossTerms, ScoredRender};
 use crate::optim::{AdamParams, LearningRates};
 use crate::splat::{GaussianBuffers, RenderSettings, Splatter};
 use crate::train::{TrainError, Trainer, ViewTarget};
@@ -43,6 +44,10 @@ pub struct TrainBenchReport {
     pub splat_fwd_bwd_s: f64,
     /// What loss, optimizer and step overhead add: 1 − splat_fwd_bwd_s / s_per_iter.
     pub overhead_fraction: f64,
+    /// Median GPU ms of the image loss (L1 + SSIM, forward and backward) alone on one view,
+    /// scoring one render, and two renders against the same target in one run (a view's
+    /// Gaussian and mesh renders, as `train` does), same run.
+    pub loss_ms: [f64; 2],
 }
 
 /// Learning rates of the fit's defaults (their values do not change the work).
@@ -102,6 +107,11 @@ pub fn bench_train(
         })
         .collect();
     let s_per_iter = super::median(walls);
+    drop(trainer);
+    let loss_ms = [
+        bench_loss(ctx, &views, 1, config.iterations)?,
+        bench_loss(ctx, &views, 2, config.iterations)?,
+    ];
     let splat = bench_splat(ctx, &SplatBenchConfig { rounds: 2, ..*c })?;
     Ok(TrainBenchReport {
         device: ctx.info().name.clone(),
@@ -111,5 +121,49 @@ pub fn bench_train(
         passes_ms,
         splat_fwd_bwd_s: splat.fwd_bwd_s,
         overhead_fraction: if s_per_iter > 0.0 { 1.0 - splat.fwd_bwd_s / s_per_iter } else { 0.0 },
+        loss_ms,
     })
+}
+
+/// Median GPU ms over `runs` of the image loss scoring `renders` renders (the next views'
+/// targets, so the images are realistic) against the first view's target.
+fn bench_loss(
+    ctx: &Arc<GpuContext>,
+    views: &[ViewTarget],
+    renders: usize,
+    runs: usize,
+) -> Result<f64, TrainError> {
+    let pixels = views[0].target.len();
+    let upload = |v: &ViewTarget| GpuBuffer::from_slice(ctx, &v.name, &v.target);
+    let target = upload(&views[0])?;
+    let images: Vec<_> =
+        (1..=renders).map(|i| upload(&views[i % views.len()])).collect::<Result<_, _>>()?;
+    let sums: Vec<_> =
+        images.iter().map(|_| LossTerms::sums(ctx, "terms")).collect::<Result<_, _>>()?;
+    let gradients: Vec<_> = images
+        .iter()
+        .map(|_| GpuBuffer::<[f32; 4]>::new(ctx, "gradient", pixels))
+        .collect::<Result<_, _>>()?;
+    let scored: Vec<_> = (0..renders)
+        .map(|i| ScoredRender {
+            image: &images[i],
+            channel_weights: [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0],
+            terms: &sums[i],
+            gradient: &gradients[i],
+        })
+        .collect();
+    let (width, height) = (views[0].camera.width, views[0].camera.height);
+    let target = LossTarget { width, height, image: &target, weight: None };
+    let mut loss = ImageLoss::new(ctx, renders)?;
+    loss.reserve(pixels)?;
+    let mut times = Vec::new();
+    for _ in 0..runs.max(1) + 1 {
+        let mut rec = Recorder::new(ctx)?;
+        rec.begin_pass("loss");
+        loss.record(&mut rec, &target, &scored)?;
+        rec.end_pass();
+        times.push(super::splat::top_level_ms(&[rec.submit_and_wait()?])["loss"]);
+    }
+    // The first run warms up (pipeline compile, first touch of the scratch).
+    Ok(super::median(times[1..].to_vec()))
 }

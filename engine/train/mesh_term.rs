@@ -1,18 +1,19 @@
 //! The mesh terms of a training step: the mesh whose vertices are the Gaussians (positions
 //! from the Gaussian buffer, colours from their SH DC) rendered by the visibility-buffer
-//! rasterizer, scored by the fused image loss against the view's target (colour and mask), and
-//! differentiated back into the Gaussians' position and SH gradients, all recorded into the
-//! training step's submission.
+//! rasterizer, scored against the view's target (colour and mask) in the same run of the fused
+//! image loss as the Gaussian render ([`Trainer::record_splat_beside`]), and differentiated back
+//! into the Gaussians' position and SH gradients, all recorded into the training step's
+//! submission.
 
-use super::TrainError;
+use super::{TrainError, Trainer};
 use crate::camera::Camera;
 use crate::gpu::{
     push_layout, ComputePipeline, FixedSums, GpuBuffer, GpuContext, PipelineDesc, Recorder,
 };
-use crate::loss::{ImageLoss, LossTarget, LossTerms, ScoredRender};
+use crate::loss::{LossTerms, ScoredRender};
 use crate::raster::{MeshRasterizer, RasterMesh, RasterSettings};
 use crate::shaders;
-use crate::splat::GaussianBuffers;
+use crate::splat::{FrameParams, GaussianBuffers};
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
 
@@ -39,7 +40,6 @@ pub struct MeshTerm {
     ctx: Arc<GpuContext>,
     raster: MeshRasterizer,
     settings: RasterSettings,
-    loss: ImageLoss,
     mesh_colors: ComputePipeline,
     sh_dc_gradient: ComputePipeline,
     pack: ComputePipeline,
@@ -66,8 +66,6 @@ impl MeshTerm {
     ) -> Result<Self, TrainError> {
         let mesh = RasterMesh::uniform(positions.to_vec(), faces.to_vec(), [0.5; 3])?;
         let pixels = width as usize * height as usize;
-        let mut loss = ImageLoss::new(ctx, 1)?;
-        loss.reserve(pixels)?;
         let pipeline = |name, shader| {
             ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &[WORKGROUP] })
         };
@@ -75,7 +73,6 @@ impl MeshTerm {
             ctx: ctx.clone(),
             raster: MeshRasterizer::new(ctx, &mesh, width, height)?,
             settings: RasterSettings::scaled_to(positions),
-            loss,
             mesh_colors: pipeline("mesh colours from SH", &shaders::TRAIN_MESH_COLORS)?,
             sh_dc_gradient: pipeline(
                 "SH DC gradient from mesh colours",
@@ -130,7 +127,7 @@ impl MeshTerm {
         params: &'a GaussianBuffers,
         camera: &Camera,
         background: [f32; 3],
-    ) -> Result<crate::raster::RasterParams, TrainError> {
+    ) -> Result<(), TrainError> {
         let groups = |n: usize| n.div_ceil(WORKGROUP as usize) as u64;
         let vertices = self.bridge(params.len(), params, background);
         rec.dispatch_1d(
@@ -153,36 +150,44 @@ impl MeshTerm {
             &self.bridge(pixels, params, background),
             groups(pixels),
         )?;
-        Ok(raster)
+        Ok(())
     }
 
-    /// Records render, loss (λ per rgba channel against `target`) and backward, ADDING to the
-    /// position and SH DC gradients in `grads`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record<'a>(
+    /// Records the mesh render of `params` from `camera`; returns it as the view's loss scores
+    /// it (λ per rgba channel), with this term's sums and gradient image. After the loss,
+    /// [`Self::record_backward`].
+    pub fn record_forward<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        params: &'a GaussianBuffers,
+        camera: &Camera,
+        lambda: [f32; 4],
+        background: [f32; 3],
+    ) -> Result<ScoredRender<'a>, TrainError> {
+        rec.begin_pass("mesh render");
+        self.record_render(rec, params, camera, background)?;
+        rec.end_pass();
+        Ok(ScoredRender {
+            image: &self.packed,
+            channel_weights: lambda,
+            terms: &self.terms,
+            gradient: &self.packed_grad,
+        })
+    }
+
+    /// Records the backward of the render [`Self::record_forward`] recorded, from the gradient
+    /// the loss wrote, ADDING to the position and SH DC gradients in `grads`.
+    pub fn record_backward<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
         params: &'a GaussianBuffers,
         grads: &'a GaussianBuffers,
         camera: &Camera,
-        target: &'a GpuBuffer<[f32; 4]>,
-        lambda: [f32; 4],
         background: [f32; 3],
     ) -> Result<(), TrainError> {
         let groups = |n: usize| n.div_ceil(WORKGROUP as usize) as u64;
-        rec.begin_pass("mesh render");
-        let raster = self.record_render(rec, params, camera, background)?;
-        rec.end_pass();
-        rec.begin_pass("mesh loss");
-        let target =
-            LossTarget { width: camera.width, height: camera.height, image: target, weight: None };
-        let render = ScoredRender {
-            image: &self.packed,
-            channel_weights: lambda,
-            terms: &self.terms,
-            gradient: &self.packed_grad,
-        };
-        self.loss.record(rec, &target, &[render])?;
+        let raster = self.raster.params(camera, &self.settings)?;
+        rec.begin_pass("mesh backward");
         let pixels = self.packed_grad.len();
         let unpack = [
             ("packed_grad", self.packed_grad.binding()),
@@ -195,8 +200,6 @@ impl MeshTerm {
             &self.bridge(pixels, params, background),
             groups(pixels),
         )?;
-        rec.end_pass();
-        rec.begin_pass("mesh backward");
         rec.fill_buffer(&self.vertex_color_grads, 0);
         self.raster.record_backward(
             rec,
@@ -214,6 +217,24 @@ impl MeshTerm {
         )?;
         rec.end_pass();
         Ok(())
+    }
+
+    /// Records a training step on view `view` with this term: the mesh render, the Gaussian
+    /// and mesh renders scored against the view's target in one run of the loss (`weights`:
+    /// Gaussian, mesh λ per rgba channel), both backwards. `trainer` must be built
+    /// [`Trainer::with_second_render`].
+    pub fn record_step_with<'a>(
+        &'a self,
+        trainer: &'a Trainer,
+        rec: &mut Recorder<'a>,
+        (view, frame): (usize, &FrameParams),
+        weights: [[f32; 4]; 2],
+        background: [f32; 3],
+    ) -> Result<(), TrainError> {
+        let (params, camera) = (trainer.params(), trainer.camera(view));
+        let mesh = self.record_forward(rec, params, camera, weights[1], background)?;
+        trainer.record_splat_beside(rec, view, frame, weights[0], mesh)?;
+        self.record_backward(rec, params, trainer.grads(), camera, background)
     }
 
     /// The loss terms summed since the last call (which restarts the sum).

@@ -49,6 +49,9 @@ pub enum TrainError {
     /// The mesh rasterizer failed.
     #[error(transparent)]
     Raster(#[from] crate::raster::RasterError),
+    /// A second render was given to a trainer built without the loss for two.
+    #[error("Trainer::record_splat_beside needs a trainer built with Trainer::with_second_render")]
+    NoSecondRender,
     /// A regularizer failed.
     #[error(transparent)]
     Regularize(#[from] crate::regularize::RegularizeError),

@@ -20,7 +20,7 @@ use super::{TrainError, Trainer};
 use crate::gpu::{PassTimes, Recorder};
 use crate::optim::{AdamParams, LearningRates};
 use crate::rng::SplitMix64;
-use crate::splat::{GaussianScene, RenderSettings};
+use crate::splat::{FrameParams, GaussianScene, RenderSettings};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -43,15 +43,18 @@ pub(crate) trait Stage {
     /// The learning rates of iteration `it` of `iterations`.
     fn rates(&self, it: u32, iterations: u32) -> LearningRates;
 
-    /// Records the stage's terms for training view `view` after the splatting loss, adding
-    /// their gradients to the trainer's. None by default: the splatting loss alone.
-    fn record_terms<'a>(
+    /// Records a step's terms on training view `view`: the splatting loss (weights per rgba
+    /// channel) and whatever the stage adds, every gradient added to the trainer's. The
+    /// splatting loss alone by default.
+    fn record_step<'a>(
         &'a self,
-        _trainer: &'a Trainer,
-        _rec: &mut Recorder<'a>,
-        _view: usize,
+        trainer: &'a Trainer,
+        rec: &mut Recorder<'a>,
+        view: usize,
+        frame: &FrameParams,
+        splat_weights: [f32; 4],
     ) -> Result<(), TrainError> {
-        Ok(())
+        trainer.record_splat(rec, view, frame, splat_weights)
     }
 
     /// The mean weighted loss over iterations `first..=last` (all summed on the GPU since the
@@ -130,8 +133,7 @@ pub(crate) fn optimize(
         let adam = AdamParams::new(&rates, it, trainer.gaussians(), trainer.sh_degree());
         let frame = trainer.prepare_step(view, settings)?;
         let mut rec = Recorder::new(trainer.context())?;
-        trainer.record_splat(&mut rec, view, &frame, schedule.splat_weights)?;
-        stage.record_terms(trainer, &mut rec, view)?;
+        stage.record_step(trainer, &mut rec, view, &frame, schedule.splat_weights)?;
         trainer.record_adam(&mut rec, &adam)?;
         add_times(&mut outcome.passes_ms, &rec.submit_and_wait()?);
         outcome.truncated_steps += (!trainer.finish_step(frame)?) as u32;

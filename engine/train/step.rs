@@ -42,6 +42,9 @@ pub struct Trainer {
     ctx: Arc<GpuContext>,
     splatter: Splatter,
     loss: ImageLoss,
+    /// Scores the Gaussian render and another render of the same view in one run; built by
+    /// [`Trainer::with_second_render`].
+    pair_loss: Option<ImageLoss>,
     cameras: Vec<Camera>,
     targets: Vec<GpuBuffer<[f32; 4]>>,
     grad_rgba: GpuBuffer<[f32; 4]>,
@@ -70,6 +73,7 @@ impl Trainer {
             ctx: ctx.clone(),
             splatter: Splatter::new(ctx)?,
             loss,
+            pair_loss: None,
             cameras: views.iter().map(|v| v.camera).collect(),
             targets: views
                 .iter()
@@ -87,6 +91,15 @@ impl Trainer {
         rec.submit_and_wait()?;
         trainer.size_for_views()?;
         Ok(trainer)
+    }
+
+    /// Builds the loss that scores the Gaussian render beside another render of the same view
+    /// in one run ([`Self::record_splat_beside`]).
+    pub fn with_second_render(mut self) -> Result<Self, TrainError> {
+        let mut pair = ImageLoss::new(&self.ctx, 2)?;
+        pair.reserve(self.grad_rgba.len())?;
+        self.pair_loss = Some(pair);
+        Ok(self)
     }
 
     /// Renders every view once, so the splatter's intersection buffers fit them all.
@@ -158,6 +171,31 @@ impl Trainer {
         frame: &FrameParams,
         lambda: [f32; 4],
     ) -> Result<(), TrainError> {
+        self.record_splat_with(rec, view, frame, lambda, None)
+    }
+
+    /// [`Self::record_splat`], with `other` (a render of the same view recorded before, its
+    /// λ, sums and gradient image) scored against the target in the same run of the loss.
+    /// Needs [`Self::with_second_render`].
+    pub fn record_splat_beside<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        view: usize,
+        frame: &FrameParams,
+        lambda: [f32; 4],
+        other: ScoredRender<'a>,
+    ) -> Result<(), TrainError> {
+        self.record_splat_with(rec, view, frame, lambda, Some(other))
+    }
+
+    fn record_splat_with<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        view: usize,
+        frame: &FrameParams,
+        lambda: [f32; 4],
+        other: Option<ScoredRender<'a>>,
+    ) -> Result<(), TrainError> {
         let (state, splatter, camera) = (&self.state, &self.splatter, &self.cameras[view]);
         splatter.record_forward(rec, &state.params, frame)?;
         rec.begin_pass("loss");
@@ -174,7 +212,13 @@ impl Trainer {
             terms: &self.terms,
             gradient: &self.grad_rgba,
         };
-        self.loss.record(rec, &target, &[render])?;
+        match other {
+            None => self.loss.record(rec, &target, &[render])?,
+            Some(other) => {
+                let pair = self.pair_loss.as_ref().ok_or(TrainError::NoSecondRender)?;
+                pair.record(rec, &target, &[render, other])?
+            }
+        }
         rec.end_pass();
         splatter.record_backward_of(
             rec,

@@ -91,16 +91,18 @@ void main() {
                 vec4 n2 = 2.0 * (xy[j] - a[j] * b[j]) + C2;
                 vec4 d1 = a[j] * a[j] + b[j] * b[j] + C1;
                 vec4 d2 = (xx[j] - a[j] * a[j]) + (yy[j] - b[j] * b[j]) + C2;
-                vec4 d = d1 * d2;
-                vec4 s = n1 * n2 / d;
+                // Two divisions where the quotient rule has six (C1, C2 > 0 keep d1, d2 > 0).
+                vec4 inverse_d1 = 1.0 / d1, inverse_d2 = 1.0 / d2;
+                vec4 inverse_d = inverse_d1 * inverse_d2;
+                vec4 s = n1 * n2 * inverse_d;
                 ssim_sum[r] += w * (1.0 - s);
                 // dL/dS of this pixel (the SSIM term is λ · share · mean(w (1 − S))); the
                 // quotient rule is written so no factor divides by n1 or n2, which may be zero.
                 vec4 ds = -lambda * params.scales.y * params.scales.w * w;
-                da = ds * ((2.0 * b[j] * n2 - 2.0 * b[j] * n1) / d
-                           - s * (2.0 * a[j] / d1 - 2.0 * a[j] / d2));
-                dxx = ds * (-s / d2);
-                dxy = ds * (2.0 * n1 / d);
+                da = ds * (2.0 * b[j] * (n2 - n1) * inverse_d
+                           - 2.0 * a[j] * s * (inverse_d1 - inverse_d2));
+                dxx = ds * (-s * inverse_d2);
+                dxy = ds * (2.0 * n1 * inverse_d);
             }
             uint q = plane(r) + p;
             d_mean_x[q] = da;

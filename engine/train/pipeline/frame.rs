@@ -12,7 +12,7 @@ use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm, SilhouetteView};
 use crate::optim::LearningRates;
 use crate::regularize::{Losses, Neighbourhoods, Regularizers, Temporal};
 use crate::rng::SplitMix64;
-use crate::splat::{GaussianBuffers, GaussianScene, RenderSettings};
+use crate::splat::{FrameParams, GaussianBuffers, GaussianScene, RenderSettings};
 use crate::topology::{
     compose, densify, face_scores, prune, DensifyConfig, ManifoldMesh, PruneConfig,
 };
@@ -151,7 +151,7 @@ pub fn optimize_frame(
         (start, report.graph, train_s) = (moved, Some(graph), t0.elapsed().as_secs_f64());
     }
 
-    let mut trainer = Trainer::new(ctx, &start, task.train)?;
+    let mut trainer = Trainer::new(ctx, &start, task.train)?.with_second_render()?;
     task.mesh.positions = start.positions.clone();
     let mesh_term = MeshTerm::new(
         ctx,
@@ -254,17 +254,25 @@ impl Stage for FrameStage<'_, '_> {
         frame_rates(self.config, self.extent, it, iterations, self.canonical)
     }
 
-    fn record_terms<'a>(
+    fn record_step<'a>(
         &'a self,
         trainer: &'a Trainer,
         rec: &mut Recorder<'a>,
         view: usize,
+        frame: &FrameParams,
+        splat_weights: [f32; 4],
     ) -> Result<(), TrainError> {
         let (terms, config) = (&self.terms, self.config);
         let (camera, target) = (trainer.camera(view), trainer.target(view));
         let (params, grads) = (trainer.params(), trainer.grads());
-        let bg = config.background;
-        terms.mesh_term.record(rec, params, grads, camera, target, self.weights.mesh, bg)?;
+        let weights = [splat_weights, self.weights.mesh];
+        terms.mesh_term.record_step_with(
+            trainer,
+            rec,
+            (view, frame),
+            weights,
+            config.background,
+        )?;
         rec.begin_pass("regularizers");
         let regularizers = config.loss.regularizers(trainer.gaussians());
         let reference = terms.reference.as_ref().map(Temporal::of);

@@ -92,7 +92,7 @@ pub fn solve_graph(
         let (_, deformer) = built.as_mut().expect("a graph was built just above");
         report.nodes = deformer.nodes();
         let views: Vec<ViewTarget> = input.train.iter().map(|v| v.downsampled(factor)).collect();
-        let mut trainer = Trainer::new(ctx, &moved, &views)?;
+        let mut trainer = Trainer::new(ctx, &moved, &views)?.with_second_render()?;
         let (width, height) = (views[0].camera.width, views[0].camera.height);
         let mesh_term = MeshTerm::new(ctx, &moved.positions, input.faces, width, height)?;
         let coverage = CoverageTerm::new(
@@ -112,14 +112,11 @@ pub fn solve_graph(
             let view = cycle.next(views.len(), rng);
             let frame = trainer.prepare_step(view, settings)?;
             let mut rec = Recorder::new(ctx)?;
-            trainer.record_splat(&mut rec, view, &frame, weights.gaussians)?;
-            mesh_term.record(
+            mesh_term.record_step_with(
+                &trainer,
                 &mut rec,
-                trainer.params(),
-                trainer.grads(),
-                trainer.camera(view),
-                trainer.target(view),
-                weights.mesh,
+                (view, &frame),
+                [weights.gaussians, weights.mesh],
                 settings.background,
             )?;
             input.silhouette.record(
