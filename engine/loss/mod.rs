@@ -117,11 +117,12 @@ pub struct ImageLoss {
     ssim_backward: ComputePipeline,
     /// Horizontal filter of the target's y and y².
     target_moments: [GpuBuffer<[f32; 4]>; 2],
-    /// Horizontal filter of each render's x, x², xy.
+    /// Horizontal filter of each render's x, x², xy; once the second pass has read them, the
+    /// horizontal filter of the derivatives (a run touches a quarter less memory, which
+    /// matters where the images do not stay in cache between runs).
     moments: [GpuBuffer<[f32; 4]>; 3],
-    /// dL/dμx, dL/dE[x²], dL/dE[xy] of each render and their horizontal filters.
+    /// dL/dμx, dL/dE[x²], dL/dE[xy] of each render.
     derivatives: [GpuBuffer<[f32; 4]>; 3],
-    filtered: [GpuBuffer<[f32; 4]>; 3],
     /// Stands in for the weight image when there is none.
     unit_weight: GpuBuffer<f32>,
 }
@@ -167,7 +168,6 @@ impl ImageLoss {
             target_moments: scratch(ctx, "loss target moments", 0)?,
             moments: scratch(ctx, "loss moments", 0)?,
             derivatives: scratch(ctx, "loss moment derivatives", 0)?,
-            filtered: scratch(ctx, "loss filtered derivatives", 0)?,
             unit_weight: GpuBuffer::from_slice(ctx, "loss unit weight", &[1.0])?,
         })
     }
@@ -185,7 +185,6 @@ impl ImageLoss {
             self.target_moments = scratch(&self.ctx, "loss target moments", pixels)?;
             self.moments = scratch(&self.ctx, "loss moments", planes)?;
             self.derivatives = scratch(&self.ctx, "loss moment derivatives", planes)?;
-            self.filtered = scratch(&self.ctx, "loss filtered derivatives", planes)?;
         }
         Ok(())
     }
@@ -223,7 +222,6 @@ impl ImageLoss {
         let [my, myy] = self.target_moments.each_ref().map(|b| b.binding());
         let [mx, mxx, mxy] = self.moments.each_ref().map(|b| b.binding());
         let [dx, dxx, dxy] = self.derivatives.each_ref().map(|b| b.binding());
-        let [fx, fxx, fxy] = self.filtered.each_ref().map(|b| b.binding());
         let images = [
             ("render_a", first.image.binding()),
             ("render_b", second.image.binding()),
@@ -232,7 +230,7 @@ impl ImageLoss {
         let target_moments = [("mean_y", my), ("mean_yy", myy)];
         let moments = [("mean_x", mx), ("mean_xx", mxx), ("mean_xy", mxy)];
         let derivatives = [("d_mean_x", dx), ("d_mean_xx", dxx), ("d_mean_xy", dxy)];
-        let filtered = [("blur_x", fx), ("blur_xx", fxx), ("blur_xy", fxy)];
+        let filtered = [("blur_x", mx), ("blur_xx", mxx), ("blur_xy", mxy)];
         let pass_1 = [&images[..], &target_moments, &moments].concat();
         rec.dispatch_1d(&self.blur_moments, &pass_1, &params, rows)?;
         let terms =
