@@ -231,12 +231,11 @@ impl ImageLoss {
         let moments = [("mean_x", mx), ("mean_xx", mxx), ("mean_xy", mxy)];
         let derivatives = [("d_mean_x", dx), ("d_mean_xx", dxx), ("d_mean_xy", dxy)];
         let filtered = [("blur_x", mx), ("blur_xx", mxx), ("blur_xy", mxy)];
-        let pass_1 = [&images[..], &target_moments, &moments].concat();
-        rec.dispatch_1d(&self.blur_moments, &pass_1, &params, rows)?;
         let terms =
             [("term_sums_a", first.terms.binding()), ("term_sums_b", second.terms.binding())];
-        let pass_2 =
-            [&images[..], &[weight], &target_moments, &moments, &derivatives, &terms].concat();
+        let pass_1 = [&images[..], &target_moments, &moments, &[weight], &terms].concat();
+        rec.dispatch_1d(&self.blur_moments, &pass_1, &params, rows)?;
+        let pass_2 = [&[weight][..], &target_moments, &moments, &derivatives, &terms].concat();
         rec.dispatch_1d(&self.ssim_forward, &pass_2, &params, columns)?;
         rec.dispatch_1d(&self.blur_gradients, &[derivatives, filtered].concat(), &params, rows)?;
         let gradients =

@@ -1,8 +1,11 @@
 #version 460
 // SSIM forward, pass 1 of 2: the horizontal Gaussian filter of every channel's moments at the
-// columns where a whole window fits: the target's y and y² once, each render's x, x² and xy.
+// columns where a whole window fits (the target's y and y² once, each render's x, x² and xy),
+// and each render's L1 term, from the span's centre pixels this pass loads anyway.
 #extension GL_EXT_control_flow_attributes : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "loss.glsl"
+#include "../common/fixed_sum.glsl"
 layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) readonly buffer RenderA { vec4 render_a[]; };
@@ -14,6 +17,11 @@ layout(std430, binding = 4) writeonly buffer MeanYY { vec4 mean_yy[]; };
 layout(std430, binding = 5) writeonly buffer MeanX { vec4 mean_x[]; };
 layout(std430, binding = 6) writeonly buffer MeanXX { vec4 mean_xx[]; };
 layout(std430, binding = 7) writeonly buffer MeanXY { vec4 mean_xy[]; };
+layout(std430, binding = 8) readonly buffer Weight { float weight[]; };
+// Per render and channel: [0..4) the mean absolute error, [4..8) the mean of 1 − S
+// (unweighted by λ); fixed_sum.glsl, 8 sums each. This pass adds the first four.
+layout(std430, binding = 9) buffer TermSumsA { int64_t term_sums_a[]; };
+layout(std430, binding = 10) buffer TermSumsB { int64_t term_sums_b[]; };  // RENDERS = 2 only
 
 // Pixel `i` of the run's span, clamped into the row: a clamped value reaches only outputs
 // outside the SSIM region, which are not written.
@@ -23,10 +31,14 @@ uint span_pixel(uint row, uint x0, int i) {
 
 bool column_valid(uint x) { return x >= uint(RADIUS) && x + uint(RADIUS) < width(); }
 
-void main() {
-    uint y, x0;
-    if (!row_run(gl_GlobalInvocationID.x, y, x0)) return;
+// The run's moments, and its L1 terms added to `l1_sum`.
+void moments(uint y, uint x0, inout vec4 l1_sum[2]) {
     uint row = y * width();
+    float w[RUN];
+    [[unroll]] for (int j = 0; j < RUN; j++) {
+        w[j] = 1.0;
+        if (has_weight() && x0 + uint(j) < width()) w[j] = weight[row + x0 + uint(j)];
+    }
     vec4 t[SPAN];
     [[unroll]] for (int i = 0; i < SPAN; i++) t[i] = target[span_pixel(row, x0, i)];
     [[unroll]] for (int j = 0; j < RUN; j++) {
@@ -46,6 +58,9 @@ void main() {
             v[i] = r == 0u ? render_a[p] : render_b[p];
         }
         [[unroll]] for (int j = 0; j < RUN; j++) {
+            if (x0 + uint(j) < width()) l1_sum[r] += w[j] * abs(v[j + RADIUS] - t[j + RADIUS]);
+        }
+        [[unroll]] for (int j = 0; j < RUN; j++) {
             if (!column_valid(x0 + uint(j))) continue;
             vec4 mx = vec4(0.0), mxx = vec4(0.0), mxy = vec4(0.0);
             [[unroll]] for (int k = 0; k < TAPS; k++) {
@@ -60,4 +75,12 @@ void main() {
             mean_xy[q] = mxy;
         }
     }
+}
+
+void main() {
+    uint y, x0;
+    // Every invocation reaches the subgroup sums at the end.
+    vec4 l1_sum[2] = vec4[2](vec4(0.0), vec4(0.0));
+    if (row_run(gl_GlobalInvocationID.x, y, x0)) moments(y, x0, l1_sum);
+    ADD_TERMS(0u, l1_sum, params.scales.z);
 }

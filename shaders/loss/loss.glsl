@@ -57,4 +57,20 @@ bool column_run(uint invocation, out uint x, out uint y0) {
 // Plane `r` of a scratch buffer holding one image per render.
 uint plane(uint r) { return r * pixel_count(); }
 
+// Adds each render's per-channel `totals[r] * scale` to sums [first, first + 4) of its term
+// buffer, one fixed-point add per subgroup (order-independent, so runs repeat bit for bit).
+// A macro, as GLSL cannot pass a buffer: the kernel declares term_sums_a and term_sums_b and
+// includes fixed_sum.glsl and subgroup arithmetic.
+#define ADD_TERMS(first, totals, scale) {                                        \
+    [[unroll]] for (uint r_ = 0u; r_ < RENDERS; r_++) {                           \
+        vec4 total_ = subgroupAdd(totals[r_]) * (scale);                         \
+        if (subgroupElect()) {                                                   \
+            [[unroll]] for (int c_ = 0; c_ < 4; c_++) {                           \
+                if (r_ == 0u) FIXED_ADD_TOTAL(term_sums_a, (first) + uint(c_), total_[c_]) \
+                else FIXED_ADD_TOTAL(term_sums_b, (first) + uint(c_), total_[c_])          \
+            }                                                                    \
+        }                                                                        \
+    }                                                                            \
+}
+
 #endif

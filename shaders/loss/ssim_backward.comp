@@ -20,6 +20,15 @@ layout(std430, binding = 8) writeonly buffer GradientB { vec4 gradient_b[]; };  
 void main() {
     uint x, y0;
     if (!column_run(gl_GlobalInvocationID.x, x, y0)) return;
+    // The target and weight of the run, loaded once for the renders.
+    vec4 t[RUN];
+    float w[RUN];
+    [[unroll]] for (int j = 0; j < RUN; j++) {
+        uint p = min(y0 + uint(j), height() - 1u) * width() + x;
+        t[j] = target[p];
+        w[j] = 1.0;
+        if (has_weight()) w[j] = weight[p];
+    }
     [[unroll]] for (uint r = 0u; r < RENDERS; r++) {
         vec4 a[SPAN], xx[SPAN], xy[SPAN];
         [[unroll]] for (int i = 0; i < SPAN; i++) {
@@ -42,10 +51,8 @@ void main() {
             }
             uint p = (y0 + uint(j)) * width() + x;
             vec4 render = r == 0u ? render_a[p] : render_b[p];
-            vec4 t = target[p];
-            float w = has_weight() ? weight[p] : 1.0;
-            vec4 l1 = lambda * params.scales.x * params.scales.z * w * sign(render - t);
-            vec4 gradient = fa + 2.0 * render * fxx + t * fxy + l1;
+            vec4 l1 = lambda * params.scales.x * params.scales.z * w[j] * sign(render - t[j]);
+            vec4 gradient = fa + 2.0 * render * fxx + t[j] * fxy + l1;
             if (r == 0u) gradient_a[p] = gradient; else gradient_b[p] = gradient;
         }
     }

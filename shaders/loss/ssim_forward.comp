@@ -2,31 +2,27 @@
 // SSIM forward, pass 2 of 2, fused with the loss value and the first half of the backward:
 // the vertical filter completes the moments; S of each render and its partial derivatives
 // with respect to the filtered μx, E[x²], E[xy] (scaled by dL/dS) go to the backward; each
-// render's L1 and SSIM terms are summed per channel, one fixed-point add per subgroup
-// (order-independent, so runs repeat bit for bit).
+// render's SSIM terms are summed per channel (the first pass summed the L1 terms).
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_EXT_control_flow_attributes : require
 #include "loss.glsl"
 #include "../common/fixed_sum.glsl"
 layout(local_size_x_id = 0) in;
 
-layout(std430, binding = 0) readonly buffer RenderA { vec4 render_a[]; };
-layout(std430, binding = 1) readonly buffer RenderB { vec4 render_b[]; };  // RENDERS = 2 only
-layout(std430, binding = 2) readonly buffer Target { vec4 target[]; };
-layout(std430, binding = 3) readonly buffer Weight { float weight[]; };
-layout(std430, binding = 4) readonly buffer MeanY { vec4 mean_y[]; };
-layout(std430, binding = 5) readonly buffer MeanYY { vec4 mean_yy[]; };
+layout(std430, binding = 0) readonly buffer Weight { float weight[]; };
+layout(std430, binding = 1) readonly buffer MeanY { vec4 mean_y[]; };
+layout(std430, binding = 2) readonly buffer MeanYY { vec4 mean_yy[]; };
 // One plane per render (loss.glsl `plane`).
-layout(std430, binding = 6) readonly buffer MeanX { vec4 mean_x[]; };
-layout(std430, binding = 7) readonly buffer MeanXX { vec4 mean_xx[]; };
-layout(std430, binding = 8) readonly buffer MeanXY { vec4 mean_xy[]; };
-layout(std430, binding = 9) writeonly buffer DMeanX { vec4 d_mean_x[]; };
-layout(std430, binding = 10) writeonly buffer DMeanXX { vec4 d_mean_xx[]; };
-layout(std430, binding = 11) writeonly buffer DMeanXY { vec4 d_mean_xy[]; };
+layout(std430, binding = 3) readonly buffer MeanX { vec4 mean_x[]; };
+layout(std430, binding = 4) readonly buffer MeanXX { vec4 mean_xx[]; };
+layout(std430, binding = 5) readonly buffer MeanXY { vec4 mean_xy[]; };
+layout(std430, binding = 6) writeonly buffer DMeanX { vec4 d_mean_x[]; };
+layout(std430, binding = 7) writeonly buffer DMeanXX { vec4 d_mean_xx[]; };
+layout(std430, binding = 8) writeonly buffer DMeanXY { vec4 d_mean_xy[]; };
 // Per render and channel: [0..4) the mean absolute error, [4..8) the mean of 1 − S
 // (unweighted by λ); fixed_sum.glsl, 8 sums each.
-layout(std430, binding = 12) buffer TermSumsA { int64_t term_sums_a[]; };
-layout(std430, binding = 13) buffer TermSumsB { int64_t term_sums_b[]; };  // RENDERS = 2 only
+layout(std430, binding = 9) buffer TermSumsA { int64_t term_sums_a[]; };
+layout(std430, binding = 10) buffer TermSumsB { int64_t term_sums_b[]; };  // RENDERS = 2 only
 
 // Row `i` of the run's span in column x, clamped into the image: a clamped value reaches only
 // outputs outside the SSIM region.
@@ -44,7 +40,6 @@ void main() {
     uint x, y0;
     bool inside = column_run(gl_GlobalInvocationID.x, x, y0);
     bool column_valid = inside && x >= uint(RADIUS) && x + uint(RADIUS) < width();
-    vec4 l1_sum[2] = vec4[2](vec4(0.0), vec4(0.0));
     vec4 ssim_sum[2] = vec4[2](vec4(0.0), vec4(0.0));
     // The target's filtered moments, shared by the renders.
     vec4 b[RUN], yy[RUN];
@@ -82,9 +77,8 @@ void main() {
             if (y0 + uint(j) >= height()) break;
             uint y = y0 + uint(j);
             uint p = y * width() + x;
-            float w = has_weight() ? weight[p] : 1.0;
-            vec4 render = r == 0u ? render_a[p] : render_b[p];
-            l1_sum[r] += w * abs(render - target[p]);
+            float w = 1.0;
+            if (has_weight()) w = weight[p];
             vec4 da = vec4(0.0), dxx = vec4(0.0), dxy = vec4(0.0);
             if (column_valid && ssim_valid(x, y)) {
                 vec4 n1 = 2.0 * a[j] * b[j] + C1;
@@ -110,21 +104,5 @@ void main() {
             d_mean_xy[q] = dxy;
         }
     }
-    [[unroll]] for (uint r = 0u; r < RENDERS; r++) {
-        vec4 l1 = subgroupAdd(l1_sum[r]);
-        vec4 dissimilarity = subgroupAdd(ssim_sum[r]);
-        if (subgroupElect()) {
-            [[unroll]] for (int c = 0; c < 4; c++) {
-                float l1_term = l1[c] * params.scales.z;
-                float ssim_term = dissimilarity[c] * params.scales.w;
-                if (r == 0u) {
-                    FIXED_ADD_TOTAL(term_sums_a, uint(c), l1_term);
-                    FIXED_ADD_TOTAL(term_sums_a, uint(4 + c), ssim_term);
-                } else {
-                    FIXED_ADD_TOTAL(term_sums_b, uint(c), l1_term);
-                    FIXED_ADD_TOTAL(term_sums_b, uint(4 + c), ssim_term);
-                }
-            }
-        }
-    }
+    ADD_TERMS(4u, ssim_sum, params.scales.w);
 }
