@@ -44,9 +44,9 @@ pub struct TrainBenchReport {
     pub splat_fwd_bwd_s: f64,
     /// What loss, optimizer and step overhead add: 1 − splat_fwd_bwd_s / s_per_iter.
     pub overhead_fraction: f64,
-    /// Median GPU ms of the image loss (L1 + SSIM, forward and backward) alone on one view,
-    /// scoring one render, and two renders against the same target in one run (a view's
-    /// Gaussian and mesh renders, as `train` does), same run.
+    /// Median GPU ms over 4 × `iterations` runs of the image loss (L1 + SSIM, forward and
+    /// backward) alone on one view, scoring one render, and two renders against the same target
+    /// in one run (a view's Gaussian and mesh renders, as `train` does), same run.
     pub loss_ms: [f64; 2],
 }
 
@@ -108,9 +108,10 @@ pub fn bench_train(
         .collect();
     let s_per_iter = super::median(walls);
     drop(trainer);
+    // A loss run is about a tenth of an iteration: four per iteration steadies the median.
     let loss_ms = [
-        bench_loss(ctx, &views, 1, config.iterations)?,
-        bench_loss(ctx, &views, 2, config.iterations)?,
+        bench_loss(ctx, &views, 1, 4 * config.iterations)?,
+        bench_loss(ctx, &views, 2, 4 * config.iterations)?,
     ];
     let splat = bench_splat(ctx, &SplatBenchConfig { rounds: 2, ..*c })?;
     Ok(TrainBenchReport {
