@@ -41,7 +41,7 @@ struct Parsed {
 
 /// Reads every `transforms*.json` in `dir` (see the module docs); the intrinsics stay as written
 /// and [`Dataset::load`](super::Dataset::load) is the entry point that converts them.
-pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
+pub(crate) fn load(dir: &Path) -> Result<Dataset, DatasetError> {
     let files = transform_files(dir);
     let mut views = Vec::new();
     for (path, test) in &files {

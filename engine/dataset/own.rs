@@ -61,7 +61,7 @@ pub fn mask_path(dir: &Path, camera: &str, t: usize) -> PathBuf {
 /// Reads the layout from `dir`, checking `dataset.json`, every camera, and that `images/` of the
 /// first camera holds at least `frames` files. The intrinsics stay as written;
 /// [`Dataset::load`](super::Dataset::load) is the entry point that converts them.
-pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
+pub(crate) fn load(dir: &Path) -> Result<Dataset, DatasetError> {
     let meta_path = dir.join(META);
     let meta: OwnMeta = read_json(&meta_path)?;
     let bad = |problem: String| DatasetError::File { path: meta_path.clone(), problem };

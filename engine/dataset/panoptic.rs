@@ -38,7 +38,7 @@ type Rig = BTreeMap<i64, (Camera, bool)>;
 /// it), one frame per time step with time = frame index. The intrinsics stay as written
 /// (integer pixel centres); [`Dataset::load`](super::Dataset::load) is the entry point that
 /// converts them.
-pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
+pub(crate) fn load(dir: &Path) -> Result<Dataset, DatasetError> {
     let mut rig: Rig = BTreeMap::new();
     let mut per_frame: Vec<Vec<(i64, PathBuf)>> = Vec::new();
     let train_path = dir.join(TRAIN_META);
