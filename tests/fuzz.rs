@@ -541,7 +541,9 @@ fn remove_scratch(dir: &Path) {
 
 type Mutation = (&'static str, fn(&mut Vec<u8>, &mut SplitMix64));
 
-const TEXT_MUTATIONS: &[Mutation] = &[
+/// Mutations for every file kind; a PLY header's counts are text in a binary file, so the
+/// number edits apply to both.
+const COMMON_MUTATIONS: [Mutation; 8] = [
     ("bit flip", flip_bit),
     ("byte set to 00/FF", set_byte),
     ("truncation", truncate),
@@ -550,22 +552,19 @@ const TEXT_MUTATIONS: &[Mutation] = &[
     ("removed chunk", remove_chunk),
     ("huge number", huge_number),
     ("huge count", huge_count),
-    ("non-finite number", non_finite_number),
-    ("line removed or repeated", edit_line),
 ];
 
-const BINARY_MUTATIONS: &[Mutation] = &[
-    ("bit flip", flip_bit),
-    ("byte set to 00/FF", set_byte),
-    ("truncation", truncate),
-    ("inserted bytes", insert_bytes),
-    ("duplicated chunk", duplicate_chunk),
-    ("removed chunk", remove_chunk),
-    // A PLY header's counts are text in a binary file.
-    ("huge number", huge_number),
-    ("huge count", huge_count),
-    ("NaN/Inf/huge binary word", special_word),
-];
+const TEXT_ONLY_MUTATIONS: &[Mutation] =
+    &[("non-finite number", non_finite_number), ("line removed or repeated", edit_line)];
+
+const BINARY_ONLY_MUTATIONS: &[Mutation] = &[("NaN/Inf/huge binary word", special_word)];
+
+/// One mutation for a text or binary file: the common ones and the kind's own, equally likely.
+fn pick_mutation(rng: &mut SplitMix64, text: bool) -> Mutation {
+    let own = if text { TEXT_ONLY_MUTATIONS } else { BINARY_ONLY_MUTATIONS };
+    let i = below(rng, COMMON_MUTATIONS.len() + own.len());
+    COMMON_MUTATIONS.get(i).copied().unwrap_or_else(|| own[i - COMMON_MUTATIONS.len()])
+}
 
 /// Replacements for a number: counts and values far beyond what the file holds, from those a
 /// reader's sanity limits let through to those that overflow its arithmetic.
@@ -783,19 +782,19 @@ fn mutate_glb(b: &mut Vec<u8>, rng: &mut SplitMix64) -> String {
     let target = below(rng, 3);
     match glb_chunks(b) {
         Some((mut json, bin)) if target == 0 => {
-            let (name, mutation) = pick(rng, TEXT_MUTATIONS);
+            let (name, mutation) = pick_mutation(rng, true);
             mutation(&mut json, rng);
             *b = glb(json, bin);
             format!("JSON chunk: {name}")
         }
         Some((json, mut bin)) if target == 1 => {
-            let (name, mutation) = pick(rng, BINARY_MUTATIONS);
+            let (name, mutation) = pick_mutation(rng, false);
             mutation(&mut bin, rng);
             *b = glb(json, bin);
             format!("BIN chunk: {name}")
         }
         _ => {
-            let (name, mutation) = pick(rng, BINARY_MUTATIONS);
+            let (name, mutation) = pick_mutation(rng, false);
             mutation(b, rng);
             name.to_string()
         }
@@ -809,8 +808,7 @@ fn mutate(file: &SeedFile, rng: &mut SplitMix64) -> (Vec<u8>, Vec<String>) {
         .map(|_| match file.kind {
             Kind::Glb => mutate_glb(&mut bytes, rng),
             kind => {
-                let table = if kind == Kind::Text { TEXT_MUTATIONS } else { BINARY_MUTATIONS };
-                let (name, mutation) = pick(rng, table);
+                let (name, mutation) = pick_mutation(rng, kind == Kind::Text);
                 mutation(&mut bytes, rng);
                 name.to_string()
             }
