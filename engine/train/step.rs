@@ -152,8 +152,9 @@ impl Trainer {
 
     /// Sizes the splatter for training view `view`; the frame goes to the record calls of
     /// this step and then to [`Self::finish_step`]. A step with more terms than the splatting
-    /// loss records them between [`Self::record_splat`] and [`Self::record_adam`], adding
-    /// their gradients to [`Self::grads`].
+    /// loss records them between [`Self::record_splat`] (or [`Self::record_splat_beside`],
+    /// after the other render) and [`Self::record_adam`], adding their gradients to
+    /// [`Self::grads`].
     pub fn prepare_step(
         &mut self,
         view: usize,
@@ -255,7 +256,8 @@ impl Trainer {
         &self.state.params
     }
 
-    /// Their gradients, zeroed by [`Self::record_splat`] and added to by every term after it.
+    /// Their gradients, zeroed by [`Self::record_splat`] or [`Self::record_splat_beside`] and
+    /// added to by every term after it.
     pub fn grads(&self) -> &GaussianBuffers {
         &self.state.grads
     }
