@@ -96,6 +96,11 @@ fn max_abs(values: impl Iterator<Item = f64>) -> f64 {
     values.fold(0.0, |m, v| m.max(v.abs()))
 }
 
+/// The largest difference between a GPU gradient and the reference's.
+fn gradient_error(gpu: &[[f32; 4]], reference: &[[f64; 4]]) -> f64 {
+    max_abs(gpu.iter().flatten().zip(reference.iter().flatten()).map(|(&a, &b)| a as f64 - b))
+}
+
 /// Checks one render's GPU terms and gradient against the f64 reference.
 fn assert_matches_reference(
     what: &str,
@@ -118,13 +123,7 @@ fn assert_matches_reference(
     }
     assert!((terms.total(lambda) as f64 - expect.total).abs() < 1e-5 * expect.total);
     let scale = max_abs(expect.gradient.iter().flatten().copied());
-    let error = max_abs(
-        gradient
-            .iter()
-            .flatten()
-            .zip(expect.gradient.iter().flatten())
-            .map(|(&a, &b)| a as f64 - b),
-    );
+    let error = gradient_error(gradient, &expect.gradient);
     assert!(error < 1e-4 * scale, "{what}: gradient error {error:e} of max {scale:e}");
 }
 
@@ -243,14 +242,7 @@ fn hard_cases() {
     let (terms, gradient) = gpu_loss(g.ctx(), &small, [1.0; 4]);
     let expect = reference(&small, [1.0; 4]);
     assert_eq!(terms.dssim, [0.0; 4]);
-    let error = max_abs(
-        gradient
-            .iter()
-            .flatten()
-            .zip(expect.gradient.iter().flatten())
-            .map(|(&a, &b)| a as f64 - b),
-    );
-    assert!(error < 1e-7);
+    assert!(gradient_error(&gradient, &expect.gradient) < 1e-7);
     // An empty image records nothing and scores nothing.
     let empty = Images { width: 0, height: 0, render: vec![], target: vec![], weight: None };
     assert_eq!(gpu_loss(g.ctx(), &empty, [1.0; 4]).0, LossTerms::default());

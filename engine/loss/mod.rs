@@ -172,11 +172,6 @@ impl ImageLoss {
         })
     }
 
-    /// Renders each run scores.
-    pub fn renders(&self) -> usize {
-        self.renders
-    }
-
     /// Makes room for images of `pixels`; call before recording (recording borrows the scratch,
     /// and fails naming it when it is too small).
     pub fn reserve(&mut self, pixels: usize) -> GpuResult<()> {
@@ -189,8 +184,8 @@ impl ImageLoss {
         Ok(())
     }
 
-    /// Records the loss of each of `renders` (as many as [`Self::renders`]) against `target`:
-    /// per render, ADDS its terms to its sums and WRITES dL/drender to its gradient.
+    /// Records the loss of each of `renders` (as many as [`Self::new`] was built for) against
+    /// `target`: per render, ADDS its terms to its sums and WRITES dL/drender to its gradient.
     pub fn record<'a>(
         &'a self,
         rec: &mut Recorder<'a>,

@@ -1,7 +1,7 @@
 //! The mesh terms of a training step: the mesh whose vertices are the Gaussians (positions
 //! from the Gaussian buffer, colours from their SH DC) rendered by the visibility-buffer
 //! rasterizer, scored against the view's target (colour and mask) in the same run of the fused
-//! image loss as the Gaussian render ([`Trainer::record_splat_beside`]), and differentiated back
+//! image loss as the Gaussian render ([`Trainer::record_splat`]), and differentiated back
 //! into the Gaussians' position and SH gradients, all recorded into the training step's
 //! submission.
 
@@ -233,7 +233,7 @@ impl MeshTerm {
     ) -> Result<(), TrainError> {
         let (params, camera) = (trainer.params(), trainer.camera(view));
         let mesh = self.record_forward(rec, params, camera, weights[1], background)?;
-        trainer.record_splat_beside(rec, view, frame, weights[0], mesh)?;
+        trainer.record_splat(rec, view, frame, weights[0], Some(mesh))?;
         self.record_backward(rec, params, trainer.grads(), camera, background)
     }
 

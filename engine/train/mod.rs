@@ -50,7 +50,7 @@ pub enum TrainError {
     #[error(transparent)]
     Raster(#[from] crate::raster::RasterError),
     /// A second render was given to a trainer built without the loss for two.
-    #[error("Trainer::record_splat_beside needs a trainer built with Trainer::with_second_render")]
+    #[error("Trainer::record_splat with a second render needs a trainer built with Trainer::with_second_render")]
     NoSecondRender,
     /// A regularizer failed.
     #[error(transparent)]

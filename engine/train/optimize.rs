@@ -54,7 +54,7 @@ pub(crate) trait Stage {
         frame: &FrameParams,
         splat_weights: [f32; 4],
     ) -> Result<(), TrainError> {
-        trainer.record_splat(rec, view, frame, splat_weights)
+        trainer.record_splat(rec, view, frame, splat_weights, None)
     }
 
     /// The mean weighted loss over iterations `first..=last` (all summed on the GPU since the

@@ -94,7 +94,7 @@ impl Trainer {
     }
 
     /// Builds the loss that scores the Gaussian render beside another render of the same view
-    /// in one run ([`Self::record_splat_beside`]).
+    /// in one run ([`Self::record_splat`] with another render).
     pub fn with_second_render(mut self) -> Result<Self, TrainError> {
         let mut pair = ImageLoss::new(&self.ctx, 2)?;
         pair.reserve(self.grad_rgba.len())?;
@@ -143,7 +143,7 @@ impl Trainer {
     ) -> Result<(PassTimes, bool), TrainError> {
         let frame = self.prepare_step(view, settings)?;
         let mut rec = Recorder::new(&self.ctx)?;
-        self.record_splat(&mut rec, view, &frame, lambda)?;
+        self.record_splat(&mut rec, view, &frame, lambda, None)?;
         self.record_adam(&mut rec, adam)?;
         let times = rec.submit_and_wait()?;
         let complete = self.finish_step(frame)?;
@@ -152,9 +152,8 @@ impl Trainer {
 
     /// Sizes the splatter for training view `view`; the frame goes to the record calls of
     /// this step and then to [`Self::finish_step`]. A step with more terms than the splatting
-    /// loss records them between [`Self::record_splat`] (or [`Self::record_splat_beside`],
-    /// after the other render) and [`Self::record_adam`], adding their gradients to
-    /// [`Self::grads`].
+    /// loss records them between [`Self::record_splat`] and [`Self::record_adam`], adding
+    /// their gradients to [`Self::grads`].
     pub fn prepare_step(
         &mut self,
         view: usize,
@@ -164,32 +163,10 @@ impl Trainer {
     }
 
     /// Records zeroing the gradients, the splatting forward, its loss against the view's
-    /// target (λ per rgba channel) and its backward.
+    /// target (λ per rgba channel) and its backward. `other` (a render of the same view
+    /// recorded before, with its λ, sums and gradient image) is scored against the target in
+    /// the same run of the loss; it needs [`Self::with_second_render`].
     pub fn record_splat<'a>(
-        &'a self,
-        rec: &mut Recorder<'a>,
-        view: usize,
-        frame: &FrameParams,
-        lambda: [f32; 4],
-    ) -> Result<(), TrainError> {
-        self.record_splat_with(rec, view, frame, lambda, None)
-    }
-
-    /// [`Self::record_splat`], with `other` (a render of the same view recorded before, its
-    /// λ, sums and gradient image) scored against the target in the same run of the loss.
-    /// Needs [`Self::with_second_render`].
-    pub fn record_splat_beside<'a>(
-        &'a self,
-        rec: &mut Recorder<'a>,
-        view: usize,
-        frame: &FrameParams,
-        lambda: [f32; 4],
-        other: ScoredRender<'a>,
-    ) -> Result<(), TrainError> {
-        self.record_splat_with(rec, view, frame, lambda, Some(other))
-    }
-
-    fn record_splat_with<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
         view: usize,
@@ -256,8 +233,7 @@ impl Trainer {
         &self.state.params
     }
 
-    /// Their gradients, zeroed by [`Self::record_splat`] or [`Self::record_splat_beside`] and
-    /// added to by every term after it.
+    /// Their gradients, zeroed by [`Self::record_splat`] and added to by every term after it.
     pub fn grads(&self) -> &GaussianBuffers {
         &self.state.grads
     }
