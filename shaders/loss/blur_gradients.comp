@@ -5,15 +5,16 @@
 // read zero.
 #extension GL_EXT_control_flow_attributes : require
 #include "loss.glsl"
+#include "../common/wide_vec4.glsl"
 layout(local_size_x_id = 0) in;
 
 // One plane per render (loss.glsl `plane`).
-layout(std430, binding = 0) readonly buffer DMeanX { vec4 d_mean_x[]; };
-layout(std430, binding = 1) readonly buffer DMeanXX { vec4 d_mean_xx[]; };
-layout(std430, binding = 2) readonly buffer DMeanXY { vec4 d_mean_xy[]; };
-layout(std430, binding = 3) writeonly buffer BlurX { vec4 blur_x[]; };
-layout(std430, binding = 4) writeonly buffer BlurXX { vec4 blur_xx[]; };
-layout(std430, binding = 5) writeonly buffer BlurXY { vec4 blur_xy[]; };
+layout(std430, binding = 0) readonly buffer DMeanX { u64vec2 d_mean_x[]; };
+layout(std430, binding = 1) readonly buffer DMeanXX { u64vec2 d_mean_xx[]; };
+layout(std430, binding = 2) readonly buffer DMeanXY { u64vec2 d_mean_xy[]; };
+layout(std430, binding = 3) writeonly buffer BlurX { u64vec2 blur_x[]; };
+layout(std430, binding = 4) writeonly buffer BlurXX { u64vec2 blur_xx[]; };
+layout(std430, binding = 5) writeonly buffer BlurXY { u64vec2 blur_xy[]; };
 
 void main() {
     uint y, x0;
@@ -26,9 +27,9 @@ void main() {
             // Phrased as "inside" so that no tap reads a neighbouring row.
             bool inside = x >= 0 && x < int(width());
             uint p = row + uint(clamp(x, 0, int(width()) - 1));
-            a[i] = inside ? d_mean_x[p] : vec4(0.0);
-            xx[i] = inside ? d_mean_xx[p] : vec4(0.0);
-            xy[i] = inside ? d_mean_xy[p] : vec4(0.0);
+            a[i] = inside ? unpack_vec4(d_mean_x[p]) : vec4(0.0);
+            xx[i] = inside ? unpack_vec4(d_mean_xx[p]) : vec4(0.0);
+            xy[i] = inside ? unpack_vec4(d_mean_xy[p]) : vec4(0.0);
         }
         [[unroll]] for (int j = 0; j < RUN; j++) {
             if (x0 + uint(j) >= width()) break;
@@ -40,9 +41,9 @@ void main() {
                 fxy += w * xy[j + k];
             }
             uint q = row + x0 + uint(j);
-            blur_x[q] = fa;
-            blur_xx[q] = fxx;
-            blur_xy[q] = fxy;
+            blur_x[q] = pack_vec4(fa);
+            blur_xx[q] = pack_vec4(fxx);
+            blur_xy[q] = pack_vec4(fxy);
         }
     }
 }

@@ -5,18 +5,19 @@
 #extension GL_EXT_control_flow_attributes : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #include "loss.glsl"
+#include "../common/wide_vec4.glsl"
 #include "../common/fixed_sum.glsl"
 layout(local_size_x_id = 0) in;
 
-layout(std430, binding = 0) readonly buffer RenderA { vec4 render_a[]; };
-layout(std430, binding = 1) readonly buffer RenderB { vec4 render_b[]; };  // RENDERS = 2 only
-layout(std430, binding = 2) readonly buffer Target { vec4 target[]; };
-layout(std430, binding = 3) writeonly buffer MeanY { vec4 mean_y[]; };
-layout(std430, binding = 4) writeonly buffer MeanYY { vec4 mean_yy[]; };
+layout(std430, binding = 0) readonly buffer RenderA { u64vec2 render_a[]; };
+layout(std430, binding = 1) readonly buffer RenderB { u64vec2 render_b[]; };  // RENDERS = 2 only
+layout(std430, binding = 2) readonly buffer Target { u64vec2 target[]; };
+layout(std430, binding = 3) writeonly buffer MeanY { u64vec2 mean_y[]; };
+layout(std430, binding = 4) writeonly buffer MeanYY { u64vec2 mean_yy[]; };
 // One plane per render (loss.glsl `plane`).
-layout(std430, binding = 5) writeonly buffer MeanX { vec4 mean_x[]; };
-layout(std430, binding = 6) writeonly buffer MeanXX { vec4 mean_xx[]; };
-layout(std430, binding = 7) writeonly buffer MeanXY { vec4 mean_xy[]; };
+layout(std430, binding = 5) writeonly buffer MeanX { u64vec2 mean_x[]; };
+layout(std430, binding = 6) writeonly buffer MeanXX { u64vec2 mean_xx[]; };
+layout(std430, binding = 7) writeonly buffer MeanXY { u64vec2 mean_xy[]; };
 layout(std430, binding = 8) readonly buffer Weight { float weight[]; };
 // Per render and channel: [0..4) the mean absolute error, [4..8) the mean of 1 − S
 // (unweighted by λ); fixed_sum.glsl, 8 sums each. This pass adds the first four.
@@ -40,7 +41,7 @@ void moments(uint y, uint x0, inout vec4 l1_sum[2]) {
         if (has_weight() && x0 + uint(j) < width()) w[j] = weight[row + x0 + uint(j)];
     }
     vec4 t[SPAN];
-    [[unroll]] for (int i = 0; i < SPAN; i++) t[i] = target[span_pixel(row, x0, i)];
+    [[unroll]] for (int i = 0; i < SPAN; i++) t[i] = unpack_vec4(target[span_pixel(row, x0, i)]);
     [[unroll]] for (int j = 0; j < RUN; j++) {
         if (!column_valid(x0 + uint(j))) continue;
         vec4 my = vec4(0.0), myy = vec4(0.0);
@@ -48,14 +49,14 @@ void moments(uint y, uint x0, inout vec4 l1_sum[2]) {
             my += params.window[k] * t[j + k];
             myy += params.window[k] * t[j + k] * t[j + k];
         }
-        mean_y[row + x0 + uint(j)] = my;
-        mean_yy[row + x0 + uint(j)] = myy;
+        mean_y[row + x0 + uint(j)] = pack_vec4(my);
+        mean_yy[row + x0 + uint(j)] = pack_vec4(myy);
     }
     [[unroll]] for (uint r = 0u; r < RENDERS; r++) {
         vec4 v[SPAN];
         [[unroll]] for (int i = 0; i < SPAN; i++) {
             uint p = span_pixel(row, x0, i);
-            v[i] = r == 0u ? render_a[p] : render_b[p];
+            v[i] = r == 0u ? unpack_vec4(render_a[p]) : unpack_vec4(render_b[p]);
         }
         [[unroll]] for (int j = 0; j < RUN; j++) {
             if (x0 + uint(j) < width()) l1_sum[r] += w[j] * abs(v[j + RADIUS] - t[j + RADIUS]);
@@ -70,9 +71,9 @@ void moments(uint y, uint x0, inout vec4 l1_sum[2]) {
                 mxy += w * v[j + k] * t[j + k];
             }
             uint q = plane(r) + row + x0 + uint(j);
-            mean_x[q] = mx;
-            mean_xx[q] = mxx;
-            mean_xy[q] = mxy;
+            mean_x[q] = pack_vec4(mx);
+            mean_xx[q] = pack_vec4(mxx);
+            mean_xy[q] = pack_vec4(mxy);
         }
     }
 }

@@ -4,18 +4,19 @@
 // pixel in the layout the renderers' backward passes read (vec4: colour, alpha).
 #extension GL_EXT_control_flow_attributes : require
 #include "loss.glsl"
+#include "../common/wide_vec4.glsl"
 layout(local_size_x_id = 0) in;
 
-layout(std430, binding = 0) readonly buffer RenderA { vec4 render_a[]; };
-layout(std430, binding = 1) readonly buffer RenderB { vec4 render_b[]; };  // RENDERS = 2 only
-layout(std430, binding = 2) readonly buffer Target { vec4 target[]; };
+layout(std430, binding = 0) readonly buffer RenderA { u64vec2 render_a[]; };
+layout(std430, binding = 1) readonly buffer RenderB { u64vec2 render_b[]; };  // RENDERS = 2 only
+layout(std430, binding = 2) readonly buffer Target { u64vec2 target[]; };
 layout(std430, binding = 3) readonly buffer Weight { float weight[]; };
 // One plane per render (loss.glsl `plane`).
-layout(std430, binding = 4) readonly buffer BlurX { vec4 blur_x[]; };
-layout(std430, binding = 5) readonly buffer BlurXX { vec4 blur_xx[]; };
-layout(std430, binding = 6) readonly buffer BlurXY { vec4 blur_xy[]; };
-layout(std430, binding = 7) writeonly buffer GradientA { vec4 gradient_a[]; };
-layout(std430, binding = 8) writeonly buffer GradientB { vec4 gradient_b[]; };  // RENDERS = 2 only
+layout(std430, binding = 4) readonly buffer BlurX { u64vec2 blur_x[]; };
+layout(std430, binding = 5) readonly buffer BlurXX { u64vec2 blur_xx[]; };
+layout(std430, binding = 6) readonly buffer BlurXY { u64vec2 blur_xy[]; };
+layout(std430, binding = 7) writeonly buffer GradientA { u64vec2 gradient_a[]; };
+layout(std430, binding = 8) writeonly buffer GradientB { u64vec2 gradient_b[]; };  // RENDERS = 2 only
 
 void main() {
     uint x, y0;
@@ -25,7 +26,7 @@ void main() {
     float w[RUN];
     [[unroll]] for (int j = 0; j < RUN; j++) {
         uint p = min(y0 + uint(j), height() - 1u) * width() + x;
-        t[j] = target[p];
+        t[j] = unpack_vec4(target[p]);
         w[j] = 1.0;
         if (has_weight()) w[j] = weight[p];
     }
@@ -35,9 +36,9 @@ void main() {
             int y = int(y0) - RADIUS + i;
             bool inside = y >= 0 && y < int(height());
             uint p = plane(r) + uint(clamp(y, 0, int(height()) - 1)) * width() + x;
-            a[i] = inside ? blur_x[p] : vec4(0.0);
-            xx[i] = inside ? blur_xx[p] : vec4(0.0);
-            xy[i] = inside ? blur_xy[p] : vec4(0.0);
+            a[i] = inside ? unpack_vec4(blur_x[p]) : vec4(0.0);
+            xx[i] = inside ? unpack_vec4(blur_xx[p]) : vec4(0.0);
+            xy[i] = inside ? unpack_vec4(blur_xy[p]) : vec4(0.0);
         }
         vec4 lambda = params.channel_weights[r];
         [[unroll]] for (int j = 0; j < RUN; j++) {
@@ -50,10 +51,10 @@ void main() {
                 fxy += g * xy[j + k];
             }
             uint p = (y0 + uint(j)) * width() + x;
-            vec4 render = r == 0u ? render_a[p] : render_b[p];
+            vec4 render = r == 0u ? unpack_vec4(render_a[p]) : unpack_vec4(render_b[p]);
             vec4 l1 = lambda * params.scales.x * params.scales.z * w[j] * sign(render - t[j]);
             vec4 gradient = fa + 2.0 * render * fxx + t[j] * fxy + l1;
-            if (r == 0u) gradient_a[p] = gradient; else gradient_b[p] = gradient;
+            if (r == 0u) gradient_a[p] = pack_vec4(gradient); else gradient_b[p] = pack_vec4(gradient);
         }
     }
 }

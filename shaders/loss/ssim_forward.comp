@@ -6,19 +6,20 @@
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_EXT_control_flow_attributes : require
 #include "loss.glsl"
+#include "../common/wide_vec4.glsl"
 #include "../common/fixed_sum.glsl"
 layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) readonly buffer Weight { float weight[]; };
-layout(std430, binding = 1) readonly buffer MeanY { vec4 mean_y[]; };
-layout(std430, binding = 2) readonly buffer MeanYY { vec4 mean_yy[]; };
+layout(std430, binding = 1) readonly buffer MeanY { u64vec2 mean_y[]; };
+layout(std430, binding = 2) readonly buffer MeanYY { u64vec2 mean_yy[]; };
 // One plane per render (loss.glsl `plane`).
-layout(std430, binding = 3) readonly buffer MeanX { vec4 mean_x[]; };
-layout(std430, binding = 4) readonly buffer MeanXX { vec4 mean_xx[]; };
-layout(std430, binding = 5) readonly buffer MeanXY { vec4 mean_xy[]; };
-layout(std430, binding = 6) writeonly buffer DMeanX { vec4 d_mean_x[]; };
-layout(std430, binding = 7) writeonly buffer DMeanXX { vec4 d_mean_xx[]; };
-layout(std430, binding = 8) writeonly buffer DMeanXY { vec4 d_mean_xy[]; };
+layout(std430, binding = 3) readonly buffer MeanX { u64vec2 mean_x[]; };
+layout(std430, binding = 4) readonly buffer MeanXX { u64vec2 mean_xx[]; };
+layout(std430, binding = 5) readonly buffer MeanXY { u64vec2 mean_xy[]; };
+layout(std430, binding = 6) writeonly buffer DMeanX { u64vec2 d_mean_x[]; };
+layout(std430, binding = 7) writeonly buffer DMeanXX { u64vec2 d_mean_xx[]; };
+layout(std430, binding = 8) writeonly buffer DMeanXY { u64vec2 d_mean_xy[]; };
 // Per render and channel: [0..4) the mean absolute error, [4..8) the mean of 1 − S
 // (unweighted by λ); fixed_sum.glsl, 8 sums each.
 layout(std430, binding = 9) buffer TermSumsA { int64_t term_sums_a[]; };
@@ -47,8 +48,8 @@ void main() {
         vec4 span_y[SPAN], span_yy[SPAN];
         [[unroll]] for (int i = 0; i < SPAN; i++) {
             uint p = span_pixel(x, y0, i);
-            span_y[i] = mean_y[p];
-            span_yy[i] = mean_yy[p];
+            span_y[i] = unpack_vec4(mean_y[p]);
+            span_yy[i] = unpack_vec4(mean_yy[p]);
         }
         [[unroll]] for (int j = 0; j < RUN; j++) {
             FILTER(span_y, j, b[j]);
@@ -62,9 +63,9 @@ void main() {
             vec4 span_x[SPAN], span_xx[SPAN], span_xy[SPAN];
             [[unroll]] for (int i = 0; i < SPAN; i++) {
                 uint p = plane(r) + span_pixel(x, y0, i);
-                span_x[i] = mean_x[p];
-                span_xx[i] = mean_xx[p];
-                span_xy[i] = mean_xy[p];
+                span_x[i] = unpack_vec4(mean_x[p]);
+                span_xx[i] = unpack_vec4(mean_xx[p]);
+                span_xy[i] = unpack_vec4(mean_xy[p]);
             }
             [[unroll]] for (int j = 0; j < RUN; j++) {
                 FILTER(span_x, j, a[j]);
@@ -99,9 +100,9 @@ void main() {
                 dxy = ds * (2.0 * n1 * inverse_d);
             }
             uint q = plane(r) + p;
-            d_mean_x[q] = da;
-            d_mean_xx[q] = dxx;
-            d_mean_xy[q] = dxy;
+            d_mean_x[q] = pack_vec4(da);
+            d_mean_xx[q] = pack_vec4(dxx);
+            d_mean_xy[q] = pack_vec4(dxy);
         }
     }
     ADD_TERMS(4u, ssim_sum, params.scales.w);

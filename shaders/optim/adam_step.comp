@@ -1,16 +1,19 @@
 #version 460
+#extension GL_EXT_control_flow_attributes : require
 // Adam over every parameter group in one dispatch. One invocation per chunk of four floats of
-// one buffer (positions, log-scales, rotations, opacity logits, SH in turn), loaded as vec4:
-// on CPU devices every buffer access is a loop over lanes, so four floats per access is four
-// times fewer loops. Moments (m, v) are interleaved beside each float; a buffer whose length
+// one buffer (positions, log-scales, rotations, opacity logits, SH in turn), loaded as two
+// 64-bit words: on CPU devices every buffer access is a loop over lanes and a scalar access per
+// component, so four floats in two words is four times fewer loops and half the accesses. Moments (m, v) are interleaved beside each float; a buffer whose length
 // is not a multiple of four ends in a chunk updated float by float.
 #include "adam.glsl"
+#include "../common/wide_vec4.glsl"
 layout(local_size_x_id = 0) in;
 
-// Each buffer is bound once and seen both as floats and as vec4 (aliases of one binding).
+// Each buffer is bound once and seen both as floats and as four floats in two 64-bit words
+// (aliases of one binding; wide_vec4.glsl says why).
 #define PARAMS(b, name) \
     layout(std430, binding = b) buffer name##_f { float name[]; }; \
-    layout(std430, binding = b) buffer name##_v { vec4 name##4[]; };
+    layout(std430, binding = b) buffer name##_v { u64vec2 name##4[]; };
 PARAMS(0, positions)
 PARAMS(1, log_scales)
 PARAMS(2, rotations)
@@ -23,7 +26,7 @@ PARAMS(8, g_opacity_logits)
 PARAMS(9, g_sh)
 #define MOMENTS(b, name) \
     layout(std430, binding = b) buffer name##_f { vec2 name[]; }; \
-    layout(std430, binding = b) buffer name##_v { vec4 name##4[]; };
+    layout(std430, binding = b) buffer name##_v { u64vec2 name##4[]; };
 MOMENTS(10, m_positions)
 MOMENTS(11, m_log_scales)
 MOMENTS(12, m_rotations)
@@ -38,34 +41,44 @@ vec4 adam(inout vec4 m, inout vec4 v, vec4 g, vec4 lr) {
     return lr * (m / params.bias.x) / (sqrt(v / params.bias.y) + params.lr_b.z);
 }
 
-// Learning rate of SH float j: SH is Gaussian-major, DC first.
-float sh_rate(uint j) {
-    return (j / 3u) % params.counts.y == 0u ? params.lr_b.x : params.lr_b.y;
+// Learning rates of SH floats j .. j + 3: SH is Gaussian-major, DC first. One modulo for the
+// four, as integer division has no SIMD form on CPUs (one division per lane). A row holds at
+// least 3 floats, so k + i wraps at most once.
+vec4 sh_rates(uint j) {
+    uint row = 3u * params.counts.y;
+    uint k = j % row;
+    vec4 rates;
+    [[unroll]] for (uint i = 0u; i < 4u; i++) {
+        uint ki = k + i >= row ? k + i - row : k + i;
+        rates[i] = ki < 3u ? params.lr_b.x : params.lr_b.y;
+    }
+    return rates;
 }
 
-#define UPDATE(P, G, M, len, c, RATE) { \
+#define UPDATE(P, G, M, len, c, RATES) { \
     uint first = 4u * (c); \
     if (first + 4u <= (len)) { \
-        vec4 lr = vec4(RATE(first), RATE(first + 1u), RATE(first + 2u), RATE(first + 3u)); \
-        vec4 m01 = M##4[2u * (c)], m23 = M##4[2u * (c) + 1u]; \
+        vec4 lr = RATES(first); \
+        vec4 m01 = unpack_vec4(M##4[2u * (c)]), m23 = unpack_vec4(M##4[2u * (c) + 1u]); \
         vec4 m = vec4(m01.xz, m23.xz), v = vec4(m01.yw, m23.yw); \
-        P##4[c] -= adam(m, v, G##4[c], lr); \
-        M##4[2u * (c)] = vec4(m.x, v.x, m.y, v.y); \
-        M##4[2u * (c) + 1u] = vec4(m.z, v.z, m.w, v.w); \
+        vec4 step = adam(m, v, unpack_vec4(G##4[c]), lr); \
+        P##4[c] = pack_vec4(unpack_vec4(P##4[c]) - step); \
+        M##4[2u * (c)] = pack_vec4(vec4(m.x, v.x, m.y, v.y)); \
+        M##4[2u * (c) + 1u] = pack_vec4(vec4(m.z, v.z, m.w, v.w)); \
     } else { \
         for (uint j = first; j < (len); j++) { \
             vec4 m = vec4(M[j].x), v = vec4(M[j].y); \
-            P[j] -= adam(m, v, vec4(G[j]), vec4(RATE(j))).x; \
+            P[j] -= adam(m, v, vec4(G[j]), RATES(j)).x; \
             M[j] = vec2(m.x, v.x); \
         } \
     } \
 }
 
-#define RATE_POSITIONS(j) params.lr_a.x
-#define RATE_SCALES(j) params.lr_a.y
-#define RATE_ROTATIONS(j) params.lr_a.z
-#define RATE_OPACITY(j) params.lr_a.w
-#define RATE_SH(j) sh_rate(j)
+#define RATE_POSITIONS(j) vec4(params.lr_a.x)
+#define RATE_SCALES(j) vec4(params.lr_a.y)
+#define RATE_ROTATIONS(j) vec4(params.lr_a.z)
+#define RATE_OPACITY(j) vec4(params.lr_a.w)
+#define RATE_SH(j) sh_rates(j)
 
 uint chunks(uint len) { return (len + 3u) / 4u; }
 
