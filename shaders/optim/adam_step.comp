@@ -2,9 +2,10 @@
 #extension GL_EXT_control_flow_attributes : require
 // Adam over every parameter group in one dispatch. One invocation per chunk of four floats of
 // one buffer (positions, log-scales, rotations, opacity logits, SH in turn), loaded as two
-// 64-bit words: on CPU devices every buffer access is a loop over lanes and a scalar access per
-// component, so four floats in two words is four times fewer loops and half the accesses. Moments (m, v) are interleaved beside each float; a buffer whose length
-// is not a multiple of four ends in a chunk updated float by float.
+// 64-bit words: on CPU devices every buffer access is a loop over lanes and a scalar access
+// per component, so four floats in two words is four times fewer loops and half the accesses.
+// Moments (m, v) are interleaved beside each float; a buffer whose length is not a multiple of
+// four ends in a chunk updated float by float.
 #include "adam.glsl"
 #include "../common/wide_vec4.glsl"
 layout(local_size_x_id = 0) in;
