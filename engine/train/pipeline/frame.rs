@@ -9,6 +9,7 @@ use crate::camera::Camera;
 use crate::eval::psnr;
 use crate::gpu::{GpuContext, Recorder};
 use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm, SilhouetteView};
+use crate::mesh::bounding_diagonal;
 use crate::optim::LearningRates;
 use crate::regularize::{Losses, Neighbourhoods, Regularizers, Temporal};
 use crate::rng::SplitMix64;
@@ -195,6 +196,7 @@ pub fn optimize_frame(
     let mut stage = FrameStage {
         config,
         extent,
+        diagonal: bounding_diagonal(&start.positions) as f32,
         near: settings.near,
         canonical,
         weights,
@@ -236,6 +238,9 @@ struct FrameTerms {
 struct FrameStage<'a, 'm> {
     config: &'a TrainConfig,
     extent: f64,
+    /// The subject's size (its starting mesh's bounding-box diagonal), which scales the
+    /// Laplacian.
+    diagonal: f32,
     /// The render settings' near plane, which the silhouette and coverage terms share.
     near: f32,
     canonical: bool,
@@ -274,7 +279,7 @@ impl Stage for FrameStage<'_, '_> {
             config.background,
         )?;
         rec.begin_pass("regularizers");
-        let regularizers = config.loss.regularizers(trainer.gaussians());
+        let regularizers = config.loss.regularizers(trainer.gaussians(), self.diagonal);
         let reference = terms.reference.as_ref().map(Temporal::of);
         terms.regs.record(rec, params, grads, &regularizers, reference)?;
         let (t, near) = (&config.temporal, self.near);
