@@ -445,4 +445,18 @@ mod tests {
         let off = GraphConfig { coarse_nodes: 0, ..graph };
         assert_eq!((0..3).map(|l| off.nodes_at(l)).collect::<Vec<_>>(), [200, 200, 200]);
     }
+
+    #[test]
+    fn laplacian_is_per_diagonal_squared_and_the_rest_per_gaussian() {
+        let weights = PipelineWeights::default();
+        let fox = weights.regularizers(1000, 200.0);
+        assert_eq!(fox.laplacian, weights.laplacian / 40_000.0);
+        assert_eq!(fox.edge_length, weights.edge_length / 1000.0);
+        // A diagonal ten times shorter: a hundred times the weight per scene unit², the same
+        // per diagonal.
+        assert_eq!(weights.regularizers(1000, 20.0).laplacian, weights.laplacian / 400.0);
+        for unusable in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert_eq!(weights.regularizers(1000, unusable).laplacian, weights.laplacian);
+        }
+    }
 }
