@@ -5,7 +5,6 @@
 // read zero.
 #extension GL_EXT_control_flow_attributes : require
 #include "loss.glsl"
-#include "../common/wide_vec4.glsl"
 layout(local_size_x_id = 0) in;
 
 // One plane per render (loss.glsl `plane`).

@@ -5,7 +5,6 @@
 #extension GL_EXT_control_flow_attributes : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #include "loss.glsl"
-#include "../common/wide_vec4.glsl"
 #include "../common/fixed_sum.glsl"
 layout(local_size_x_id = 0) in;
 

@@ -1,5 +1,6 @@
 // Shared by the fused image-loss kernels. Mirrors engine/loss/params.rs (LossParams).
-// Images are vec4 per pixel (rgb + alpha/mask), row-major; every channel is one loss channel
+// Images are vec4 per pixel (rgb + alpha/mask), row-major, declared as u64vec2 and moved as two
+// 64-bit words (common/wide_vec4.glsl says why); every channel is one loss channel
 // with its own weight, so one run scores colour and mask together. One run scores RENDERS
 // renders (1 or 2: the Gaussian and the mesh render of a view) against one target, whose
 // moments they share.
@@ -11,6 +12,8 @@
 // vertical passes stay coalesced.
 #ifndef LOSS_GLSL
 #define LOSS_GLSL
+
+#include "../common/wide_vec4.glsl"
 
 const int RADIUS = 5;            // the 11×11 SSIM window
 const int TAPS = 2 * RADIUS + 1;

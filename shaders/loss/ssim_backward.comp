@@ -4,7 +4,6 @@
 // pixel in the layout the renderers' backward passes read (vec4: colour, alpha).
 #extension GL_EXT_control_flow_attributes : require
 #include "loss.glsl"
-#include "../common/wide_vec4.glsl"
 layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) readonly buffer RenderA { u64vec2 render_a[]; };
