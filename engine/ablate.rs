@@ -132,11 +132,8 @@ pub fn run_temporal_ablations(
         let train = run_train(
             ctx,
             &TrainJob {
-                data: job.data.clone(),
-                out: dir.clone(),
-                mesh: None,
-                config,
                 frames: Some(job.frames.clone()),
+                ..TrainJob::new(&job.data, &dir, config)
             },
             &mut |p| progress(ablation.name, p),
         )?;

@@ -140,11 +140,7 @@ pub fn train_and_score(
     progress: &mut dyn FnMut(TrainProgress),
 ) -> Result<(TrainReport, Scores), DemoError> {
     let started = std::time::Instant::now();
-    let train = run_train(
-        ctx,
-        &TrainJob { data: data.to_owned(), out: out.to_owned(), mesh: None, config, frames: None },
-        progress,
-    )?;
+    let train = run_train(ctx, &TrainJob::new(data, out, config), progress)?;
     let sequence = MeshSequence::read(&out.join("meshes"))?;
     let queries = Queries::Points(read_points(&data.join("points.csv"))?);
     // Bind within 5% of the extent: the reconstruction is not the ground-truth surface.

@@ -37,13 +37,7 @@ fn run(data: &Path, out: &Path, points: Option<&Path>) -> Result<(), Error> {
     eprintln!("device: {}", ctx.info().name);
 
     // Train (or resume: frames already in OUT are kept) with a progress line per 100 steps.
-    let job = TrainJob {
-        data: data.into(),
-        out: out.into(),
-        mesh: None,
-        config: TrainConfig::default(),
-        frames: None,
-    };
+    let job = TrainJob::new(data, out, TrainConfig::default());
     let report = run_train(&ctx, &job, &mut |p: TrainProgress| {
         if p.iteration % 100 == 0 || p.iteration == p.iterations {
             eprintln!(

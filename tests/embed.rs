@@ -34,7 +34,7 @@ fn reconstruct_render_track(
     out: &Path,
     config: TrainConfig,
 ) -> Result<Outcome, Error> {
-    let job = TrainJob { data: data.into(), out: out.into(), mesh: None, config, frames: None };
+    let job = TrainJob::new(data, out, config);
     let report = run_train(ctx, &job, &mut |_| {})?;
     let sequence = MeshSequence::read(&out.join("sequence.glb"))?;
 

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::gpu;
+use common::{file_names, gpu, without_run_specifics};
 use std::path::{Path, PathBuf};
 use tagsplat::eval::chamfer_meshes;
 use tagsplat::io::trajectories::read_trajectories_csv;
@@ -55,7 +55,7 @@ fn job(
     config: TrainConfig,
     frames: Option<std::ops::Range<usize>>,
 ) -> TrainJob {
-    TrainJob { data: data.to_owned(), out: out.to_owned(), mesh: None, config, frames }
+    TrainJob { frames, ..TrainJob::new(data, out, config) }
 }
 
 #[test]
@@ -103,6 +103,10 @@ fn a_sequence_is_reconstructed_then_resumed_with_one_face_list() {
         report["frames"].as_array().unwrap().iter().map(|f| f["frame"].as_u64()).collect();
     assert_eq!(reported, [Some(0), Some(1), Some(2)]);
     assert_eq!(report["frames"][0]["psnr_mesh"].as_f64(), Some(first.frames[0].psnr_mesh));
+    // The generator's rig is Y-up: every export keeps its axes, and the report says so.
+    let up = report["up_axis"].as_str().unwrap();
+    assert!(up.contains("OBJ + PC2: Y up (the capture's up +Y kept); GLB: Y up"), "{up}");
+    assert_eq!(report["pixel_centers"], "half-integer", "the own layout's convention");
     // run.log holds both runs, in order: each one's start, its frames, its end.
     let log = std::fs::read_to_string(out.join("run.log")).unwrap();
     let lines: Vec<&str> = log.lines().map(|l| l.split_once(' ').unwrap().1).collect();
@@ -350,42 +354,4 @@ fn frames_that_lose_the_subject_keep_going_and_say_where() {
         "a run over frames 3..4 did not continue from frames 1 and 2"
     );
     let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// A report without what differs between two runs of the same job: times (keys ending in
-/// `_s` or `_ms`), the output paths and the frames found complete on disk.
-fn without_run_specifics(value: serde_json::Value) -> serde_json::Value {
-    use serde_json::Value;
-    match value {
-        Value::Object(map) => Value::Object(
-            map.into_iter()
-                .filter(|(key, _)| {
-                    !(key.ends_with("_s") || key.ends_with("_ms"))
-                        && key != "outputs"
-                        && key != "resumed_frames"
-                })
-                .map(|(key, v)| (key, without_run_specifics(v)))
-                .collect(),
-        ),
-        Value::Array(items) => Value::Array(items.into_iter().map(without_run_specifics).collect()),
-        other => other,
-    }
-}
-
-/// Every file under `dir`, relative to it, sorted.
-fn file_names(dir: &Path) -> Vec<PathBuf> {
-    let mut names = Vec::new();
-    let mut stack = vec![dir.to_owned()];
-    while let Some(folder) = stack.pop() {
-        for entry in std::fs::read_dir(&folder).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-            } else {
-                names.push(path.strip_prefix(dir).unwrap().to_owned());
-            }
-        }
-    }
-    names.sort();
-    names
 }

@@ -34,7 +34,7 @@ fn a_run_writes_a_self_contained_report_that_shows_its_scores_and_renders() {
     let mut config = TrainConfig { sh_degree: 0, ..Default::default() };
     config.canonical.iterations = 60;
     config.temporal.iterations = 60;
-    let job = TrainJob { data: data.clone(), out: out.clone(), mesh: None, config, frames: None };
+    let job = TrainJob::new(&data, &out, config);
     run_train(g.ctx(), &job, &mut |_| {}).unwrap();
 
     // Frames 0, 1 and 2 of synth's one held-out view (of 8): target, Gaussians, mesh.

@@ -232,6 +232,23 @@ fn cli_converts_between_every_layout() {
     let back = MeshSequence::read(&dir.join("d")).unwrap();
     assert_eq!(back.faces, seq.faces);
     assert!(max_difference(&back, &seq) < 1e-6);
+    // A Z-up input turned Y-up, as glTF viewers expect: (x, y, z) -> (x, z, -y) (the GLB's
+    // morph targets store offsets from frame 0, so later frames read back within rounding).
+    convert("a", "f.glb", &["--from-up", "+z", "--up", "y"]);
+    let turned = MeshSequence::read(&dir.join("f.glb")).unwrap();
+    let expected = MeshSequence {
+        frames: seq
+            .frames
+            .iter()
+            .map(|f| f.iter().map(|p| [p[0], p[2], -p[1]]).collect())
+            .collect(),
+        ..seq.clone()
+    };
+    assert_eq!(turned.faces, seq.faces);
+    assert!(max_difference(&turned, &expected) < 1e-6);
+    convert("a", "g.pc2", &["--from-up", "-y", "--up", "z"]);
+    let turned = MeshSequence::read(&dir.join("g.pc2")).unwrap();
+    assert!(turned.frames[1].iter().zip(&seq.frames[1]).all(|(t, p)| t[2] == -p[1]), "-Y onto +Z");
     // USD from convert, and from track with the tracked points (vertices 0 and 5 of frame 0).
     convert("a", "e.usda", &["--up", "z", "--fps", "12"]);
     let points = [0, 5].map(|v| {
@@ -315,7 +332,8 @@ fn triples(value: &serde_json::Value) -> Vec<Vec<[f64; 3]>> {
 
 #[test]
 fn usd_export_reads_back_exactly_in_pixars_library_and_passes_its_compliance_checker() {
-    use tagsplat::sequence::usd::{write_usda, UpAxis, UsdTracks};
+    use tagsplat::sequence::orient::{Orientation, UpAxis};
+    use tagsplat::sequence::usd::{write_usda, UsdTracks};
     let dir = temp_dir("seq-usd");
     let seq = sequence(2, 5, bend);
     let ids = ["nose".to_string(), "tail \"tip\"".to_string()];
@@ -323,7 +341,7 @@ fn usd_export_reads_back_exactly_in_pixars_library_and_passes_its_compliance_che
         (0..2).map(|i| seq.frames.iter().map(|f| f[i * 7].map(f64::from)).collect()).collect();
     let tracks = UsdTracks { ids: &ids, trajectories: &trajectories };
     let path = dir.join("sequence.usda");
-    write_usda(&path, &seq, 30.0, UpAxis::Z, Some(&tracks)).unwrap();
+    write_usda(&path, &seq, 30.0, Orientation::keep(UpAxis::Z), Some(&tracks)).unwrap();
     let Some(usd) = read_with_pxr(&path) else { return };
     // usdchecker's validators (30 in usd-core 26.11) found nothing to report.
     assert!(usd["validators"].as_u64() >= Some(20), "{}", usd["validators"]);

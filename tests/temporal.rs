@@ -58,13 +58,7 @@ fn the_temporal_stage_tracks_a_run_that_the_previous_stage_loses() {
     let (new, old) = (dir.join("new"), dir.join("previous"));
     run_train(
         g.ctx(),
-        &TrainJob {
-            data: data.clone(),
-            out: new.clone(),
-            mesh: None,
-            config: config(),
-            frames: Some(0..1),
-        },
+        &TrainJob { frames: Some(0..1), ..TrainJob::new(&data, &new, config()) },
         &mut |_| {},
     )
     .unwrap();

@@ -38,7 +38,7 @@ pub fn run(context: impl FnOnce() -> Result<Arc<GpuContext>>, a: BenchSequenceAr
     let out = a.out.unwrap_or_else(|| {
         std::env::temp_dir().join(format!("tagsplat-bench-{name}-{}", std::process::id()))
     });
-    let job = TrainJob { data: a.data, out, mesh: None, config, frames: a.frames };
+    let job = TrainJob { frames: a.frames, ..TrainJob::new(a.data, out, config) };
     let eval = SequenceEvalOptions { chamfer_samples: a.chamfer_samples, ..Default::default() };
     // One line per frame on stderr, so stdout stays one JSON object with --json.
     let mut current = None;

@@ -4,7 +4,8 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use tagsplat::camera::Camera;
-use tagsplat::sequence::usd::{write_usda, UpAxis, UsdTracks};
+use tagsplat::sequence::orient::{Orientation, SignedAxis, UpAxis};
+use tagsplat::sequence::usd::{write_usda, UsdTracks};
 use tagsplat::sequence::{FrameFormat, MeshSequence};
 use tagsplat::track::bench::{bench_track, TrackBenchReport};
 use tagsplat::track::output::{
@@ -40,11 +41,12 @@ pub struct TrackArgs {
     /// Also write the sequence with the tracked points as USD (time-sampled mesh and points).
     #[arg(long)]
     usd: Option<PathBuf>,
-    /// Frames per second and up axis of the --usd file.
+    /// Frames per second of the --usd file.
     #[arg(long, default_value_t = 24.0)]
     fps: f64,
-    #[arg(long, value_enum, default_value = "y")]
-    up: UpArg,
+    /// Up axis of the --usd file.
+    #[command(flatten)]
+    up: UpArgs,
     /// Also plot the trajectories as SVG (left: projected on the two axes of largest spread;
     /// right: distance from the frame-0 position against the frame; ids in the legend).
     #[arg(long)]
@@ -92,7 +94,7 @@ pub fn track(args: TrackArgs) -> Result<()> {
         let ids: Vec<String> = report.points.iter().map(|p| p.id.clone()).collect();
         let trajectories: Vec<_> = report.points.iter().map(|p| p.trajectory.clone()).collect();
         let tracks = UsdTracks { ids: &ids, trajectories: &trajectories };
-        write_usda(usd, &sequence, args.fps, args.up.into(), Some(&tracks))?;
+        write_usda(usd, &sequence, args.fps, args.up.orientation(), Some(&tracks))?;
     }
     if let Some(plot) = &args.plot {
         let paths: Vec<Vec<glam::DVec3>> = report
@@ -172,9 +174,31 @@ pub struct ConvertArgs {
     /// Frames per second of the .glb or .usda animation.
     #[arg(long, default_value_t = 24.0)]
     fps: f64,
-    /// The up axis a .usda declares (positions are written unchanged).
+    #[command(flatten)]
+    up: UpArgs,
+}
+
+/// The up axis of a written sequence, and the input's, turned onto it.
+#[derive(Args)]
+pub struct UpArgs {
+    /// The written file's up axis (a .usda also declares it).
     #[arg(long, value_enum, default_value = "y")]
     up: UpArg,
+    /// The input's up (+x, -x, +y, -y, +z or -z), turned onto --up by quarter turns. Default:
+    /// --up itself, so positions are written as read.
+    #[arg(long, value_parser = parse_signed_axis, allow_hyphen_values = true)]
+    from_up: Option<SignedAxis>,
+}
+
+impl UpArgs {
+    fn orientation(&self) -> Orientation {
+        let up = UpAxis::from(self.up);
+        self.from_up.map_or(Orientation::keep(up), |source| Orientation::new(source, up))
+    }
+}
+
+fn parse_signed_axis(text: &str) -> Result<SignedAxis, String> {
+    SignedAxis::parse(text).ok_or_else(|| format!("'{text}' is not one of +x, -x, +y, -y, +z, -z"))
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -198,10 +222,12 @@ pub fn convert(args: ConvertArgs) -> Result<()> {
         FrameFormatArg::Ply => FrameFormat::Ply,
         FrameFormatArg::Obj => FrameFormat::Obj,
     };
+    let orientation = args.up.orientation();
     if args.to.extension().is_some_and(|e| e.eq_ignore_ascii_case("usda")) {
-        write_usda(&args.to, &sequence, args.fps, args.up.into(), None)?;
+        write_usda(&args.to, &sequence, args.fps, orientation, None)?;
     } else {
-        sequence.write(&args.to, format, args.fps).context("cannot write the sequence")?;
+        let turned = orientation.sequence(&sequence);
+        turned.write(&args.to, format, args.fps).context("cannot write the sequence")?;
     }
     println!(
         "{} frames, {} vertices, {} faces -> {}",

@@ -1,9 +1,12 @@
 //! `tagsplat train`: the reconstruction pipeline over a dataset, resumable.
 
+use crate::dataset::PixelCentersArg;
+use crate::track::UpArg;
 use anyhow::{bail, Context, Result};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::sync::Arc;
+use tagsplat::dataset::LoadOptions;
 use tagsplat::gpu::GpuContext;
 use tagsplat::train::pipeline::{run_train, TrainConfig, TrainJob, TrainProgress, TrainReport};
 
@@ -25,6 +28,15 @@ pub struct TrainArgs {
     /// Frames A..B (B excluded); frames before A must be complete in --out.
     #[arg(long, value_parser = parse_range)]
     frames: Option<std::ops::Range<usize>>,
+    /// Up axis of sequence.glb, .usda and .obj + .pc2. Default: the GLB Y-up (glTF's up), the
+    /// others Z-up when the capture is Z-up and Y-up otherwise; either way the capture's up
+    /// (the axis nearest its cameras' mean up) is turned onto it. meshes/ keeps the dataset's axes.
+    #[arg(long, value_enum)]
+    up: Option<UpArg>,
+    /// Where the dataset's intrinsics put pixel centres (default: the layout's own, see
+    /// `tagsplat dataset info`).
+    #[arg(long, value_enum)]
+    pixel_centers: Option<PixelCentersArg>,
     /// Print the default config as TOML and exit.
     #[arg(long)]
     print_config: bool,
@@ -52,7 +64,13 @@ pub fn train(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: TrainArgs)
     let (Some(data), Some(out)) = (args.data, args.out) else {
         bail!("--data and --out are required")
     };
-    let job = TrainJob { data, out, mesh: args.mesh, config, frames: args.frames };
+    let job = TrainJob {
+        mesh: args.mesh,
+        frames: args.frames,
+        up: args.up.map(Into::into),
+        load: LoadOptions { pixel_centers: args.pixel_centers.map(Into::into) },
+        ..TrainJob::new(data, out, config)
+    };
     let report = run_with_progress(&context()?, &job)?;
     print_report(&report);
     Ok(())

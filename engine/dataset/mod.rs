@@ -110,7 +110,7 @@ pub enum Format {
 /// Where a layout's intrinsics put the centre of pixel (i, j). The engine's cameras use
 /// `HalfInteger` (docs/conventions.md); intrinsics in the other convention are shifted by +0.5
 /// in cx and cy at load time.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum PixelCenters {
     /// At (i, j): OpenCV calibrations, so the default for K matrices (Panoptic).

@@ -13,6 +13,7 @@
 
 pub mod folder;
 pub mod glb;
+pub mod orient;
 pub mod usd;
 
 use crate::io::pc2::{self, Pc2Error, PointCache};

@@ -8,40 +8,11 @@
 //! Floats are written as shortest round-trip decimals, so a reader gets every f32 back exactly.
 
 use super::glb::srgb_to_linear;
+use super::orient::Orientation;
+pub use super::orient::UpAxis;
 use super::MeshSequence;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-
-/// Which world axis points up, as the stage's `upAxis` metadata says. Positions are written as
-/// they are: this names the axis, it does not rotate.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum UpAxis {
-    /// +Y is up.
-    Y,
-    /// +Z is up.
-    Z,
-}
-
-impl UpAxis {
-    /// The axis of Y and Z nearer to `up` (e.g. the mean of the capture cameras' up vectors,
-    /// [`crate::camera::Camera::world_up`]), and whether `up` points along it (true) or
-    /// against it (false: the metadata cannot say "down", the caller should report it).
-    pub fn nearest(up: [f64; 3]) -> (UpAxis, bool) {
-        if up[2].abs() > up[1].abs() {
-            (UpAxis::Z, up[2] > 0.0)
-        } else {
-            (UpAxis::Y, up[1] >= 0.0)
-        }
-    }
-
-    /// The `upAxis` token: `"Y"` or `"Z"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            UpAxis::Y => "Y",
-            UpAxis::Z => "Z",
-        }
-    }
-}
 
 /// Tracked points to add: an id and a position per frame (scene units), each trajectory as
 /// long as the sequence.
@@ -62,13 +33,14 @@ pub struct UsdError {
     pub problem: String,
 }
 
-/// Writes `sequence` (and `tracks`) to `path` atomically. Errors: an unusable sequence, `fps`
+/// Writes `sequence` (and `tracks`) to `path` atomically, turned by `orientation`, whose up
+/// axis the stage declares. Errors: an unusable sequence, `fps`
 /// not positive and finite, tracks whose lengths do not match the frames, a write failure.
 pub fn write_usda(
     path: &Path,
     sequence: &MeshSequence,
     fps: f64,
-    up: UpAxis,
+    orientation: Orientation,
     tracks: Option<&UsdTracks>,
 ) -> Result<(), UsdError> {
     let fail = |problem: String| UsdError { path: path.to_owned(), problem };
@@ -84,7 +56,15 @@ pub fn write_usda(
     if let Some(problem) = tracks.and_then(|t| track_problem(t, sequence.frames.len())) {
         return Err(fail(format!("cannot write the tracks: {problem}")));
     }
-    crate::io::write_atomically(path, |w| write_stage(w, sequence, fps, up, tracks))
+    let sequence = orientation.sequence(sequence);
+    let trajectories: Option<Vec<Vec<[f64; 3]>>> = tracks.map(|t| {
+        t.trajectories.iter().map(|p| p.iter().map(|&x| orientation.apply(x)).collect()).collect()
+    });
+    let tracks = tracks
+        .zip(trajectories.as_deref())
+        .map(|(t, trajectories)| UsdTracks { ids: t.ids, trajectories });
+    let up = orientation.up;
+    crate::io::write_atomically(path, |w| write_stage(w, &sequence, fps, up, tracks.as_ref()))
         .map_err(|e| fail(format!("cannot write: {e}")))
 }
 
@@ -221,14 +201,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_nearer_of_y_and_z_is_up_and_a_downward_up_is_said() {
-        assert_eq!(UpAxis::nearest([0.1, 0.2, 0.9]), (UpAxis::Z, true));
-        assert_eq!(UpAxis::nearest([0.3, 0.9, -0.2]), (UpAxis::Y, true));
-        assert_eq!(UpAxis::nearest([0.0, -0.95, 0.1]), (UpAxis::Y, false));
-        assert_eq!(UpAxis::nearest([0.0, 0.1, -0.7]), (UpAxis::Z, false));
-    }
-
-    #[test]
     fn unusable_input_is_refused_naming_the_file() {
         let path = Path::new("out/s.usda");
         let sequence = MeshSequence {
@@ -237,7 +209,9 @@ mod tests {
             colors: None,
         };
         let error = |fps, tracks: Option<&UsdTracks>| {
-            write_usda(path, &sequence, fps, UpAxis::Y, tracks).unwrap_err().to_string()
+            write_usda(path, &sequence, fps, Orientation::keep(UpAxis::Y), tracks)
+                .unwrap_err()
+                .to_string()
         };
         assert!(error(0.0, None).starts_with("out/s.usda: cannot write: frame rate 0"));
         assert!(error(f64::NAN, None).contains("frame rate NaN"));
@@ -248,7 +222,9 @@ mod tests {
             error(24.0, Some(&tracks)).contains("point a has 1 positions, the sequence 2 frames")
         );
         let empty = MeshSequence::default();
-        let message = write_usda(path, &empty, 24.0, UpAxis::Y, None).unwrap_err().to_string();
+        let message = write_usda(path, &empty, 24.0, Orientation::keep(UpAxis::Y), None)
+            .unwrap_err()
+            .to_string();
         assert!(message.contains("no frames"), "{message}");
     }
 }

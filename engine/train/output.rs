@@ -6,7 +6,8 @@
 use super::TrainError;
 use crate::dataset::own::frame_name;
 use crate::mesh::TriMesh;
-use crate::sequence::usd::{write_usda, UpAxis};
+use crate::sequence::orient::{Orientation, SignedAxis, UpAxis};
+use crate::sequence::usd::write_usda;
 use crate::sequence::{FrameFormat, MeshSequence};
 use crate::splat::GaussianScene;
 use std::path::{Path, PathBuf};
@@ -83,14 +84,17 @@ impl SequenceOutput {
     }
 
     /// Writes `sequence.obj` + `sequence.pc2`, `sequence.glb` and `sequence.usda` (`fps`
-    /// frames per second, `up` in the USD metadata) from the meshes of `frames`; returns the
-    /// paths.
+    /// frames per second) from the meshes of `frames`, turned from the capture's up `source`
+    /// onto `up` ([`Orientation::for_export`]: by default GLB Y-up, the others following the
+    /// capture); returns the paths and a sentence saying how each was turned. The frames in
+    /// `meshes/` stay in the dataset's world, where its ground truth is.
     pub fn export(
         &self,
         frames: std::ops::Range<usize>,
         fps: f64,
-        up: UpAxis,
-    ) -> Result<Vec<PathBuf>, TrainError> {
+        source: SignedAxis,
+        up: Option<UpAxis>,
+    ) -> Result<(Vec<PathBuf>, String), TrainError> {
         let mut sequence = MeshSequence::default();
         for t in frames {
             let mesh = TriMesh::read_ply(&self.mesh_path(t))?;
@@ -106,13 +110,16 @@ impl SequenceOutput {
             }
             sequence.frames.push(mesh.positions);
         }
+        let (others, gltf) =
+            (Orientation::for_export(source, up, false), Orientation::for_export(source, up, true));
         let (pc2, glb) = (self.root.join("sequence.pc2"), self.root.join("sequence.glb"));
-        for path in [&pc2, &glb] {
-            sequence.write(path, FrameFormat::Ply, fps)?;
-        }
         let usd = self.root.join("sequence.usda");
-        write_usda(&usd, &sequence, fps, up, None)?;
-        Ok(vec![self.root.join("sequence.obj"), pc2, glb, usd])
+        let turned = others.sequence(&sequence);
+        turned.write(&pc2, FrameFormat::Ply, fps)?;
+        gltf.sequence(&sequence).write(&glb, FrameFormat::Ply, fps)?;
+        write_usda(&usd, &sequence, fps, others, None)?;
+        let said = format!("USD, OBJ + PC2: {}; GLB: {}", others.describe(), gltf.describe());
+        Ok((vec![self.root.join("sequence.obj"), pc2, glb, usd], said))
     }
 }
 
@@ -157,9 +164,21 @@ mod tests {
             assert_eq!((back.faces, back_scene), (faces.clone(), scene));
             assert_eq!(back.colors.unwrap()[0], [51, 102, 153]);
         }
-        let written = out.export(0..2, 10.0, UpAxis::Y).unwrap();
+        // A Z-up capture: GLB turned Y-up, the others kept Z-up, meshes/ untouched.
+        let z_up = SignedAxis { axis: 2, negative: false };
+        let (written, said) = out.export(0..2, 10.0, z_up, None).unwrap();
         assert!(written.iter().all(|p| p.is_file()));
-        assert_eq!(MeshSequence::read(&root.join("sequence.glb")).unwrap().frames.len(), 2);
+        assert!(said.contains("GLB: Y up (the capture's up +Z turned onto +Y)"), "{said}");
+        let glb = MeshSequence::read(&root.join("sequence.glb")).unwrap();
+        let pc2 = MeshSequence::read(&root.join("sequence.pc2")).unwrap();
+        assert_eq!(glb.frames.len(), 2);
+        assert_eq!(glb.frames[1][3], [1.0, 1.0, 0.0], "(x, y, z) -> (x, z, -y)");
+        assert_eq!(pc2.frames[1][3], [1.0, 0.0, 1.0]);
+        assert_eq!(out.read_frame(1).unwrap().0.positions[3], [1.0, 0.0, 1.0]);
+        // Asked for Y up, every export is.
+        out.export(0..2, 10.0, z_up, Some(UpAxis::Y)).unwrap();
+        let pc2 = MeshSequence::read(&root.join("sequence.pc2")).unwrap();
+        assert_eq!(pc2.frames[1][3], [1.0, 1.0, 0.0]);
         std::fs::remove_file(out.mesh_path(1)).unwrap();
         assert!(!out.is_complete(1));
         let _ = std::fs::remove_dir_all(&root);

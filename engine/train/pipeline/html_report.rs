@@ -8,7 +8,7 @@
 
 use super::FrameReport;
 use crate::camera::Camera;
-use crate::dataset::Dataset;
+use crate::dataset::{Dataset, LoadOptions, PixelCenters};
 use crate::eval::psnr;
 use crate::gpu::GpuContext;
 use crate::io::image::{encode_png, Image};
@@ -50,6 +50,9 @@ struct Run {
     /// Reports written before the field existed were trained on the default, black.
     #[serde(default)]
     background: [f32; 3],
+    /// Reports written before the field existed used the layout's default.
+    #[serde(default)]
+    pixel_centers: Option<PixelCenters>,
 }
 
 /// `OUT/eval.json` of `tagsplat eval` on a benchmark: the per-frame scores the page shows.
@@ -77,7 +80,7 @@ pub fn write_html_report(ctx: &Arc<GpuContext>, out: &Path) -> Result<PathBuf, T
     })?;
     let eval: Option<Eval> = read_json(&out.join("eval.json"))?;
     let eval_plot = if eval.is_some() { read_text(&out.join("eval.svg"))? } else { None };
-    let dataset = Dataset::load(&run.data)?;
+    let dataset = Dataset::load_with(&run.data, &LoadOptions { pixel_centers: run.pixel_centers })?;
     let views = views_section(ctx, &dataset, out, &run)?;
     let page = page(out, &run, eval.as_ref(), eval_plot.as_deref(), &views);
     let path = out.join("report.html");

@@ -7,12 +7,12 @@ use super::frame::{optimize_frame, FrameReport, FrameTask};
 use super::html_report::write_html_report;
 use super::run_log::RunLog;
 use crate::camera::mean_up;
-use crate::dataset::Dataset;
+use crate::dataset::{Dataset, LoadOptions, PixelCenters};
 use crate::gpu::GpuContext;
 use crate::init::{init_mesh, InitOptions};
 use crate::io::write_atomically;
 use crate::mesh::TriMesh;
-use crate::sequence::usd::UpAxis;
+use crate::sequence::orient::{SignedAxis, UpAxis};
 use crate::splat::GaussianScene;
 use crate::topology::{gaussians_from_mesh, import, InitConfig, ManifoldMesh, TopologyError};
 use crate::train::output::{dc_vertex_colors, SequenceOutput};
@@ -35,6 +35,29 @@ pub struct TrainJob {
     pub config: TrainConfig,
     /// Frames to produce (default: all). Frames before the range must be complete already.
     pub frames: Option<Range<usize>>,
+    /// The exports' up axis; None follows the capture ([`Orientation::for_export`]).
+    ///
+    /// [`Orientation::for_export`]: crate::sequence::orient::Orientation::for_export
+    pub up: Option<UpAxis>,
+    /// What the dataset's files leave open (the intrinsics' pixel centres).
+    pub load: LoadOptions,
+}
+
+impl TrainJob {
+    /// A job over every frame of `data` into `out`: the frame-0 mesh built from the masks,
+    /// exports oriented after the capture, the layout's own pixel-centre convention.
+    pub fn new(data: impl Into<PathBuf>, out: impl Into<PathBuf>, config: TrainConfig) -> Self {
+        let (data, out) = (data.into(), out.into());
+        TrainJob {
+            data,
+            out,
+            mesh: None,
+            config,
+            frames: None,
+            up: None,
+            load: LoadOptions::default(),
+        }
+    }
 }
 
 /// Where the run is, for a progress display.
@@ -71,8 +94,11 @@ pub struct TrainReport {
     pub faces: usize,
     /// The files written: per-frame folders and the sequence exports.
     pub outputs: Vec<PathBuf>,
-    /// The USD export's up axis, chosen from the cameras' mean up vector, and how.
+    /// The exports' up axes and how the capture was turned onto them (the capture's up is the
+    /// signed axis nearest the cameras' mean up vector).
     pub up_axis: String,
+    /// Where the dataset's intrinsics were read to put pixel centres.
+    pub pixel_centers: PixelCenters,
     /// The colour behind the renders and the targets they are scored against (the config's).
     pub background: [f32; 3],
 }
@@ -108,7 +134,7 @@ fn run_logged(
 ) -> Result<TrainReport, TrainError> {
     job.config.check()?;
     let started = Instant::now();
-    let dataset = Dataset::load(&job.data)?;
+    let dataset = Dataset::load_with(&job.data, &job.load)?;
     let frames = job.frames.clone().unwrap_or(0..dataset.frames.len());
     if frames.is_empty() || frames.end > dataset.frames.len() {
         let (data, available) = (job.data.clone(), dataset.frames.len());
@@ -134,9 +160,10 @@ fn run_logged(
         faces: 0,
         outputs: vec![job.out.join("meshes"), job.out.join("gaussians")],
         up_axis: String::new(),
+        pixel_centers: dataset.pixel_centers,
         background: job.config.background,
     };
-    let up = up_axis(&dataset, &mut report.up_axis);
+    let source = capture_up(&dataset, &mut report.up_axis);
     report.frames = earlier_frame_reports(&job.out, &report.resumed_frames);
     if !report.resumed_frames.is_empty() {
         log.line(&format!("resuming: frames {:?} are complete on disk", report.resumed_frames))?;
@@ -205,9 +232,11 @@ fn run_logged(
         finish_report(&mut report, &mesh, started, &job.out)?;
     }
     if (0..dataset.frames.len()).all(|t| out.is_complete(t)) {
-        let exported = out.export(0..dataset.frames.len(), fps(&dataset), up)?;
+        let (exported, said) =
+            out.export(0..dataset.frames.len(), fps(&dataset), source, job.up)?;
+        report.up_axis = format!("{said}; {}", report.up_axis);
         let names: Vec<String> = exported.iter().map(|p| p.display().to_string()).collect();
-        log.line(&format!("exported (up axis {}): {}", report.up_axis, names.join(", ")))?;
+        log.line(&format!("exported ({}): {}", report.up_axis, names.join(", ")))?;
         report.outputs.extend(exported);
     }
     finish_report(&mut report, &mesh, started, &job.out)?;
@@ -399,17 +428,12 @@ fn finish_report(
     .map_err(|error| TrainError::Io { path, error })
 }
 
-/// The axis of Y and Z nearest the cameras' mean up vector, and a sentence saying so.
-fn up_axis(dataset: &Dataset, said: &mut String) -> UpAxis {
+/// The signed axis nearest the cameras' mean up vector, and a sentence saying so.
+fn capture_up(dataset: &Dataset, said: &mut String) -> SignedAxis {
     let mean = mean_up(&dataset.cameras);
-    let (axis, along) = UpAxis::nearest(mean.to_array());
-    let name = axis.name();
-    *said = if along {
-        format!("{name} (the cameras' mean up is {mean:.3})")
-    } else {
-        format!("{name}, but the cameras' mean up {mean:.3} points along -{name}: the USD export is upside down")
-    };
-    axis
+    let source = SignedAxis::nearest(mean.to_array());
+    *said = format!("the cameras' mean up {mean:.3} is nearest {source}");
+    source
 }
 
 /// Frames per second of the dataset's clock (10 when it has none).
