@@ -4,6 +4,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use tagsplat::camera::Camera;
+use tagsplat::dataset::Dataset;
 use tagsplat::sequence::orient::{Orientation, SignedAxis, UpAxis};
 use tagsplat::sequence::usd::{write_usda, UsdTracks};
 use tagsplat::sequence::{FrameFormat, MeshSequence};
@@ -27,11 +28,16 @@ pub struct TrackArgs {
     /// ray-cast onto frame 0 through --camera.
     #[arg(long, requires = "camera")]
     pixels: Option<PathBuf>,
-    /// A camera (cam.json: width, height, fx, fy, cx, cy, world_to_camera): the one --pixels
-    /// are in, and the one every point is projected into, per frame, with its visibility
-    /// (OUT's `.2d.csv`: id, frame, u, v, visible).
+    /// A camera: a cam.json file (width, height, fx, fy, cx, cy, world_to_camera) or, with
+    /// --data, the name of one of that dataset's cameras (e.g. c01). The one --pixels are in,
+    /// and the one every point is projected into, per frame, with its visibility (OUT's
+    /// `.2d.csv`: id, frame, u, v, visible).
     #[arg(long)]
     camera: Option<PathBuf>,
+    /// The dataset whose camera --camera names (in its own pixel-centre convention, see
+    /// `tagsplat dataset info`).
+    #[arg(long, requires = "camera")]
+    data: Option<PathBuf>,
     /// Trajectories out: CSV `id,frame,x,y,z`.
     #[arg(long)]
     out: PathBuf,
@@ -66,7 +72,18 @@ pub fn track(args: TrackArgs) -> Result<()> {
         bail!("--max-distance {} must be a finite non-negative fraction", args.max_distance);
     }
     let sequence = MeshSequence::read(&args.sequence).context("cannot read the sequence")?;
-    let camera = args.camera.as_deref().map(Camera::load_json).transpose()?;
+    // The outputs' folders are made, as `train` makes OUT.
+    for path in [Some(&args.out), args.json.as_ref(), args.usd.as_ref(), args.plot.as_ref()] {
+        if let Some(folder) = path.and_then(|p| p.parent()).filter(|f| !f.as_os_str().is_empty()) {
+            std::fs::create_dir_all(folder)
+                .with_context(|| format!("cannot create the folder {}", folder.display()))?;
+        }
+    }
+    let camera = match (&args.camera, &args.data) {
+        (Some(name), Some(data)) => Some(dataset_camera(data, &name.to_string_lossy())?),
+        (Some(file), None) => Some(Camera::load_json(file)?),
+        (None, _) => None,
+    };
     let queries = match (&args.points, &args.pixels, &camera) {
         (Some(points), _, _) => Queries::Points(read_points(points)?),
         (None, Some(pixels), Some(camera)) => {
@@ -149,6 +166,20 @@ fn report_unbound(args: &TrackArgs, queries: &Queries, report: &TrackReport) -> 
 }
 
 /// `tracks.csv` → `tracks.unbound.csv`.
+/// The camera called `name` in the dataset at `data`; the error lists the names it has.
+fn dataset_camera(data: &Path, name: &str) -> Result<Camera> {
+    let dataset = Dataset::load(data)
+        .with_context(|| format!("cannot load the dataset {} for --camera", data.display()))?;
+    match dataset.camera_names.iter().position(|n| n == name) {
+        Some(i) => Ok(dataset.cameras[i]),
+        None => bail!(
+            "{}: no camera named '{name}'; it has {}",
+            data.display(),
+            dataset.camera_names.join(", ")
+        ),
+    }
+}
+
 fn unbound_path(out: &Path) -> PathBuf {
     out.with_extension("unbound.csv")
 }
