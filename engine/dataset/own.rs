@@ -53,6 +53,15 @@ pub fn image_path(dir: &Path, camera: &str, t: usize) -> PathBuf {
     dir.join("images").join(camera).join(format!("{}.png", frame_name(t)))
 }
 
+/// The image of `camera` at frame `t` as stored: `<t>.png`, else `<t>.jpg` or `<t>.jpeg` (a
+/// capture kept as JPEG); the `.png` name when none exists, so the missing-file report names it.
+fn stored_image_path(dir: &Path, camera: &str, t: usize) -> PathBuf {
+    let png = image_path(dir, camera, t);
+    let found =
+        ["png", "jpg", "jpeg"].into_iter().map(|e| png.with_extension(e)).find(|p| p.is_file());
+    found.unwrap_or(png)
+}
+
 /// `dir/masks/<camera>/<t>.png`, `<t>` as in [`frame_name`].
 pub fn mask_path(dir: &Path, camera: &str, t: usize) -> PathBuf {
     dir.join("masks").join(camera).join(format!("{}.png", frame_name(t)))
@@ -125,7 +134,7 @@ pub(crate) fn load(dir: &Path) -> Result<Dataset, DatasetError> {
                 .enumerate()
                 .map(|(c, name)| View {
                     camera: c,
-                    image: image_path(dir, name, t),
+                    image: stored_image_path(dir, name, t),
                     mask: MaskSource::File(mask_path(dir, name, t)),
                 })
                 .collect(),
