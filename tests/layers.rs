@@ -9,11 +9,16 @@ use std::path::{Path, PathBuf};
 type Graph = BTreeMap<String, BTreeMap<String, BTreeSet<PathBuf>>>;
 
 fn rust_files(path: &Path, out: &mut Vec<PathBuf>) {
+    files_ending(path, "rs", out);
+}
+
+/// Every file under `path` (or `path` itself) whose extension is `extension`.
+fn files_ending(path: &Path, extension: &str, out: &mut Vec<PathBuf>) {
     if path.is_dir() {
         for entry in std::fs::read_dir(path).unwrap() {
-            rust_files(&entry.unwrap().path(), out);
+            files_ending(&entry.unwrap().path(), extension, out);
         }
-    } else if path.is_file() && path.extension().is_some_and(|e| e == "rs") {
+    } else if path.is_file() && path.extension().is_some_and(|e| e == extension) {
         out.push(path.to_owned());
     }
 }
@@ -142,4 +147,33 @@ fn cited_documents_exist() {
     assert!(cited.iter().any(|(name, _)| name == "docs/conventions.md"), "{cited:?}");
     let missing: Vec<_> = cited.iter().filter(|(name, _)| !root.join(name).is_file()).collect();
     assert!(missing.is_empty(), "cited but not in the repository: {missing:?}");
+}
+
+/// A fresh clone is all a reader has: no code, test, script or document points at the team's
+/// shared folder or at the planning documents that live outside the repository.
+#[test]
+fn nothing_cites_files_outside_the_repository() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = vec![root.join("README.md")];
+    for (folder, extension) in [("docs", "md"), ("scripts", "sh"), ("scripts", "py")] {
+        files_ending(&root.join(folder), extension, &mut files);
+    }
+    for folder in ["engine", "tools", "tests", "examples", "benches"] {
+        rust_files(&root.join(folder), &mut files);
+    }
+    // Spelled in pieces so that this file does not cite them itself.
+    let outside =
+        [["..", "/shared"], ["ARCHITECTURE", ".md"], ["CONVENTIONS", ".md"], ["MISSION", ".md"]]
+            .map(|pieces| pieces.concat());
+    let mut found = Vec::new();
+    for file in &files {
+        let text = std::fs::read_to_string(file).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            if let Some(name) = outside.iter().find(|name| line.contains(name.as_str())) {
+                found.push(format!("{}:{}: {name}", file.display(), n + 1));
+            }
+        }
+    }
+    assert!(files.len() > 100, "{} files scanned", files.len());
+    assert!(found.is_empty(), "cites files outside the repository:\n{}", found.join("\n"));
 }
