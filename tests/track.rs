@@ -1,7 +1,8 @@
 //! Tracking against oracles: BVH queries against brute force, tracked vertices against the
 //! generated trajectories, surface points against the analytic motion, pixel hits against
-//! the camera projection, the CLI end to end.
+//! the camera projection, the CLI end to end and twice on the same input.
 
+mod common;
 mod deforming;
 
 use deforming::{affine, bend, sequence, temp_dir};
@@ -406,5 +407,77 @@ fn cli_tracks_points_of_a_folder_sequence_into_csv_json_and_png() {
     // Once every point binds, the earlier list goes.
     std::fs::write(dir.join("points.csv"), "id,x,y,z\nok,1,0,0\n").unwrap();
     assert!(run(&[]).status.success() && !dir.join("tracks.unbound.csv").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Two `tagsplat track` processes on the same sequence, points and camera write the same
+/// files byte for byte: tracks, JSON report, image tracks, unbound list, USD and plot.
+#[test]
+fn track_cli_twice_on_the_same_input_writes_the_same_files() {
+    let dir = temp_dir("track-rerun");
+    let seq = sequence(3, 8, bend);
+    seq.write_folder(&dir.join("frames"), tagsplat::sequence::FrameFormat::Ply).unwrap();
+    // 300 points on random faces at random barycentrics, a little off the surface, and two
+    // too far from it to bind.
+    let mut rng = common::rng(21);
+    let mut csv = String::from("id,x,y,z\n");
+    for i in 0..300 {
+        let face = seq.faces[(rng.next_f64() * seq.faces.len() as f64) as usize];
+        let [a, b, c] = face.map(|v| DVec3::from(seq.frames[0][v as usize].map(f64::from)));
+        let (r1, r2) = (rng.next_f64().sqrt(), rng.next_f64());
+        let normal = (b - a).cross(c - a).normalize();
+        let p = a * (1.0 - r1)
+            + b * (r1 * (1.0 - r2))
+            + c * (r1 * r2)
+            + normal * (0.02 * rng.next_f64() - 0.01);
+        csv += &format!("p{i},{},{},{}\n", p.x, p.y, p.z);
+    }
+    csv += "far1,5,0,0\nfar2,0,-3,1\n";
+    std::fs::write(dir.join("points.csv"), csv).unwrap();
+    let eye = DVec3::new(0.3, -0.2, -6.0);
+    let camera =
+        Camera::look_at(80, 60, 70.0, 70.0, 40.0, 30.0, eye, DVec3::ZERO, DVec3::NEG_Y).unwrap();
+    camera.save_json(&dir.join("cam.json")).unwrap();
+    let run = |out: &str| {
+        let out = dir.join(out);
+        std::fs::create_dir_all(&out).unwrap();
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+            .args(["track", "--sequence"])
+            .arg(dir.join("frames"))
+            .arg("--points")
+            .arg(dir.join("points.csv"))
+            .arg("--camera")
+            .arg(dir.join("cam.json"))
+            .arg("--out")
+            .arg(out.join("tracks.csv"))
+            .arg("--json")
+            .arg(out.join("tracks.json"))
+            .arg("--usd")
+            .arg(out.join("tracks.usda"))
+            .arg("--plot")
+            .arg(out.join("tracks.svg"))
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        assert!(stdout.contains("tracked 300 of 302 points"), "{stdout}");
+        out
+    };
+    let (a, b) = (run("a"), run("b"));
+    let names = common::file_names(&a);
+    let expected = [
+        "tracks.2d.csv",
+        "tracks.csv",
+        "tracks.json",
+        "tracks.svg",
+        "tracks.unbound.csv",
+        "tracks.usda",
+    ];
+    assert_eq!(names, expected.map(std::path::PathBuf::from));
+    assert_eq!(common::file_names(&b), names);
+    for name in &names {
+        let (x, y) = (std::fs::read(a.join(name)).unwrap(), std::fs::read(b.join(name)).unwrap());
+        assert!(x == y, "{} differs between the runs", name.display());
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -63,3 +63,41 @@ pub fn skipped(what: &str, why: &str) {
     use std::io::Write;
     let _ = writeln!(std::io::stderr(), "\n******** SKIPPED {what}: {why} ********\n");
 }
+
+/// A JSON report without what differs between two runs of the same job: times (keys ending in
+/// `_s` or `_ms`), the output paths and the frames found complete on disk.
+pub fn without_run_specifics(value: serde_json::Value) -> serde_json::Value {
+    use serde_json::Value;
+    match value {
+        Value::Object(map) => Value::Object(
+            map.into_iter()
+                .filter(|(key, _)| {
+                    !(key.ends_with("_s") || key.ends_with("_ms"))
+                        && key != "outputs"
+                        && key != "resumed_frames"
+                })
+                .map(|(key, v)| (key, without_run_specifics(v)))
+                .collect(),
+        ),
+        Value::Array(items) => Value::Array(items.into_iter().map(without_run_specifics).collect()),
+        other => other,
+    }
+}
+
+/// Every file under `dir`, relative to it, sorted.
+pub fn file_names(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut names = Vec::new();
+    let mut stack = vec![dir.to_owned()];
+    while let Some(folder) = stack.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                names.push(path.strip_prefix(dir).unwrap().to_owned());
+            }
+        }
+    }
+    names.sort();
+    names
+}
