@@ -236,6 +236,14 @@ fn a_non_finite_frame_stops_the_run_and_keeps_finished_frames() {
     let log = std::fs::read_to_string(out.join("run.log")).unwrap();
     let last = log.lines().last().unwrap();
     assert!(last.contains("run failed: frame 1") && last.contains("non-finite"), "{log}");
+    // The deformation graph's own loop stops the same way, at its first non-finite pass.
+    let mut wild_graph = quick_config();
+    wild_graph.temporal.graph.translation_lr = 1e30;
+    let error = run_train(g.ctx(), &job(&dir.join("data"), &out, wild_graph, None), &mut |_| {})
+        .unwrap_err();
+    assert!(matches!(error, TrainError::NonFinite { frame: Some(1), .. }), "{error:?}");
+    let error = error.to_string();
+    assert!(error.contains("graph level") && error.contains("non-finite parameters:"), "{error}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

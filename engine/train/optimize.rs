@@ -11,8 +11,9 @@
 //! after every finite interval whose Gaussians are all finite (the interval's loss saw them
 //! before its last Adam step, not after) the trainer copies them. `train` fails the frame
 //! instead and keeps the finished ones, so it takes no checkpoints.
-//! (The deformation graph solves other parameters with its own optimiser, in
-//! pipeline/graph_stage.rs, and keeps its own loop.)
+//! (The deformation graph solves other parameters, node rotations and translations, with its
+//! own optimiser in pipeline/graph_stage.rs and keeps its own loop; it follows the same
+//! non-finite policy with [`non_finite_detail`], without checkpoints, as `train` does.)
 
 use super::plateau::{Plateau, StopReason};
 use super::schedule::{sh_degree_at, DensifyWindow, ViewCycle};
@@ -190,7 +191,12 @@ fn all_finite(scene: &GaussianScene) -> bool {
 }
 
 /// Names the iterations, the terms, and any parameter group that went non-finite.
-fn non_finite_detail(scene: &GaussianScene, first: u32, last: u32, terms: &str) -> String {
+pub(crate) fn non_finite_detail(
+    scene: &GaussianScene,
+    first: u32,
+    last: u32,
+    terms: &str,
+) -> String {
     let groups = non_finite_counts(scene);
     let params: Vec<String> =
         groups.iter().filter(|(_, n)| *n > 0).map(|(g, n)| format!("{n} {g} values")).collect();

@@ -141,6 +141,7 @@ pub fn optimize_frame(
         let (faces, neighbourhoods) =
             (task.mesh.live_faces(), Neighbourhoods::from_mesh(task.mesh));
         let input = GraphInput {
+            frame: task.frame,
             train: task.train,
             start: &start,
             frame0: task.frame0.unwrap_or(&start),

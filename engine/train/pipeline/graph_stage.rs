@@ -13,6 +13,7 @@ use crate::regularize::Neighbourhoods;
 use crate::rng::SplitMix64;
 use crate::splat::{GaussianScene, RenderSettings};
 use crate::train::mesh_term::MeshTerm;
+use crate::train::optimize::non_finite_detail;
 use crate::train::plateau::{Plateau, StopReason};
 use crate::train::schedule::ViewCycle;
 use crate::train::{TrainError, Trainer, ViewTarget};
@@ -46,9 +47,10 @@ pub struct GraphReport {
     pub levels: Vec<LevelReport>,
 }
 
-/// What the stage works on: the frame's training views, where it starts (the extrapolated
+/// What the stage works on: the frame (for errors), its training views, where it starts (the extrapolated
 /// previous frame), frame 0's surface, the topology, and the silhouette term of the training views.
 pub struct GraphInput<'a> {
+    pub frame: usize,
     pub train: &'a [ViewTarget],
     pub start: &'a GaussianScene,
     pub frame0: &'a GaussianScene,
@@ -151,11 +153,23 @@ pub fn solve_graph(
             trainer.finish_step(frame)?;
 
             let pass_loss = if plateau.pass_ends(it) {
-                let total = trainer.take_terms()?.total(weights.gaussians) as f64
-                    + mesh_term.take_terms()?.total(weights.mesh) as f64
-                    + input.silhouette.take_loss()? as f64
-                    + coverage.take_loss()? as f64
-                    + deformer.take_arap_loss()? as f64;
+                let terms = [
+                    ("Gaussian image", trainer.take_terms()?.total(weights.gaussians)),
+                    ("mesh image", mesh_term.take_terms()?.total(weights.mesh)),
+                    ("silhouette", input.silhouette.take_loss()?),
+                    ("coverage", coverage.take_loss()?),
+                    ("ARAP", deformer.take_arap_loss()?),
+                ];
+                // The policy of every training loop: stop at the first non-finite pass and
+                // say where, which terms, and which parameters.
+                let bad: Vec<&str> =
+                    terms.iter().filter(|(_, v)| !v.is_finite()).map(|(n, _)| *n).collect();
+                if !bad.is_empty() {
+                    let terms = format!("graph level {factor}: {}", bad.join(", "));
+                    let detail = non_finite_detail(&trainer.scene()?, pass_start, it, &terms);
+                    return Err(TrainError::NonFinite { frame: Some(input.frame), detail });
+                }
+                let total: f64 = terms.iter().map(|&(_, v)| v as f64).sum();
                 let mean = total / (it + 1 - pass_start) as f64;
                 pass_start = it + 1;
                 Some(mean)
@@ -164,10 +178,6 @@ pub fn solve_graph(
             };
             if let Some(stop_reason) = plateau.check(it, pass_loss) {
                 let loss = pass_loss.unwrap_or(f64::NAN);
-                if !loss.is_finite() {
-                    let detail = format!("the deformation graph's loss went non-finite at level {factor}, iteration {it}");
-                    return Err(TrainError::NonFinite { frame: None, detail });
-                }
                 report.levels.push(LevelReport {
                     factor,
                     nodes: deformer.nodes(),
