@@ -481,3 +481,52 @@ fn track_cli_twice_on_the_same_input_writes_the_same_files() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--data DIR --camera NAME` projects into the dataset's camera of that name: the same 2D
+/// tracks as its cam.json given directly; an unknown name is refused with the names there are.
+#[test]
+fn track_cli_takes_a_dataset_camera_by_name() {
+    use tagsplat::synth::{generate, SubjectSource, SynthOptions};
+    let dir = temp_dir("track-dataset-camera");
+    let data = dir.join("data");
+    let o = SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 2 },
+        views: 4,
+        frames: 2,
+        resolution: 16,
+        samples: 1,
+        track_vertices: 4,
+        track_surface: 4,
+        ..Default::default()
+    };
+    generate(&o, &data).unwrap();
+    let track = |camera: &[&std::ffi::OsStr], out: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+            .args(["track".as_ref(), "--sequence".as_ref(), data.join("meshes").as_os_str()])
+            .args(["--points".as_ref(), data.join("points.csv").as_os_str()])
+            .args(["--out".as_ref(), dir.join(out).as_os_str()])
+            .args(camera)
+            .output()
+            .unwrap()
+    };
+    let cam_json = data.join("cameras/cam001.json");
+    let by_file = track(&["--camera".as_ref(), cam_json.as_os_str()], "file.csv");
+    let by_name = track(
+        &["--data".as_ref(), data.as_os_str(), "--camera".as_ref(), "cam001".as_ref()],
+        "name.csv",
+    );
+    for run in [&by_file, &by_name] {
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    }
+    let read = |name: &str| std::fs::read(dir.join(name)).unwrap();
+    assert_eq!(read("file.2d.csv"), read("name.2d.csv"));
+    assert!(read("name.2d.csv").len() > 100);
+    let unknown = track(
+        &["--data".as_ref(), data.as_os_str(), "--camera".as_ref(), "cam9".as_ref()],
+        "x.csv",
+    );
+    let stderr = String::from_utf8_lossy(&unknown.stderr);
+    assert!(!unknown.status.success() && stderr.contains("no camera named 'cam9'"), "{stderr}");
+    assert!(stderr.contains("cam000, cam001, cam002, cam003"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
