@@ -25,6 +25,7 @@ fn main() {
          use crate::gpu::Shader;\n",
     );
     let mut failures = Vec::new();
+    let mut names = Vec::new();
     for path in &sources {
         println!("cargo:rerun-if-changed={}", path.display());
         let Some(kind) = shader_kind(path) else {
@@ -42,6 +43,7 @@ fn main() {
                 let spv_path = out_dir.join(format!("{name}.spv"));
                 std::fs::write(&spv_path, spirv).expect("cannot write SPIR-V to OUT_DIR");
                 module += &shader_const(&name, relative, &spv_path, &interface);
+                names.push(name);
             }
             Err(message) => failures.push(message),
         }
@@ -50,6 +52,11 @@ fn main() {
         // Cargo shows a build script's panic message: every failing shader, file and line.
         panic!("shader compilation failed:\n{}", failures.join("\n"));
     }
+    let all: Vec<String> = names.iter().map(|n| format!("({n:?}, &{n})")).collect();
+    module += &format!(
+        "/// Every shader above, by its constant's name.\npub const ALL: &[(&str, &Shader)] = &[{}];\n",
+        all.join(", ")
+    );
     std::fs::write(out_dir.join("shaders.rs"), module).expect("cannot write shaders.rs");
 }
 

@@ -177,3 +177,31 @@ fn nothing_cites_files_outside_the_repository() {
     assert!(files.len() > 100, "{} files scanned", files.len());
     assert!(found.is_empty(), "cites files outside the repository:\n{}", found.join("\n"));
 }
+
+/// Every shader with push constants has a Rust struct checked against its block at compile
+/// time: its constant is named in a `push_layout!` invocation somewhere in the engine.
+#[test]
+fn every_push_constant_block_has_a_push_layout() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(&root.join("engine"), &mut files);
+    let mut listed = BTreeSet::new();
+    for file in &files {
+        let text = std::fs::read_to_string(file).unwrap();
+        for (at, _) in text.match_indices("push_layout!(") {
+            let invocation = text[at..].split(");").next().unwrap_or("");
+            let words = invocation.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'));
+            listed.extend(words.map(str::to_owned));
+        }
+    }
+    let shaders = tagsplat::shaders::ALL;
+    assert!(shaders.len() > 30, "{} shaders", shaders.len());
+    let unchecked: Vec<&str> = shaders
+        .iter()
+        .filter(|(name, shader)| shader.push_size > 0 && !listed.contains(*name))
+        .map(|(name, _)| *name)
+        .collect();
+    let with_push = shaders.iter().filter(|(_, shader)| shader.push_size > 0).count();
+    assert!(with_push > 20, "{with_push} shaders with push constants");
+    assert!(unchecked.is_empty(), "push constants without push_layout!: {unchecked:?}");
+}
