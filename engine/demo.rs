@@ -5,6 +5,8 @@
 
 use crate::eval::{evaluate_folders, FolderOptions, FolderReport};
 use crate::gpu::GpuContext;
+use crate::sequence::orient::{Orientation, UpAxis};
+use crate::sequence::usd::{write_usda, UsdTracks};
 use crate::sequence::MeshSequence;
 use crate::synth::{generate, SubjectSource, SynthOptions};
 use crate::track::output::write_tracks_csv;
@@ -99,6 +101,9 @@ pub enum DemoError {
     /// A mesh sequence (reconstructed or ground truth) could not be read.
     #[error("reading the result: {0}")]
     Sequence(#[from] crate::sequence::SequenceError),
+    /// The tracks' USD stage could not be written.
+    #[error("writing the tracks: {0}")]
+    Usd(#[from] crate::sequence::usd::UsdError),
 }
 
 /// Runs the demo in `dir` (`data/`, `out/`, `out/trajectories.csv`, `demo.json`). A finished
@@ -130,8 +135,28 @@ pub fn run_demo(
     Ok(report)
 }
 
+/// The reconstructed sequence with the tracked points, as one USD stage (the generator's rig is
+/// Y-up, so nothing is turned).
+fn write_tracks_usda(
+    path: &Path,
+    sequence: &MeshSequence,
+    points: &[crate::track::output::TrackedPoint],
+) -> Result<(), DemoError> {
+    let ids: Vec<String> = points.iter().map(|p| p.id.clone()).collect();
+    let trajectories: Vec<_> = points.iter().map(|p| p.trajectory.clone()).collect();
+    let tracks = UsdTracks { ids: &ids, trajectories: &trajectories };
+    Ok(write_usda(
+        path,
+        sequence,
+        crate::synth::gltf::FPS,
+        Orientation::keep(UpAxis::Y),
+        Some(&tracks),
+    )?)
+}
+
 /// Reconstructs `data` into `out` (resuming what is there), tracks the ground-truth points
-/// (`data/points.csv`) into `out/trajectories.csv`, and scores the result against `data`.
+/// (`data/points.csv`) into `out/trajectories.csv` and, with the mesh, `out/tracks.usda`, and
+/// scores the result against `data`.
 pub fn train_and_score(
     ctx: &Arc<GpuContext>,
     data: &Path,
@@ -146,6 +171,7 @@ pub fn train_and_score(
     // Bind within 5% of the extent: the reconstruction is not the ground-truth surface.
     let tracked = track(&sequence.faces, &sequence.frames, &queries, 0.05)?;
     write_tracks_csv(&out.join("trajectories.csv"), &tracked.points)?;
+    write_tracks_usda(&out.join("tracks.usda"), &sequence, &tracked.points)?;
     let eval = evaluate_folders(
         out,
         data,

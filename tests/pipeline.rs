@@ -5,6 +5,7 @@ mod common;
 
 use common::{file_names, gpu, without_run_specifics};
 use std::path::{Path, PathBuf};
+use tagsplat::demo::train_and_score;
 use tagsplat::eval::chamfer_meshes;
 use tagsplat::io::trajectories::read_trajectories_csv;
 use tagsplat::mesh::TriMesh;
@@ -156,6 +157,16 @@ fn a_sequence_is_reconstructed_then_resumed_with_one_face_list() {
             ),
         }
     }
+
+    // The demo's scoring on the finished folder: the tracked points, as CSV and, with the mesh,
+    // as one USD stage whose Points prim names every tracked point.
+    let (_, scores) =
+        train_and_score(g.ctx(), &dir.join("data"), &out, quick_config(), &mut |_| {}).unwrap();
+    let stage = std::fs::read_to_string(out.join("tracks.usda")).unwrap();
+    assert!(stage.contains("def Points \"Tracks\"") && stage.contains("upAxis = \"Y\""));
+    let ids = read_trajectories_csv(&out.join("trajectories.csv")).unwrap();
+    assert_eq!(scores.tracked_points, 300);
+    assert!(ids.iter().all(|row| stage.contains(&format!("\"{}\"", row.id))));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
