@@ -56,7 +56,8 @@ fn a_short_fit_raises_held_out_psnr() {
     let g = gpu();
     let dir = temp("fit");
     small_dataset(&dir.join("data"));
-    let job = FitJob { data: dir.join("data"), frame: 0, init: None, config: short_config() };
+    let (data, config) = (dir.join("data"), short_config());
+    let job = FitJob { data, frame: 0, init: None, config, load: Default::default() };
     let mut calls = 0;
     let outcome = run_fit_job(g.ctx(), &job, &mut |_| calls += 1).unwrap();
     let r = &outcome.report;

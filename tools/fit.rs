@@ -1,9 +1,11 @@
 //! `tagsplat fit`: Gaussians for one frame of a multi-view dataset (static multi-view).
 
+use crate::dataset::PixelCentersArg;
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::sync::Arc;
+use tagsplat::dataset::LoadOptions;
 use tagsplat::gpu::GpuContext;
 use tagsplat::train::{run_fit_job, write_fit_outputs, FitConfig, FitJob, Progress};
 
@@ -28,6 +30,10 @@ pub struct FitArgs {
     /// are sampled inside the masks.
     #[arg(long)]
     init: Option<PathBuf>,
+    /// Where the dataset's intrinsics put pixel centres (default: the layout's own, see
+    /// `tagsplat dataset info`).
+    #[arg(long, value_enum)]
+    pixel_centers: Option<PixelCentersArg>,
     /// Print the default config as TOML and exit.
     #[arg(long)]
     print_config: bool,
@@ -60,7 +66,8 @@ pub fn fit(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: FitArgs) -> 
             bar.set_message(format!("loss {loss:.4}  {} Gaussians", p.gaussians));
         }
     };
-    let job = FitJob { data: data.clone(), frame: args.frame, init: args.init, config };
+    let load = LoadOptions { pixel_centers: args.pixel_centers.map(Into::into) };
+    let job = FitJob { data: data.clone(), frame: args.frame, init: args.init, config, load };
     let outcome = run_fit_job(&ctx, &job, &mut progress)
         .with_context(|| format!("fit of {} frame {}", data.display(), args.frame))?;
     bar.finish_and_clear();

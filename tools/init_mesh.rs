@@ -1,8 +1,9 @@
 //! `tagsplat init-mesh`: the first mesh of a frame from the dataset's masks (visual hull).
 
+use crate::dataset::PixelCentersArg;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
-use tagsplat::dataset::Dataset;
+use tagsplat::dataset::{Dataset, LoadOptions};
 use tagsplat::init::{init_mesh, InitOptions};
 
 #[derive(clap::Args)]
@@ -40,10 +41,15 @@ pub struct InitMeshArgs {
     /// Print the report as JSON.
     #[arg(long)]
     json: bool,
+    /// Where the dataset's intrinsics put pixel centres (default: the layout's own, see
+    /// `tagsplat dataset info`).
+    #[arg(long, value_enum)]
+    pixel_centers: Option<PixelCentersArg>,
 }
 
 pub fn run(a: InitMeshArgs) -> Result<()> {
-    let data = Dataset::load(&a.data)
+    let load = LoadOptions { pixel_centers: a.pixel_centers.map(Into::into) };
+    let data = Dataset::load_with(&a.data, &load)
         .with_context(|| format!("cannot load the dataset {}", a.data.display()))?;
     let options = InitOptions {
         tolerance: a.tolerance,

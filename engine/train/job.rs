@@ -7,7 +7,7 @@ use super::init::{gaussians_at_points, points_inside_masks, MaskedView};
 use super::report::{write_curve_csv, write_curve_plot};
 use super::views::{load_targets, ViewTarget};
 use super::TrainError;
-use crate::dataset::Dataset;
+use crate::dataset::{Dataset, LoadOptions};
 use crate::gpu::GpuContext;
 use crate::io::image::write_png;
 use crate::io::ply::Ply;
@@ -27,6 +27,8 @@ pub struct FitJob {
     pub init: Option<PathBuf>,
     /// The fit configuration.
     pub config: FitConfig,
+    /// What the dataset's files leave open (the intrinsics' pixel centres).
+    pub load: LoadOptions,
 }
 
 /// Loads the dataset, initialises, fits. The report's `frame` is the job's.
@@ -36,7 +38,7 @@ pub fn run_fit_job(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<FitOutcome, TrainError> {
     job.config.check()?;
-    let dataset = Dataset::load(&job.data)?;
+    let dataset = Dataset::load_with(&job.data, &job.load)?;
     let use_masks = job.config.loss.mask > 0.0 || job.init.is_none();
     let train =
         load_targets(&dataset, job.frame, &dataset.train, job.config.background, use_masks)?;
