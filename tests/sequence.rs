@@ -249,6 +249,12 @@ fn cli_converts_between_every_layout() {
     convert("a", "g.pc2", &["--from-up", "-y", "--up", "z"]);
     let turned = MeshSequence::read(&dir.join("g.pc2")).unwrap();
     assert!(turned.frames[1].iter().zip(&seq.frames[1]).all(|(t, p)| t[2] == -p[1]), "-Y onto +Z");
+    // A folder of PLY frames turned too (the only way to turn train's meshes/): exact, since a
+    // quarter turn copies or negates coordinates.
+    convert("a", "h", &["--from-up", "+z", "--up", "y"]);
+    let turned = MeshSequence::read(&dir.join("h")).unwrap();
+    assert_eq!(turned.faces, seq.faces);
+    assert_eq!(turned.frames, expected.frames, "+Z onto +Y, frame by frame in PLY");
     // USD from convert, and from track with the tracked points (vertices 0 and 5 of frame 0).
     convert("a", "e.usda", &["--up", "z", "--fps", "12"]);
     let points = [0, 5].map(|v| {

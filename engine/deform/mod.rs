@@ -8,6 +8,7 @@
 
 pub mod fit;
 pub mod graph;
+mod interior;
 mod kernels;
 pub mod reference;
 
