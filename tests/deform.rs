@@ -20,7 +20,7 @@ fn sphere(nodes: usize) -> (GaussianScene, DeformGraph) {
     let mesh = ManifoldMesh::new(p.iter().map(|p| p.map(|c| c as f32)).collect(), f).unwrap();
     let scene = gaussians_from_mesh(&mesh, &[], &InitConfig { sh_degree: 0, ..Default::default() });
     let nb = Neighbourhoods::from_mesh(&mesh);
-    let graph = build_graph(&scene.positions, |i| nb.neighbours(i), nodes, None);
+    let graph = build_graph(&scene.positions, |i| nb.neighbours(i), nodes);
     (scene, graph)
 }
 

@@ -115,7 +115,7 @@ mod tests {
     #[test]
     fn a_rigid_motion_is_recovered_at_every_node() {
         let (rest, adjacency) = grid();
-        let graph = build_graph(&rest, |i| &adjacency[i], 20, None);
+        let graph = build_graph(&rest, |i| &adjacency[i], 20);
         let rotation = DQuat::from_axis_angle(DVec3::new(0.3, -1.0, 0.5).normalize(), 2.4);
         let shift = DVec3::new(0.7, -0.2, 1.5);
         let posed: Vec<[f32; 3]> = rest
@@ -142,7 +142,7 @@ mod tests {
     #[test]
     fn the_rest_pose_gives_identity_and_a_collapsed_pose_stays_finite() {
         let (rest, adjacency) = grid();
-        let graph = build_graph(&rest, |i| &adjacency[i], 10, None);
+        let graph = build_graph(&rest, |i| &adjacency[i], 10);
         let same = fit_nodes(&rest, &rest, &graph);
         assert!(same.rotations.iter().all(|q| (q[0].abs() - 1.0).abs() < 1e-9));
         assert!(same.translations.iter().flatten().all(|t| t.abs() < 1e-6));

@@ -37,19 +37,9 @@ pub fn build_graph<'a>(
     positions: &[[f32; 3]],
     adjacency: impl Fn(usize) -> &'a [u32],
     nodes: usize,
-    interior_faces: Option<&[[u32; 3]]>,
 ) -> DeformGraph {
     let node_vertices = farthest_points(positions, nodes);
-    let mut nearest = nearest_nodes(positions, &adjacency, &node_vertices);
-    if let Some(faces) = interior_faces {
-        nearest = super::interior::interior_nearest_nodes(
-            positions,
-            faces,
-            &node_vertices,
-            &nearest,
-            NODES_PER_VERTEX + 1,
-        );
-    }
+    let nearest = nearest_nodes(positions, &adjacency, &node_vertices);
     let mut graph = DeformGraph { node_vertices, ..Default::default() };
     let mut links = vec![Vec::new(); graph.node_vertices.len()];
     for labels in &nearest {
@@ -186,7 +176,7 @@ mod tests {
     #[test]
     fn weights_sum_to_one_and_links_are_symmetric() {
         let (positions, adjacency) = strip(40);
-        let graph = build_graph(&positions, |i| &adjacency[i], 8, None);
+        let graph = build_graph(&positions, |i| &adjacency[i], 8);
         assert_eq!(graph.node_vertices.len(), 8);
         assert_eq!(graph.node_vertices[..2], [0, 39]);
         for w in &graph.bound_weights {
@@ -210,7 +200,7 @@ mod tests {
         positions.extend(other.iter().map(|p| [p[0], 0.1, 0.0]));
         adjacency
             .extend(other_adjacency.into_iter().map(|l| l.into_iter().map(|j| j + 20).collect()));
-        let graph = build_graph(&positions, |i| &adjacency[i], 6, None);
+        let graph = build_graph(&positions, |i| &adjacency[i], 6);
         let strip_of = |v: u32| v / 20;
         for (v, (nodes, weights)) in graph.bound_nodes.iter().zip(&graph.bound_weights).enumerate()
         {
@@ -228,10 +218,10 @@ mod tests {
 
     #[test]
     fn empty_mesh_and_unreached_vertices() {
-        let graph = build_graph(&[], |_| &[], 10, None);
+        let graph = build_graph(&[], |_| &[], 10);
         assert!(graph.node_vertices.is_empty() && graph.bound_nodes.is_empty());
         let positions = vec![[0.0; 3], [1.0, 0.0, 0.0]];
-        let graph = build_graph(&positions, |_| &[], 1, None);
+        let graph = build_graph(&positions, |_| &[], 1);
         assert_eq!(graph.bound_weights[1], [0.0; NODES_PER_VERTEX]);
         assert_eq!(graph.bound_weights[0][0], 1.0);
     }

@@ -8,7 +8,6 @@
 
 pub mod fit;
 pub mod graph;
-mod interior;
 mod kernels;
 pub mod reference;
 

@@ -205,17 +205,7 @@ fn graph_on(
 ) -> Result<GraphDeformer, TrainError> {
     let g = &config.temporal.graph;
     let rest = g.rest.pick(pose, input.frame0);
-    let interior = match std::env::var("TAGSPLAT_EXP_BIND").as_deref() {
-        Ok("all") => true,
-        Ok("coarse") => nodes < g.nodes as usize,
-        _ => false,
-    };
-    let graph = build_graph(
-        &rest.positions,
-        |i| input.neighbourhoods.neighbours(i),
-        nodes,
-        interior.then_some(input.faces),
-    );
+    let graph = build_graph(&rest.positions, |i| input.neighbourhoods.neighbours(i), nodes);
     let mut deformer = GraphDeformer::new(ctx, &graph, rest, g.arap)?;
     if g.rest == ReferencePose::Frame0 {
         deformer.write_nodes(&fit_nodes(&rest.positions, &pose.positions, &graph))?;
