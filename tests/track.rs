@@ -7,6 +7,7 @@ mod deforming;
 
 use deforming::{affine, bend, sequence, temp_dir};
 use glam::{DMat4, DVec3};
+use std::path::Path;
 use tagsplat::camera::Camera;
 use tagsplat::geometry::bvh::triangles;
 use tagsplat::geometry::{brute, SurfaceBvh, SurfaceError};
@@ -289,6 +290,29 @@ fn pixels_bind_where_their_rays_first_hit_the_surface() {
     }
 }
 
+/// `tagsplat track` on `dir`'s `frames/` and `points.csv`, writing `tracks.csv`, `.json` and
+/// `.svg` into `out`, with `extra` arguments after those.
+fn track_cli<'a>(
+    dir: &Path,
+    out: &Path,
+    extra: impl IntoIterator<Item = &'a std::ffi::OsStr>,
+) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+        .args(["track", "--sequence"])
+        .arg(dir.join("frames"))
+        .arg("--points")
+        .arg(dir.join("points.csv"))
+        .arg("--out")
+        .arg(out.join("tracks.csv"))
+        .arg("--json")
+        .arg(out.join("tracks.json"))
+        .arg("--plot")
+        .arg(out.join("tracks.svg"))
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn cli_tracks_points_of_a_folder_sequence_into_csv_json_and_png() {
     let dir = temp_dir("cli-track");
@@ -304,22 +328,7 @@ fn cli_tracks_points_of_a_folder_sequence_into_csv_json_and_png() {
             })
             .collect::<String>();
     std::fs::write(dir.join("points.csv"), csv).unwrap();
-    let run = |extra: &[&str]| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
-            .args(["track", "--sequence"])
-            .arg(dir.join("frames"))
-            .arg("--points")
-            .arg(dir.join("points.csv"))
-            .arg("--out")
-            .arg(dir.join("tracks.csv"))
-            .arg("--json")
-            .arg(dir.join("tracks.json"))
-            .arg("--plot")
-            .arg(dir.join("tracks.svg"))
-            .args(extra)
-            .output()
-            .unwrap()
-    };
+    let run = |extra: &[&str]| track_cli(&dir, &dir, extra.iter().map(|a| a.as_ref()));
     let out = run(&[]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let tracks = std::fs::read_to_string(dir.join("tracks.csv")).unwrap();
@@ -441,23 +450,10 @@ fn track_cli_twice_on_the_same_input_writes_the_same_files() {
     let run = |out: &str| {
         let out = dir.join(out);
         std::fs::create_dir_all(&out).unwrap();
-        let output = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
-            .args(["track", "--sequence"])
-            .arg(dir.join("frames"))
-            .arg("--points")
-            .arg(dir.join("points.csv"))
-            .arg("--camera")
-            .arg(dir.join("cam.json"))
-            .arg("--out")
-            .arg(out.join("tracks.csv"))
-            .arg("--json")
-            .arg(out.join("tracks.json"))
-            .arg("--usd")
-            .arg(out.join("tracks.usda"))
-            .arg("--plot")
-            .arg(out.join("tracks.svg"))
-            .output()
-            .unwrap();
+        let camera = dir.join("cam.json");
+        let usd = out.join("tracks.usda");
+        let extra = ["--camera".as_ref(), camera.as_os_str(), "--usd".as_ref(), usd.as_os_str()];
+        let output = track_cli(&dir, &out, extra);
         let stdout = String::from_utf8_lossy(&output.stdout);
         assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
         assert!(stdout.contains("tracked 300 of 302 points"), "{stdout}");
