@@ -190,6 +190,17 @@ impl Camera {
             .then(|| DVec2::new(self.fx * p.x / p.z + self.cx, self.fy * p.y / p.z + self.cy))
     }
 
+    /// dE/dx for a world point whose camera-space position is `c`, from dE/dq of its pixel
+    /// coordinates q (the chain rule through [`Self::project`]; a constant offset of q alike).
+    pub fn pixel_gradient_to_world(&self, c: DVec3, d_pixel: DVec2) -> DVec3 {
+        let dc = DVec3::new(
+            d_pixel.x * self.fx / c.z,
+            d_pixel.y * self.fy / c.z,
+            -(d_pixel.x * self.fx * c.x + d_pixel.y * self.fy * c.y) / (c.z * c.z),
+        );
+        glam::DMat3::from_mat4(self.world_to_camera).transpose() * dc
+    }
+
     /// The camera centre in world coordinates.
     pub fn center(&self) -> DVec3 {
         rigid_inverse(self.world_to_camera).w_axis.truncate()

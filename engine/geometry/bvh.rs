@@ -174,6 +174,16 @@ impl SurfaceBvh {
             }
         })
     }
+
+    /// Whether the surface blocks the sight line from `eye` to `p`: a hit nearer than
+    /// `(1 − slack) · |p − eye|`, so the surface a point lies on does not hide it.
+    pub fn hides(&self, eye: DVec3, p: DVec3, slack: f64) -> bool {
+        let to_point = p - eye;
+        let distance = to_point.length();
+        // The ray direction is unit, so the hit's ray parameter is a distance.
+        self.ray_cast(eye, to_point / distance)
+            .is_some_and(|hit| hit.distance < distance * (1.0 - slack))
+    }
 }
 
 /// The corners of every face, checked: at least one face, indices in range, finite positions.

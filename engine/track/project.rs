@@ -47,20 +47,11 @@ pub fn project_tracks(
             let (u, v) = camera.project(p).map_or((f64::NAN, f64::NAN), |uv| (uv.x, uv.y));
             let inside =
                 u >= 0.0 && v >= 0.0 && u < camera.width as f64 && v < camera.height as f64;
-            let visible = inside && !occluded(&bvh, centre, p);
+            let visible = inside && !bvh.hides(centre, p, SLACK);
             out.push(ImagePoint { id: point.id.clone(), frame: t, u, v, visible });
         }
     }
     Ok(out)
-}
-
-/// Whether the surface blocks the segment from `centre` to `p`.
-fn occluded(bvh: &SurfaceBvh, centre: DVec3, p: DVec3) -> bool {
-    let to_point = p - centre;
-    let distance = to_point.length();
-    // The ray direction is unit, so the hit's ray parameter is a distance.
-    bvh.ray_cast(centre, to_point / distance)
-        .is_some_and(|hit| hit.distance < distance * (1.0 - SLACK))
 }
 
 #[cfg(test)]

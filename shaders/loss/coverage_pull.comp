@@ -8,6 +8,7 @@
 // ring r lies in its pixel, at least r − 0.5 pixels from p's centre. Ties go to the lower id.
 #include "coverage_common.glsl"
 #include "../common/fixed_sum.glsl"
+#include "../common/pinhole.glsl"
 layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) readonly buffer Positions { float positions[]; };
@@ -65,9 +66,7 @@ void main() {
             vec2 uv = project(c);
             energy = pc.scale * dot(uv - centre, uv - centre);
             vec2 g = 2.0 * pc.scale * (uv - centre);
-            vec4 k = pc.intrinsics;
-            vec3 dc = vec3(g.x * k.x / c.z, g.y * k.y / c.z, -(g.x * k.x * c.x + g.y * k.y * c.y) / (c.z * c.z));
-            vec3 dx = transpose(mat3(pc.world_to_camera)) * dc;
+            vec3 dx = pinhole_backward(pc.world_to_camera, pc.intrinsics, c, g);
             for (uint k = 0u; k < 3u; k++) {
                 FIXED_ADD_GRADIENT(grad_position_sums, 3u * s + k, dx[k]);
             }

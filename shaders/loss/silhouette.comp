@@ -11,6 +11,7 @@
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #include "../common/grid.glsl"
 #include "../common/fixed_sum.glsl"
+#include "../common/pinhole.glsl"
 layout(local_size_x_id = 0) in;
 
 // Mirrors engine/loss/silhouette/mod.rs (`GpuView`).
@@ -73,8 +74,7 @@ void main() {
             float inv_size = 1.0 / float(max(view.dims.x, view.dims.y));
             energy += pc.scale * d.x * d.x * inv_size * inv_size;
             vec2 dq = 2.0 * pc.scale * d.x * inv_size * inv_size * d.yz;
-            vec3 dc = vec3(dq.x * k.x / c.z, dq.y * k.y / c.z, -(dq.x * k.x * c.x + dq.y * k.y * c.y) / (c.z * c.z));
-            grad += transpose(mat3(view.world_to_camera)) * dc;
+            grad += pinhole_backward(view.world_to_camera, k, c, dq);
         }
         grad_positions[3u * i] += grad.x;
         grad_positions[3u * i + 1u] += grad.y;

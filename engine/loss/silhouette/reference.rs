@@ -1,7 +1,7 @@
 //! f64 CPU reference of the silhouette term (shaders/loss/silhouette.comp).
 
 use super::SilhouetteView;
-use glam::{DMat3, DVec2, DVec3};
+use glam::{DVec2, DVec3};
 
 /// D at index coordinates `q` (pixel centres at integers) and dD/dq, as the kernel samples it.
 fn field_at(field: &[f32], width: usize, height: usize, q: DVec2) -> (f64, DVec2) {
@@ -52,12 +52,7 @@ pub fn silhouette_loss(
             let inv = 1.0 / camera.width.max(camera.height) as f64;
             energy += scale * d * d * inv * inv;
             let dq = 2.0 * scale * d * inv * inv * slope;
-            let dc = DVec3::new(
-                dq.x * camera.fx / c.z,
-                dq.y * camera.fy / c.z,
-                -(dq.x * camera.fx * c.x + dq.y * camera.fy * c.y) / (c.z * c.z),
-            );
-            g += DMat3::from_mat4(camera.world_to_camera).transpose() * dc;
+            g += camera.pixel_gradient_to_world(c, dq);
         }
         *grad = g.to_array();
     }
@@ -108,12 +103,7 @@ pub fn coverage_loss(
         let (c, uv) = project(positions[s]);
         energy += scale * (uv - centre).length_squared();
         let g = 2.0 * scale * (uv - centre);
-        let dc = DVec3::new(
-            g.x * camera.fx / c.z,
-            g.y * camera.fy / c.z,
-            -(g.x * camera.fx * c.x + g.y * camera.fy * c.y) / (c.z * c.z),
-        );
-        let dx = DMat3::from_mat4(camera.world_to_camera).transpose() * dc;
+        let dx = camera.pixel_gradient_to_world(c, g);
         for a in 0..3 {
             grads[s][a] += dx[a];
         }
