@@ -16,16 +16,13 @@
 //! - [`dataset`]: synchronized multi-view video (own layout, Panoptic, nerfstudio / D-NeRF).
 //! - [`sequence`]: mesh sequences (one face list, positions per frame) and their formats.
 //! - [`geometry`]: closest point and ray casts on a mesh (BVH, f64 triangle routines).
-//! - [`flow`]: optical flow between consecutive frames of one camera (sparse pyramidal
-//!   Lucas–Kanade).
 //! - [`ssim_window`]: the SSIM window and formula the metric and the loss share.
 //! - [`splat`]: differentiable Gaussian splatting (forward, backward, CPU reference).
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
 //! - [`raster`]: differentiable visibility-buffer mesh rasterizer (forward, backward, CPU reference).
 //! - [`train`]: the training loops (single-frame fit with the 3DGS baseline densification).
 //! - [`track`](mod@track): surface points bound on frame 0 and followed through a mesh sequence.
-//! - [`loss`]: the fused image loss (L1 + SSIM) with its gradient; the silhouette, coverage
-//!   and optical-flow terms.
+//! - [`loss`]: the fused image loss (L1 + SSIM) with its gradient.
 //! - [`optim`]: fused Adam with moments that survive Gaussian-set changes, schedules.
 //! - [`eval`]: image, surface and tracking metrics.
 //! - [`score`]: a reconstruction's output folder scored against a benchmark's ground truth.
@@ -46,7 +43,6 @@ pub mod dataset;
 pub mod deform;
 pub mod demo;
 pub mod eval;
-pub mod flow;
 pub mod geometry;
 pub mod gpu;
 pub mod init;

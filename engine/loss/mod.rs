@@ -17,7 +17,6 @@
 //! the same target (a view's Gaussian and mesh renders): they share the target's loads and
 //! its moments.
 
-pub mod flow;
 mod params;
 pub mod reference;
 pub mod silhouette;

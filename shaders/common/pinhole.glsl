@@ -1,6 +1,5 @@
 // The pinhole projection's backward, shared by the terms that pull a vertex's pixel
-// (silhouette, coverage, flow); engine/camera.rs `Camera::pixel_gradient_to_world` is its
-// reference.
+// (silhouette, coverage); engine/camera.rs `Camera::pixel_gradient_to_world` is its reference.
 #ifndef COMMON_PINHOLE_GLSL
 #define COMMON_PINHOLE_GLSL
 

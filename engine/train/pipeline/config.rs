@@ -89,9 +89,6 @@ pub struct TemporalConfig {
     /// How far the coverage term searches for a vertex, pixels at the level's resolution
     /// (default 24).
     pub coverage_radius: u32,
-    /// Weight of the optical-flow term (each vertex a view saw at frame t − 1 pulled to where
-    /// Lucas–Kanade follows its pixel in that view's image at t; 0: off).
-    pub flow: f32,
     /// The pose the temporal regularizers (edge length, rigidity, rotation) compare against.
     pub regularizer_reference: ReferencePose,
     /// The deformation graph stage.
@@ -251,7 +248,6 @@ impl Default for TemporalConfig {
             silhouette: 10.0,
             coverage: 0.01,
             coverage_radius: 24,
-            flow: 0.0,
             regularizer_reference: ReferencePose::Previous,
             graph: GraphConfig::default(),
         }
@@ -372,7 +368,6 @@ impl TrainConfig {
             ("temporal.tolerance", self.temporal.tolerance),
             ("temporal.silhouette", self.temporal.silhouette),
             ("temporal.coverage", self.temporal.coverage),
-            ("temporal.flow", self.temporal.flow),
             ("temporal.graph.arap", self.temporal.graph.arap),
             ("learning_rates.log_scales", r.log_scales),
             ("learning_rates.rotations", r.rotations),

@@ -4,12 +4,10 @@
 //! previous frame) — then Adam. Frame 0 also densifies and prunes through the topology.
 
 use super::config::TrainConfig;
-use super::flow_targets::flow_targets;
 use super::graph_stage::{solve_graph, GraphInput, GraphReport, ImageWeights};
 use crate::camera::Camera;
 use crate::eval::psnr;
 use crate::gpu::{GpuContext, Recorder};
-use crate::loss::flow::FlowTerm;
 use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm, SilhouetteView};
 use crate::mesh::bounding_diagonal;
 use crate::optim::LearningRates;
@@ -83,8 +81,6 @@ pub struct FrameTask<'a> {
     pub mesh: &'a mut ManifoldMesh,
     /// Frame t − 1's Gaussians for the temporal terms (None on frame 0).
     pub previous: Option<&'a GaussianScene>,
-    /// Frame t − 1's training views, for the flow term (empty on frame 0 or with it off).
-    pub previous_views: &'a [ViewTarget],
     /// Frame 0's Gaussians, for a graph or regularizers configured against frame 0 (None on
     /// frame 0).
     pub frame0: Option<&'a GaussianScene>,
@@ -130,7 +126,6 @@ pub fn optimize_frame(
                 .collect::<Vec<_>>(),
         )?)
     };
-    let flow = flow_term(ctx, &task, t.flow)?;
     let mut start = task.start;
     let mut train_s = 0.0;
     if let (false, true) = (canonical, t.graph.nodes > 0) {
@@ -153,7 +148,6 @@ pub fn optimize_frame(
             faces: &faces,
             neighbourhoods: &neighbourhoods,
             silhouette,
-            flow: flow.as_ref(),
         };
         let (moved, graph) = solve_graph(ctx, &input, config, weights, &settings, &mut rng)?;
         (start, report.graph, train_s) = (moved, Some(graph), t0.elapsed().as_secs_f64());
@@ -207,7 +201,7 @@ pub fn optimize_frame(
         near: settings.near,
         canonical,
         weights,
-        terms: FrameTerms { mesh_term, regs, reference, silhouette, coverage, flow },
+        terms: FrameTerms { mesh_term, regs, reference, silhouette, coverage },
         mesh: task.mesh,
         densify_camera: (first.camera, budget),
         report: &mut report,
@@ -238,25 +232,6 @@ struct FrameTerms {
     reference: Option<GaussianBuffers>,
     silhouette: Option<SilhouetteTerm>,
     coverage: Option<CoverageTerm>,
-    flow: Option<FlowTerm>,
-}
-
-/// A later frame's flow term over the training views that frame t − 1 has too (None on frame
-/// 0 or with the term off).
-fn flow_term(
-    ctx: &Arc<GpuContext>,
-    task: &FrameTask,
-    weight: f32,
-) -> Result<Option<FlowTerm>, TrainError> {
-    let Some(previous) = task.previous.filter(|_| weight > 0.0) else { return Ok(None) };
-    let views: Vec<(&ViewTarget, &ViewTarget)> = task
-        .train
-        .iter()
-        .filter_map(|now| task.previous_views.iter().find(|v| v.name == now.name).map(|v| (v, now)))
-        .collect();
-    let targets = flow_targets(&previous.positions, &task.mesh.live_faces(), &views);
-    let cameras: Vec<Camera> = views.iter().map(|(_, now)| now.camera).collect();
-    Ok(Some(FlowTerm::new(ctx, &cameras, &targets)?))
 }
 
 /// A frame's part of the loop: the mesh, regularizer, silhouette and coverage terms, frame 0's
@@ -316,9 +291,6 @@ impl Stage for FrameStage<'_, '_> {
             let images = (target, trainer.rendered());
             c.record(rec, camera, images, &params.positions, &grads.positions, t.coverage, near)?;
         }
-        if let Some(f) = &terms.flow {
-            f.record(rec, &params.positions, &grads.positions, t.flow, near)?;
-        }
         rec.end_pass();
         Ok(())
     }
@@ -373,8 +345,7 @@ fn read_losses(
         terms.mesh_term.take_terms()?.total(weights.mesh) / steps,
     );
     let sil = (terms.silhouette.as_ref().map(|s| s.take_loss()).transpose()?.unwrap_or(0.0)
-        + terms.coverage.as_ref().map(|c| c.take_loss()).transpose()?.unwrap_or(0.0)
-        + terms.flow.as_ref().map(|f| f.take_loss()).transpose()?.unwrap_or(0.0))
+        + terms.coverage.as_ref().map(|c| c.take_loss()).transpose()?.unwrap_or(0.0))
         / steps;
     let regularizers: Losses<f32> = terms.regs.read_losses()?;
     if !(gs.is_finite()

@@ -7,7 +7,6 @@
 use super::config::{ReferencePose, TrainConfig};
 use crate::deform::{build_graph, fit_nodes, GraphDeformer};
 use crate::gpu::{GpuContext, Recorder};
-use crate::loss::flow::FlowTerm;
 use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm};
 use crate::mesh::bounding_diagonal;
 use crate::regularize::Neighbourhoods;
@@ -58,8 +57,6 @@ pub struct GraphInput<'a> {
     pub faces: &'a [[u32; 3]],
     pub neighbourhoods: &'a Neighbourhoods,
     pub silhouette: &'a SilhouetteTerm,
-    /// The flow term, when the frame has one.
-    pub flow: Option<&'a FlowTerm>,
 }
 
 /// The loss weights of a step: λ per rgba channel of the Gaussian and mesh renders.
@@ -141,15 +138,6 @@ pub fn solve_graph(
                 config.temporal.coverage,
                 settings.near,
             )?;
-            if let Some(flow) = input.flow {
-                flow.record(
-                    &mut rec,
-                    &trainer.params().positions,
-                    &trainer.grads().positions,
-                    config.temporal.flow,
-                    settings.near,
-                )?;
-            }
             deformer.record_gradients(&mut rec, &trainer.grads().positions)?;
             adam_step += 1;
             // Tenfold decay over the level's cap.
@@ -170,7 +158,6 @@ pub fn solve_graph(
                     ("mesh image", mesh_term.take_terms()?.total(weights.mesh)),
                     ("silhouette", input.silhouette.take_loss()?),
                     ("coverage", coverage.take_loss()?),
-                    ("flow", input.flow.map(FlowTerm::take_loss).transpose()?.unwrap_or(0.0)),
                     ("ARAP", deformer.take_arap_loss()?),
                 ];
                 // The policy of every training loop: stop at the first non-finite pass and

@@ -5,7 +5,6 @@
 //! solved first, then every vertex refined, each stage until its loss stops improving.
 
 pub mod config;
-mod flow_targets;
 mod frame;
 mod graph_stage;
 mod html_report;

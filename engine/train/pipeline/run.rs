@@ -200,12 +200,6 @@ fn run_logged(
         let (train, lost): (Vec<_>, Vec<_>) = train.into_iter().partition(ViewTarget::has_subject);
         let lost_views: Vec<String> = lost.into_iter().map(|v| v.name).collect();
         let start = extrapolate(&previous, before_previous.as_ref());
-        // The flow term follows pixels from frame t − 1's images.
-        let previous_views = if job.config.temporal.flow > 0.0 {
-            load_targets(&dataset, t - 1, &dataset.train, job.config.background, true)?
-        } else {
-            Vec::new()
-        };
         let (scene, frame_report) = if train.is_empty() {
             let report = FrameReport::without_views(t, start.len(), lost_views);
             mesh.positions = start.positions.clone();
@@ -218,7 +212,6 @@ fn run_logged(
                 start,
                 mesh: &mut mesh,
                 previous: Some(&previous),
-                previous_views: &previous_views,
                 frame0: Some(&frame0),
             };
             let (scene, report) =
@@ -339,7 +332,6 @@ fn canonical_start(
         start,
         mesh: &mut mesh,
         previous: None,
-        previous_views: &[],
         frame0: None,
     };
     let (scene, frame_report) =
