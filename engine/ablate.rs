@@ -31,6 +31,7 @@ pub fn temporal_ablations() -> Vec<Ablation> {
         Ablation { name: "w/o coarse graph", apply: |c| c.temporal.graph.coarse_nodes = 0 },
         Ablation { name: "w/o silhouette term", apply: |c| c.temporal.silhouette = 0.0 },
         Ablation { name: "w/o coverage term", apply: |c| c.temporal.coverage = 0.0 },
+        Ablation { name: "w/o limb stiffness", apply: |c| c.temporal.limb_thickness = 0.0 },
         Ablation {
             name: "w/o adaptive iterations",
             apply: |c| {
@@ -42,16 +43,18 @@ pub fn temporal_ablations() -> Vec<Ablation> {
     ]
 }
 
-/// The temporal stage before the deformation graph, the silhouette and coverage terms and the
-/// adaptive stop: 300 per-vertex iterations per frame from the extrapolated pose.
+/// The temporal stage before the deformation graph, the silhouette and coverage terms, the
+/// limb stiffness and the adaptive stop: 300 per-vertex iterations per frame from the
+/// extrapolated pose.
 pub fn previous_temporal_stage(c: &mut TrainConfig) {
     (
         c.temporal.graph.nodes,
         c.temporal.silhouette,
         c.temporal.coverage,
+        c.temporal.limb_thickness,
         c.temporal.iterations,
         c.temporal.min_iterations,
-    ) = (0, 0.0, 0.0, 300, 300);
+    ) = (0, 0.0, 0.0, 0.0, 300, 300);
 }
 
 /// The temporal ablations of one benchmark; see [`run_temporal_ablations`].

@@ -16,7 +16,7 @@ use tagsplat::topology::{gaussians_from_mesh, InitConfig, ManifoldMesh};
 
 /// A closed sphere and an open disk (boundary fans), each with a current and a previous frame:
 /// initial Gaussians, then noise on positions (a fraction of an edge), rotations (unnormalised
-/// on purpose) and log-scales.
+/// on purpose) and log-scales. The sphere's vertices get stiffness in [0.1, 1], the disk's 1.
 fn cases() -> Vec<(&'static str, Neighbourhoods, GaussianScene, GaussianScene)> {
     let (sp, sf) = icosphere(1);
     let sphere = ManifoldMesh::new(sp.iter().map(|p| p.map(|c| c as f32)).collect(), sf).unwrap();
@@ -26,11 +26,14 @@ fn cases() -> Vec<(&'static str, Neighbourhoods, GaussianScene, GaussianScene)> 
         gf,
     )
     .unwrap();
-    let mut r = rng(11);
+    let (mut r, mut stiff) = (rng(11), rng(12));
     [("sphere", sphere), ("disk", disk)]
         .into_iter()
         .map(|(name, mesh)| {
-            let nb = Neighbourhoods::from_mesh(&mesh);
+            let mut nb = Neighbourhoods::from_mesh(&mesh);
+            if name == "sphere" {
+                nb.stiffness.iter_mut().for_each(|s| *s = 0.1 + 0.9 * stiff.next_f64() as f32);
+            }
             let base =
                 gaussians_from_mesh(&mesh, &[], &InitConfig { sh_degree: 0, ..Default::default() });
             let noise = 0.2 * nb.mean_edge_length;

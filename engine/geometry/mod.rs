@@ -4,10 +4,12 @@
 //! - [`bvh`]: `obvhs` BVH over a mesh's triangles with exact closest-point and ray queries.
 //! - [`brute`]: the same queries by testing every triangle (the reference for tests and bench).
 //! - [`sphere`]: a subdivided-octahedron sphere, the surface of tests and benchmarks.
+//! - [`thickness`]: how far the inside reaches from each vertex (shape diameter function).
 
 pub mod brute;
 pub mod bvh;
 pub mod sphere;
+pub mod thickness;
 pub mod triangle;
 
 pub use bvh::{triangles, SurfaceBvh, SurfacePoint};

@@ -69,6 +69,7 @@ pub struct Regularizers {
     gather: ComputePipeline,
     ranges: GpuBuffer<[u32; 2]>,
     ring: GpuBuffer<u32>,
+    stiffness: GpuBuffer<f32>,
     deltas: GpuBuffer<[f32; 4]>,
     normal_grads: GpuBuffer<[f32; 4]>,
     loss_sums: FixedSums,
@@ -88,6 +89,7 @@ impl Regularizers {
             gather: pipeline("regularize gather", &shaders::REGULARIZE_GATHER)?,
             ranges: GpuBuffer::new(ctx, "regularize ranges", 0)?,
             ring: GpuBuffer::new(ctx, "regularize ring", 0)?,
+            stiffness: GpuBuffer::new(ctx, "regularize stiffness", 0)?,
             deltas: GpuBuffer::new(ctx, "regularize deltas", 0)?,
             normal_grads: GpuBuffer::new(ctx, "regularize normal gradients", 0)?,
             loss_sums: FixedSums::new(ctx, "regularize losses", LOSS_SLOTS, FixedPrecision::Total)?,
@@ -100,6 +102,7 @@ impl Regularizers {
     pub fn upload(&mut self, nb: &Neighbourhoods) -> GpuResult<()> {
         self.ranges = GpuBuffer::from_slice(&self.ctx, "regularize ranges", &nb.ranges)?;
         self.ring = GpuBuffer::from_slice(&self.ctx, "regularize ring", &nb.ring)?;
+        self.stiffness = GpuBuffer::from_slice(&self.ctx, "regularize stiffness", &nb.stiffness)?;
         self.deltas = GpuBuffer::new(&self.ctx, "regularize deltas", nb.len())?;
         self.normal_grads = GpuBuffer::new(&self.ctx, "regularize normal gradients", nb.len())?;
         self.count = nb.len();
@@ -161,6 +164,7 @@ impl Regularizers {
             ("grad_positions", grads.positions.binding()),
             ("grad_rotations", grads.rotations.binding()),
             ("loss_sums", self.loss_sums.binding()),
+            ("stiffness", self.stiffness.binding()),
         ];
         rec.dispatch_1d(&self.gather, &gather, &push, groups)?;
         Ok(())

@@ -7,9 +7,10 @@
 //! - `laplacian` = (1/n) Σᵢ ‖δᵢ‖², δᵢ = μᵢ − (1/mᵢ) Σ_{j∈N(i)} μⱼ (eq. 5).
 //! - `normal` = Σᵢ ‖R(q̂ᵢ) e_z − Nᵢ/‖Nᵢ‖‖, Nᵢ = Σ over faces (i, b, c) of (b − i) × (c − i):
 //!   the area-weighted vertex normal from the current positions (eq. 6).
-//! - `edge_length` = Σ over edges |lᵢⱼ − l'ᵢⱼ| (eq. 9).
-//! - `rigidity` = Σᵢ Σ_{j∈N(i)} ωᵢⱼ ‖(μ'ⱼ − μ'ᵢ) − ΔRᵢ (μⱼ − μᵢ)‖, ΔRᵢ = R(q̂'ᵢ) R(q̂ᵢ)ᵀ
+//! - `edge_length` = Σ over edges ½(sᵢ + sⱼ) |lᵢⱼ − l'ᵢⱼ| (eq. 9).
+//! - `rigidity` = Σᵢ sᵢ Σ_{j∈N(i)} ωᵢⱼ ‖(μ'ⱼ − μ'ᵢ) − ΔRᵢ (μⱼ − μᵢ)‖, ΔRᵢ = R(q̂'ᵢ) R(q̂ᵢ)ᵀ
 //!   (eq. 10–11).
+//! - sᵢ: vertex i's stiffness (1 in the paper; [`stiffness`] lowers it on thick parts).
 //! - `rotation` = Σᵢ Σ_{j∈N(i)} ωᵢⱼ ‖q̂ⱼ ⊗ q̂'ⱼ⁻¹ − q̂ᵢ ⊗ q̂'ᵢ⁻¹‖ (eq. 12).
 //! - ωᵢⱼ = exp(−λ_w · l'ᵢⱼ / l̄), l̄ the mean edge length when the neighbourhoods were built:
 //!   λ_w is dimensionless (scale-free), default 1 (an average edge weighs e⁻¹).
@@ -20,6 +21,7 @@
 mod kernels;
 mod neighbourhoods;
 pub mod reference;
+pub mod stiffness;
 
 pub use kernels::{Regularizers, Temporal};
 pub use neighbourhoods::{Neighbourhoods, BOUNDARY_BIT};

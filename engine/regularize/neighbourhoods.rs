@@ -18,6 +18,9 @@ pub struct Neighbourhoods {
     pub ring: Vec<u32>,
     /// Mean edge length when built: the length scale of the temporal weights.
     pub mean_edge_length: f32,
+    /// Per vertex, a factor on its temporal edge-length and rigidity terms (1 from
+    /// [`Self::from_mesh`]; see [`super::stiffness`]).
+    pub stiffness: Vec<f32>,
 }
 
 impl Neighbourhoods {
@@ -31,7 +34,8 @@ impl Neighbourhoods {
             ranges.push([ring.len() as u32, neighbours.len() as u32 | flag]);
             ring.extend(neighbours);
         }
-        Self { ranges, ring, mean_edge_length: mean_edge_length(mesh) }
+        let stiffness = vec![1.0; ranges.len()];
+        Self { ranges, ring, mean_edge_length: mean_edge_length(mesh), stiffness }
     }
 
     /// The number of vertex rows (dead vertices have empty neighbourhoods).

@@ -129,7 +129,7 @@ fn normal(nb: &Neighbourhoods, params: &Params, w: f64, gp: &mut [DVec3], gq: &m
     loss
 }
 
-/// L_len = Σ over edges |l_t − l_{t−1}|.
+/// L_len = Σ over edges ½(sᵢ + sⱼ) |l_t − l_{t−1}| (s: stiffness).
 fn edge_length(
     nb: &Neighbourhoods,
     params: &Params,
@@ -143,9 +143,10 @@ fn edge_length(
             let d = p3(params.positions[i]) - p3(params.positions[j as usize]);
             let l0 = (p3(prev.positions[i]) - p3(prev.positions[j as usize])).length();
             let l = d.length();
-            loss += (l - l0).abs();
+            let s = 0.5 * (nb.stiffness[i] + nb.stiffness[j as usize]) as f64;
+            loss += s * (l - l0).abs();
             if l > 0.0 && l != l0 {
-                let gd = w * (l - l0).signum() * d / l;
+                let gd = w * s * (l - l0).signum() * d / l;
                 g[i] += gd;
                 g[j as usize] -= gd;
             }
@@ -159,7 +160,8 @@ fn omega(prev: &Params, i: usize, j: usize, scale: f64) -> f64 {
     (-scale * (p3(prev.positions[i]) - p3(prev.positions[j])).length()).exp()
 }
 
-/// L_rigid = Σᵢ Σⱼ ωᵢⱼ ‖(μⱼ' − μᵢ') − ΔRᵢ (μⱼ − μᵢ)‖, ΔRᵢ = Rᵢ' Rᵢᵀ (primes: frame t − 1).
+/// L_rigid = Σᵢ sᵢ Σⱼ ωᵢⱼ ‖(μⱼ' − μᵢ') − ΔRᵢ (μⱼ − μᵢ)‖, ΔRᵢ = Rᵢ' Rᵢᵀ (primes: frame t − 1,
+/// s: stiffness).
 fn rigidity(
     nb: &Neighbourhoods,
     params: &Params,
@@ -181,7 +183,7 @@ fn rigidity(
             let j = j as usize;
             let d = p3(params.positions[j]) - p3(params.positions[i]);
             let d_prev = p3(prev.positions[j]) - p3(prev.positions[i]);
-            let weight = omega(prev, i, j, scale);
+            let weight = nb.stiffness[i] as f64 * omega(prev, i, j, scale);
             let e = d_prev - delta_r * d;
             loss += weight * e.length();
             let Some(u) = e.try_normalize() else { continue };

@@ -79,6 +79,9 @@ pub enum TrainError {
     /// The deformation graph could not be built or solved.
     #[error(transparent)]
     Deform(#[from] crate::deform::DeformError),
+    /// A frame's surface could not be ray cast (non-finite or no faces).
+    #[error("surface: {0}")]
+    Surface(#[from] crate::geometry::SurfaceError),
     /// The initial mesh could not be built from the masks.
     #[error("initial mesh from the masks: {0}")]
     InitMesh(#[from] crate::init::InitError),

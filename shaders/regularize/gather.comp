@@ -6,7 +6,8 @@
 //   face's area vector enters the mesh normal of its three corners;
 // - temporal terms (previous frame bound): edge length, 1-ring rigidity (v's own terms and
 //   the terms of its neighbours in which v is the neighbour), rotation consistency (ω is
-//   symmetric, so dL/dp_v = 2 w Σ_j ω_vj (p_v − p_j) / |p_v − p_j|).
+//   symmetric, so dL/dp_v = 2 w Σ_j ω_vj (p_v − p_j) / |p_v − p_j|). Vertex i's stiffness
+//   s_i scales its own rigidity terms; an edge's length term takes the mean of its ends'.
 #include "common.glsl"
 #include "../common/grid.glsl"
 
@@ -23,6 +24,7 @@ layout(std430, binding = 7) readonly buffer NormalGrads { vec4 normal_grads[]; }
 layout(std430, binding = 8) buffer GradPositions { float grad_positions[]; };
 layout(std430, binding = 9) buffer GradRotations { vec4 grad_rotations[]; };
 layout(std430, binding = 10) buffer LossSums { int64_t loss_sums[]; };
+layout(std430, binding = 11) readonly buffer Stiffness { float stiffness[]; };
 
 vec3 position(uint i) {
     return vec3(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
@@ -72,19 +74,20 @@ void main() {
                 uint j = ring[start + k];
                 vec3 d = position(j) - p, d_prev = prev_position(j) - pp;
                 float l = length(d), l_prev = length(d_prev);
+                float s_edge = 0.5 * (stiffness[v] + stiffness[j]);
                 if (j > v) {
-                    edge_length += abs(l - l_prev);
+                    edge_length += s_edge * abs(l - l_prev);
                 }
                 if (l > 0.0 && l != l_prev) {
-                    gp -= pc.w_edge_length * sign(l - l_prev) * d / l;
+                    gp -= pc.w_edge_length * s_edge * sign(l - l_prev) * d / l;
                 }
                 float omega = exp(-pc.omega_scale * l_prev);
                 // v's own rigidity term with neighbour j.
                 vec3 e = d_prev - dr * d;
                 float el = length(e);
-                rigidity += omega * el;
+                rigidity += stiffness[v] * omega * el;
                 if (el > 0.0) {
-                    vec3 u = pc.w_rigidity * omega * e / el;
+                    vec3 u = pc.w_rigidity * stiffness[v] * omega * e / el;
                     gp += transpose(dr) * u;
                     g_rot -= outerProduct(d, transpose(r_prev) * u);
                 }
@@ -93,7 +96,7 @@ void main() {
                 vec3 e_j = -d_prev + dr_j * d;
                 float el_j = length(e_j);
                 if (el_j > 0.0) {
-                    gp -= transpose(dr_j) * (pc.w_rigidity * omega * e_j / el_j);
+                    gp -= transpose(dr_j) * (pc.w_rigidity * stiffness[j] * omega * e_j / el_j);
                 }
                 // Rotation consistency.
                 vec4 diff = rel - quat_mul(unit_quat(rotations[j]), quat_conj(unit_quat(prev_rotations[j])));

@@ -91,6 +91,11 @@ pub struct TemporalConfig {
     pub coverage_radius: u32,
     /// The pose the temporal regularizers (edge length, rigidity, rotation) compare against.
     pub regularizer_reference: ReferencePose,
+    /// Thickness, × the mesh's bounding-box diagonal, up to which the temporal edge-length and
+    /// rigidity terms keep their full weight; a thicker part t gets `limb_thickness / t` of it
+    /// (`regularize::stiffness`), so a torso may stretch with its legs while the legs keep
+    /// their shape (0: the same weight everywhere; default 0.045, a fox's leg).
+    pub limb_thickness: f32,
     /// The deformation graph stage.
     pub graph: GraphConfig,
 }
@@ -249,6 +254,7 @@ impl Default for TemporalConfig {
             coverage: 0.01,
             coverage_radius: 24,
             regularizer_reference: ReferencePose::Previous,
+            limb_thickness: 0.045,
             graph: GraphConfig::default(),
         }
     }
@@ -368,6 +374,7 @@ impl TrainConfig {
             ("temporal.tolerance", self.temporal.tolerance),
             ("temporal.silhouette", self.temporal.silhouette),
             ("temporal.coverage", self.temporal.coverage),
+            ("temporal.limb_thickness", self.temporal.limb_thickness),
             ("temporal.graph.arap", self.temporal.graph.arap),
             ("learning_rates.log_scales", r.log_scales),
             ("learning_rates.rotations", r.rotations),

@@ -3,7 +3,7 @@
 //! rendered and scored for colour and mask, the regularizers (temporal ones against the
 //! previous frame) — then Adam. Frame 0 also densifies and prunes through the topology.
 
-use super::config::TrainConfig;
+use super::config::{TemporalConfig, TrainConfig};
 use super::graph_stage::{solve_graph, GraphInput, GraphReport, ImageWeights};
 use crate::camera::Camera;
 use crate::eval::psnr;
@@ -11,6 +11,7 @@ use crate::gpu::{GpuContext, Recorder};
 use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm, SilhouetteView};
 use crate::mesh::bounding_diagonal;
 use crate::optim::LearningRates;
+use crate::regularize::stiffness::limb_stiffness;
 use crate::regularize::{Losses, Neighbourhoods, Regularizers, Temporal};
 use crate::rng::SplitMix64;
 use crate::splat::{FrameParams, GaussianBuffers, GaussianScene, RenderSettings};
@@ -163,7 +164,7 @@ pub fn optimize_frame(
         first.camera.height,
     )?;
     let mut regs = Regularizers::new(ctx)?;
-    regs.upload(&Neighbourhoods::from_mesh(task.mesh))?;
+    regs.upload(&refinement_neighbourhoods(task.mesh, canonical, t)?)?;
     let reference = t
         .regularizer_reference
         .pick(task.previous, task.frame0)
@@ -454,6 +455,21 @@ fn topology_step(
     mesh_term.set_mesh(&scene.positions, &mesh.live_faces())?;
     regs.upload(&Neighbourhoods::from_mesh(mesh))?;
     Ok((it, densified.split_faces, pruned.pruned, scene.len()))
+}
+
+/// The 1-rings the refinement's regularizers read, with the temporal terms' stiffness on later
+/// frames when `limb_thickness` is set.
+fn refinement_neighbourhoods(
+    mesh: &ManifoldMesh,
+    canonical: bool,
+    t: &TemporalConfig,
+) -> Result<Neighbourhoods, TrainError> {
+    let nb = Neighbourhoods::from_mesh(mesh);
+    if canonical || t.limb_thickness == 0.0 {
+        return Ok(nb);
+    }
+    let limb = t.limb_thickness as f64 * bounding_diagonal(&mesh.positions);
+    Ok(Neighbourhoods { stiffness: limb_stiffness(mesh, limb)?, ..nb })
 }
 
 /// Pixels the subject covers (mask > 0.5) in the median training view.
