@@ -24,8 +24,6 @@ pub struct DeformGraph {
     pub neighbours: Vec<u32>,
     /// Mean distance between linked nodes (scene units): the graph's length scale.
     pub node_spacing: f32,
-    /// Per node, a factor on its own as-rigid-as-possible terms (1 from [`build_graph`]).
-    pub node_stiffness: Vec<f32>,
 }
 
 /// Builds a graph of `nodes` nodes (fewer when the mesh has fewer vertices) over a mesh given
@@ -42,8 +40,7 @@ pub fn build_graph<'a>(
 ) -> DeformGraph {
     let node_vertices = farthest_points(positions, nodes);
     let nearest = nearest_nodes(positions, &adjacency, &node_vertices);
-    let node_stiffness = vec![1.0; node_vertices.len()];
-    let mut graph = DeformGraph { node_vertices, node_stiffness, ..Default::default() };
+    let mut graph = DeformGraph { node_vertices, ..Default::default() };
     let mut links = vec![Vec::new(); graph.node_vertices.len()];
     for labels in &nearest {
         let (bound, weights) = weights_of(labels);

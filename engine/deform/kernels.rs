@@ -68,7 +68,6 @@ pub struct GraphDeformer {
     member_weights: GpuBuffer<f32>,
     neighbour_ranges: GpuBuffer<[u32; 2]>,
     neighbours: GpuBuffer<u32>,
-    node_stiffness: GpuBuffer<f32>,
     nodes: GaussianBuffers,
     node_grads: GaussianBuffers,
     adam: Adam,
@@ -91,12 +90,6 @@ impl GraphDeformer {
             return Err(super::DeformError::Shape(format!(
                 "a graph over {} vertices for {n} Gaussians",
                 graph.bound_nodes.len()
-            )));
-        }
-        if graph.node_stiffness.len() != m {
-            return Err(super::DeformError::Shape(format!(
-                "{} node stiffnesses for {m} nodes",
-                graph.node_stiffness.len()
             )));
         }
         let pipeline = |name, shader| {
@@ -152,11 +145,6 @@ impl GraphDeformer {
                 &graph.neighbour_ranges,
             )?,
             neighbours: GpuBuffer::from_slice(ctx, "deform neighbours", &graph.neighbours)?,
-            node_stiffness: GpuBuffer::from_slice(
-                ctx,
-                "deform node stiffness",
-                &graph.node_stiffness,
-            )?,
             node_grads,
             adam: Adam::new(ctx, &nodes)?,
             nodes,
@@ -218,7 +206,6 @@ impl GraphDeformer {
             ("member_weights", self.member_weights.binding()),
             ("neighbour_ranges", self.neighbour_ranges.binding()),
             ("neighbours", self.neighbours.binding()),
-            ("node_stiffness", self.node_stiffness.binding()),
             ("grad_positions", grad_positions.binding()),
             ("node_grad_translations", self.node_grads.positions.binding()),
             ("node_grad_rotations", self.node_grads.rotations.binding()),

@@ -64,14 +64,12 @@ pub fn blend(
     out
 }
 
-/// The as-rigid-as-possible energy c Σ_k s_k Σ_{j∈N(k)} ‖R_k (g_j − g_k) + g_k + t_k − g_j − t_j‖²
-/// (s_k: `graph.node_stiffness`).
+/// The as-rigid-as-possible energy c Σ_k Σ_{j∈N(k)} ‖R_k (g_j − g_k) + g_k + t_k − g_j − t_j‖².
 pub fn arap_energy(rest: &[[f32; 3]], graph: &DeformGraph, nodes: &NodeTransforms, c: f64) -> f64 {
     let mut energy = 0.0;
     for k in 0..graph.node_vertices.len() {
         for j in neighbours(graph, k) {
-            let s = graph.node_stiffness[k] as f64;
-            energy += c * s * residual(rest, graph, nodes, k, j).length_squared();
+            energy += c * residual(rest, graph, nodes, k, j).length_squared();
         }
     }
     energy
@@ -123,10 +121,8 @@ pub fn node_gradients(
             let d = rest_of(rest, graph, j) - rest_of(rest, graph, k);
             let (own, theirs) =
                 (residual(rest, graph, nodes, k, j), residual(rest, graph, nodes, j, k));
-            let (c_own, c_theirs) =
-                (c * graph.node_stiffness[k] as f64, c * graph.node_stiffness[j] as f64);
-            gt[k] += 2.0 * (c_own * own - c_theirs * theirs);
-            gr[k] += outer(2.0 * c_own * own, d);
+            gt[k] += 2.0 * c * (own - theirs);
+            gr[k] += outer(2.0 * c * own, d);
         }
     }
     let rotations = (0..m)

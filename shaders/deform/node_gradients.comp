@@ -3,9 +3,9 @@
 // its own rows (no atomics, a fixed order):
 // - from its vertices (CSR members, weight w_ik): dL/dt_k = Σ_i w_ik ∂L/∂p_i and
 //   dL/dR_k = Σ_i w_ik ∂L/∂p_i (x_i − g_k)ᵀ, then through R(q̂) and the normalisation;
-// - as-rigid-as-possible between neighbours, E = c Σ_k s_k Σ_{j∈N(k)} ‖r_kj‖² (s_k: node
-//   stiffness), r_kj = R_k (g_j − g_k) + g_k + t_k − (g_j + t_j): k's own terms and, since N
-//   is symmetric, the terms of its neighbours in which k is the neighbour (−2c s_j r_jk on t_k).
+// - as-rigid-as-possible between neighbours, E = c Σ_k Σ_{j∈N(k)} ‖r_kj‖²,
+//   r_kj = R_k (g_j − g_k) + g_k + t_k − (g_j + t_j): k's own terms and, since N is symmetric,
+//   the terms of its neighbours in which k is the neighbour (−2c r_jk on t_k).
 // Vertex rotation gradients do not reach the nodes: a Gaussian's rotation follows its nodes.
 #include "common.glsl"
 #include "../common/fixed_sum.glsl"
@@ -24,7 +24,6 @@ layout(std430, binding = 9) readonly buffer GradPositions { float grad_positions
 layout(std430, binding = 10) writeonly buffer NodeGradTranslations { float node_grad_translations[]; };
 layout(std430, binding = 11) writeonly buffer NodeGradRotations { vec4 node_grad_rotations[]; };
 layout(std430, binding = 12) buffer LossSum { int64_t loss_sum[]; };
-layout(std430, binding = 13) readonly buffer NodeStiffness { float node_stiffness[]; };
 
 vec3 translation(uint k) {
     return vec3(node_translations[3u * k], node_translations[3u * k + 1u], node_translations[3u * k + 2u]);
@@ -53,10 +52,9 @@ void main() {
             vec3 d = node_rest[j].xyz - g, tj = translation(j);
             vec3 own = r * d - d + t - tj;
             vec3 theirs = rotation_of(unit_quat(node_rotations[j])) * -d + d + tj - t;
-            float c_own = pc.arap_scale * node_stiffness[k], c_theirs = pc.arap_scale * node_stiffness[j];
-            energy += c_own * dot(own, own);
-            gt += 2.0 * (c_own * own - c_theirs * theirs);
-            gr += outerProduct(2.0 * c_own * own, d);
+            energy += pc.arap_scale * dot(own, own);
+            gt += 2.0 * pc.arap_scale * (own - theirs);
+            gr += outerProduct(2.0 * pc.arap_scale * own, d);
         }
         node_grad_translations[3u * k] = gt.x;
         node_grad_translations[3u * k + 1u] = gt.y;

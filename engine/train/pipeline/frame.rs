@@ -140,7 +140,7 @@ pub fn optimize_frame(
             }
         };
         let (faces, neighbourhoods) =
-            (task.mesh.live_faces(), temporal_neighbourhoods(task.mesh, canonical, t)?);
+            (task.mesh.live_faces(), Neighbourhoods::from_mesh(task.mesh));
         let input = GraphInput {
             frame: task.frame,
             train: task.train,
@@ -164,7 +164,7 @@ pub fn optimize_frame(
         first.camera.height,
     )?;
     let mut regs = Regularizers::new(ctx)?;
-    regs.upload(&temporal_neighbourhoods(task.mesh, canonical, t)?)?;
+    regs.upload(&refinement_neighbourhoods(task.mesh, canonical, t)?)?;
     let reference = t
         .regularizer_reference
         .pick(task.previous, task.frame0)
@@ -457,9 +457,9 @@ fn topology_step(
     Ok((it, densified.split_faces, pruned.pruned, scene.len()))
 }
 
-/// The mesh's 1-rings with the temporal terms' stiffness on later frames when `limb_thickness`
-/// is set (read by the refinement's regularizers and the graph's ARAP term).
-fn temporal_neighbourhoods(
+/// The 1-rings the refinement's regularizers read, with the temporal terms' stiffness on later
+/// frames when `limb_thickness` is set.
+fn refinement_neighbourhoods(
     mesh: &ManifoldMesh,
     canonical: bool,
     t: &TemporalConfig,

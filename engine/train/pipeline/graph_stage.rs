@@ -205,9 +205,7 @@ fn graph_on(
 ) -> Result<GraphDeformer, TrainError> {
     let g = &config.temporal.graph;
     let rest = g.rest.pick(pose, input.frame0);
-    let nb = input.neighbourhoods;
-    let mut graph = build_graph(&rest.positions, |i| nb.neighbours(i), nodes);
-    graph.node_stiffness = graph.node_vertices.iter().map(|&v| nb.stiffness[v as usize]).collect();
+    let graph = build_graph(&rest.positions, |i| input.neighbourhoods.neighbours(i), nodes);
     let mut deformer = GraphDeformer::new(ctx, &graph, rest, g.arap)?;
     if g.rest == ReferencePose::Frame0 {
         deformer.write_nodes(&fit_nodes(&rest.positions, &pose.positions, &graph))?;
