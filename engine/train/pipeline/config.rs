@@ -91,10 +91,10 @@ pub struct TemporalConfig {
     pub coverage_radius: u32,
     /// The pose the temporal regularizers (edge length, rigidity, rotation) compare against.
     pub regularizer_reference: ReferencePose,
-    /// Thickness, × the mesh's bounding-box diagonal, up to which the temporal edge-length and
-    /// rigidity terms keep their full weight; a thicker part t gets `limb_thickness / t` of it
-    /// (`regularize::stiffness`), so a torso may stretch with its legs while the legs keep
-    /// their shape (0: the same weight everywhere; default 0.045, a fox's leg).
+    /// Thickness, × the subject's thickest parts (the 95th percentile of vertex thickness), up
+    /// to which the temporal edge-length and rigidity terms keep their full weight; a thicker
+    /// part gets l / t of it (`regularize::stiffness`), so a torso may stretch with its legs
+    /// while the legs keep their shape (0: the same weight everywhere; default 0.3).
     pub limb_thickness: f32,
     /// The deformation graph stage.
     pub graph: GraphConfig,
@@ -254,7 +254,7 @@ impl Default for TemporalConfig {
             coverage: 0.01,
             coverage_radius: 24,
             regularizer_reference: ReferencePose::Previous,
-            limb_thickness: 0.045,
+            limb_thickness: 0.3,
             graph: GraphConfig::default(),
         }
     }

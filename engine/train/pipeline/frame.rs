@@ -468,8 +468,7 @@ fn refinement_neighbourhoods(
     if canonical || t.limb_thickness == 0.0 {
         return Ok(nb);
     }
-    let limb = t.limb_thickness as f64 * bounding_diagonal(&mesh.positions);
-    Ok(Neighbourhoods { stiffness: limb_stiffness(mesh, limb)?, ..nb })
+    Ok(Neighbourhoods { stiffness: limb_stiffness(mesh, t.limb_thickness as f64)?, ..nb })
 }
 
 /// Pixels the subject covers (mask > 0.5) in the median training view.
