@@ -458,14 +458,14 @@ fn topology_step(
 }
 
 /// The 1-rings the refinement's regularizers read, with the temporal terms' stiffness on later
-/// frames when `limb_thickness` is set.
+/// frames (all 1 when `limb_thickness` is 0: `limb_stiffness` says so).
 fn refinement_neighbourhoods(
     mesh: &ManifoldMesh,
     canonical: bool,
     t: &TemporalConfig,
 ) -> Result<Neighbourhoods, TrainError> {
     let nb = Neighbourhoods::from_mesh(mesh);
-    if canonical || t.limb_thickness == 0.0 {
+    if canonical {
         return Ok(nb);
     }
     Ok(Neighbourhoods { stiffness: limb_stiffness(mesh, t.limb_thickness as f64)?, ..nb })
