@@ -2,15 +2,20 @@
 //! device (vertex + fragment shader writing the triangle id into an R32_SFLOAT image, depth test
 //! LESS, so equal depths keep the first-drawn = lower id, as the visibility buffer does).
 //!
-//! Ids are written as floats (exact below 2^24) rather than to an R32_UINT image: with an
-//! integer colour attachment, Mesa 22.3's llvmpipe at 128-bit vectors (`LP_NATIVE_VECTOR_WIDTH
-//! =128`, the subgroup-size-4 run) corrupts the heap now and then (measured: 22 aborts in 150
-//! runs of five draws, 0 in 60 at 256-bit vectors; 0 in 60 with the float image).
+//! The draw runs in a child process (this test binary again, its ignored test
+//! `graphics_pipeline_oracle_child`) at llvmpipe's default vector width: Mesa 22.3's llvmpipe
+//! graphics path corrupts the heap now and then at 128-bit vectors (`LP_NATIVE_VECTOR_WIDTH=128`,
+//! the subgroup-size-4 run), which aborts the whole test binary. Measured on this oracle's
+//! draws, 20 per run: 9 aborts in 80 runs of the pixel-centre grid with large cells and 1 in 80 of
+//! the sphere with clutter at 128 bits, none in 300 runs of every case at 256 bits; padding the
+//! attachments to whole 64-pixel tiles did not help. With an R32_UINT attachment it was worse
+//! (22 aborts in 150 runs of five draws), hence the float ids.
 
 use ash::vk;
 use glam::DVec3;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 use tagsplat::camera::Camera;
 use tagsplat::gpu::GpuContext;
@@ -295,16 +300,61 @@ fn pipeline(d: &ash::Device, owned: &mut Owned, (w, h): (u32, u32)) -> vk::Pipel
         .unwrap()[0]
 }
 
-/// Triangle id per pixel (`u32::MAX` where nothing was drawn) for camera-space vertices `cam`.
-pub fn triangle_ids(
-    ctx: &Arc<GpuContext>,
-    cam: &[DVec3],
-    faces: &[[u32; 3]],
-    camera: &Camera,
-    near: f64,
-) -> Vec<u32> {
+/// Names the job folder of a child process.
+const JOB_VARIABLE: &str = "TAGSPLAT_RASTER_ORACLE_JOB";
+
+/// Triangle id per pixel (`u32::MAX` where nothing was drawn) for camera-space vertices `cam`,
+/// drawn by a child process (see the module doc).
+pub fn triangle_ids(cam: &[DVec3], faces: &[[u32; 3]], camera: &Camera, near: f64) -> Vec<u32> {
+    assert!(faces.len() < 1 << 24, "float ids are exact below 2^24 faces");
+    static JOBS: AtomicUsize = AtomicUsize::new(0);
+    let job = std::env::temp_dir().join(format!(
+        "tagsplat-raster-oracle-{}-{}",
+        std::process::id(),
+        JOBS.fetch_add(1, Ordering::Relaxed)
+    ));
+    std::fs::create_dir_all(&job).unwrap();
+    let corners = clip_positions(cam, faces, camera, near);
+    let mut input = bytemuck::cast_slice(&[camera.width, camera.height]).to_vec();
+    input.extend_from_slice(bytemuck::cast_slice(&corners));
+    std::fs::write(job.join("input"), input).unwrap();
+    let output = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["graphics_pipeline_oracle_child", "--exact", "--ignored", "--nocapture"])
+        .env(JOB_VARIABLE, &job)
+        .env_remove("LP_NATIVE_VECTOR_WIDTH")
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "the oracle's child process failed ({}):\n{}{}",
+        output.status,
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let ids = bytemuck::pod_collect_to_vec(&std::fs::read(job.join("ids")).unwrap());
+    std::fs::remove_dir_all(&job).unwrap();
+    assert_eq!(ids.len(), camera.width as usize * camera.height as usize);
+    ids
+}
+
+/// The child's side: reads the job the environment names, draws it on a validated context,
+/// writes the ids. Panics when run other than by [`triangle_ids`].
+pub fn serve_child() {
+    let job = std::env::var_os(JOB_VARIABLE)
+        .expect("only oracle::triangle_ids runs this, with the job folder in the environment");
+    let job = std::path::PathBuf::from(job);
+    let input = std::fs::read(job.join("input")).unwrap();
+    let (size, corners) = input.split_at(8);
+    let size: [u32; 2] = bytemuck::pod_read_unaligned(size);
+    let corners: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(corners);
+    let gpu = crate::common::gpu();
+    let ids = draw_ids(gpu.ctx(), &corners, (size[0], size[1]));
+    std::fs::write(job.join("ids"), bytemuck::cast_slice(&ids)).unwrap();
+}
+
+/// Draws clip-space `corners` (three per triangle) into a `size` image: the id per pixel.
+fn draw_ids(ctx: &Arc<GpuContext>, corners: &[[f32; 4]], size: (u32, u32)) -> Vec<u32> {
     let d = ctx.device().clone();
-    let size = (camera.width, camera.height);
     let pixels = size.0 as usize * size.1 as usize;
     let mut owned = Owned {
         ctx: ctx.clone(),
@@ -320,15 +370,13 @@ pub fn triangle_ids(
         pool: vk::CommandPool::null(),
         fence: vk::Fence::null(),
     };
-    assert!(faces.len() < 1 << 24, "float ids are exact below 2^24 faces");
-    let corners = clip_positions(cam, faces, camera, near);
     let vertex_buffer = owned.buffer(
         "oracle vertices",
         (corners.len() * 16) as u64,
         vk::BufferUsageFlags::VERTEX_BUFFER,
         MemoryLocation::CpuToGpu,
     );
-    let corner_bytes: &[u8] = bytemuck::cast_slice(&corners);
+    let corner_bytes: &[u8] = bytemuck::cast_slice(corners);
     unsafe {
         std::ptr::copy_nonoverlapping(
             corner_bytes.as_ptr(),
