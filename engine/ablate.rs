@@ -32,6 +32,7 @@ pub fn temporal_ablations() -> Vec<Ablation> {
         Ablation { name: "w/o silhouette term", apply: |c| c.temporal.silhouette = 0.0 },
         Ablation { name: "w/o coverage term", apply: |c| c.temporal.coverage = 0.0 },
         Ablation { name: "w/o limb stiffness", apply: |c| c.temporal.limb_thickness = 0.0 },
+        Ablation { name: "w/o colour fit", apply: |c| c.temporal.colour_iterations = 0 },
         Ablation {
             name: "w/o adaptive iterations",
             apply: |c| {
@@ -44,8 +45,8 @@ pub fn temporal_ablations() -> Vec<Ablation> {
 }
 
 /// The temporal stage before the deformation graph, the silhouette and coverage terms, the
-/// limb stiffness and the adaptive stop: 300 per-vertex iterations per frame from the
-/// extrapolated pose.
+/// limb stiffness, the adaptive stop and the colour fit: 300 per-vertex iterations per frame
+/// from the extrapolated pose.
 pub fn previous_temporal_stage(c: &mut TrainConfig) {
     (
         c.temporal.graph.nodes,
@@ -54,7 +55,8 @@ pub fn previous_temporal_stage(c: &mut TrainConfig) {
         c.temporal.limb_thickness,
         c.temporal.iterations,
         c.temporal.min_iterations,
-    ) = (0, 0.0, 0.0, 0.0, 300, 300);
+        c.temporal.colour_iterations,
+    ) = (0, 0.0, 0.0, 0.0, 300, 300, 0);
 }
 
 /// The temporal ablations of one benchmark; see [`run_temporal_ablations`].

@@ -114,7 +114,9 @@ pub fn print_report(r: &TrainReport) {
     if !r.resumed_frames.is_empty() {
         println!("resumed: frames {:?} were complete", r.resumed_frames);
     }
-    println!("frame  graph iters  iters  stopped         seconds  Gaussians  PSNR gs  PSNR mesh");
+    println!(
+        "frame  graph iters  iters  colour  stopped         seconds  Gaussians  PSNR gs  PSNR mesh"
+    );
     for f in &r.frames {
         let graph = f.graph.as_ref().map_or("-".into(), |g| {
             g.levels.iter().map(|l| l.iterations.to_string()).collect::<Vec<_>>().join("+")
@@ -124,8 +126,14 @@ pub fn print_report(r: &TrainReport) {
             .and_then(|v| v.as_str().map(String::from))
             .unwrap_or_default();
         println!(
-            "{:>5}  {graph:>11}  {:>5}  {stop:<14}  {:>7.1}  {:>9}  {:>7.2}  {:>9.2}",
-            f.frame, f.iterations, f.wall_s, f.gaussians, f.psnr_gs, f.psnr_mesh
+            "{:>5}  {graph:>11}  {:>5}  {:>6}  {stop:<14}  {:>7.1}  {:>9}  {:>7.2}  {:>9.2}",
+            f.frame,
+            f.iterations,
+            f.colour_iterations,
+            f.wall_s,
+            f.gaussians,
+            f.psnr_gs,
+            f.psnr_mesh
         );
     }
     for f in r.frames.iter().filter(|f| !f.lost_views.is_empty()) {

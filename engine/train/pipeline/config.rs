@@ -81,6 +81,13 @@ pub struct TemporalConfig {
     pub tolerance: f32,
     /// Keep colour, opacity and scale of frame 0 (only positions and rotations move).
     pub freeze_appearance: bool,
+    /// Iterations that fit the frame's colours (SH) alone once its shape is found, everything
+    /// else held, so each frame's mesh and Gaussians carry the shading of that frame; the next
+    /// frame starts from them (0: frame 0's colours throughout, with `freeze_appearance`).
+    pub colour_iterations: u32,
+    /// The colour fit's SH rates, × `learning_rates.sh_dc` and `sh_rest` (a few dozen steps
+    /// must reach a change of light: 3DGS's rates move a colour by about 0.001 per step).
+    pub colour_lr_scale: f32,
     /// Weight of the long-range silhouette term (every vertex inside every mask; 0: off).
     pub silhouette: f32,
     /// Weight of the coverage term (mask pixels the render leaves uncovered pull the nearest
@@ -250,6 +257,8 @@ impl Default for TemporalConfig {
             min_iterations: 60,
             tolerance: 0.005,
             freeze_appearance: true,
+            colour_iterations: 32,
+            colour_lr_scale: 10.0,
             silhouette: 10.0,
             coverage: 0.01,
             coverage_radius: 24,
@@ -375,6 +384,7 @@ impl TrainConfig {
             ("temporal.silhouette", self.temporal.silhouette),
             ("temporal.coverage", self.temporal.coverage),
             ("temporal.limb_thickness", self.temporal.limb_thickness),
+            ("temporal.colour_lr_scale", self.temporal.colour_lr_scale),
             ("temporal.graph.arap", self.temporal.graph.arap),
             ("learning_rates.log_scales", r.log_scales),
             ("learning_rates.rotations", r.rotations),

@@ -35,6 +35,9 @@ pub struct FrameReport {
     pub frame: usize,
     /// Per-vertex iterations (the graph stage's are in `graph`).
     pub iterations: u32,
+    /// Iterations of the colour fit after them (`temporal.colour_iterations`).
+    #[serde(default)]
+    pub colour_iterations: u32,
     /// Why the per-vertex stage stopped.
     pub stop_reason: StopReason,
     /// The deformation graph's levels (later frames with a graph).
@@ -201,6 +204,7 @@ pub fn optimize_frame(
         diagonal: bounding_diagonal(&start.positions) as f32,
         near: settings.near,
         canonical,
+        colour_only: false,
         weights,
         terms: FrameTerms { mesh_term, regs, reference, silhouette, coverage },
         mesh: task.mesh,
@@ -208,18 +212,34 @@ pub fn optimize_frame(
         report: &mut report,
         progress,
     };
+    let non_finite = |detail: String| TrainError::NonFinite {
+        frame: Some(task.frame),
+        detail: format!("{detail}; the finished frames are kept"),
+    };
     let run = optimize(&mut trainer, &mut stage, &schedule, plateau, &mut settings, &mut rng)?;
     if let Some(detail) = run.non_finite {
-        let detail = format!("{detail}; the finished frames are kept");
-        return Err(TrainError::NonFinite { frame: Some(task.frame), detail });
+        return Err(non_finite(detail));
+    }
+    let colour_iterations = if canonical { 0 } else { t.colour_iterations };
+    let (mut colour_run_iterations, mut colour_s) = (0, 0.0);
+    if colour_iterations > 0 {
+        stage.colour_only = true;
+        let schedule = Schedule { iterations: colour_iterations, ..schedule };
+        let plateau = Plateau::new(colour_iterations, colour_iterations, task.train.len(), 0.0);
+        let fit = optimize(&mut trainer, &mut stage, &schedule, plateau, &mut settings, &mut rng)?;
+        if let Some(detail) = fit.non_finite {
+            return Err(non_finite(detail));
+        }
+        (colour_run_iterations, colour_s) = (fit.iterations, fit.train_s);
     }
     let FrameStage { terms, mesh, .. } = stage;
     let scene = trainer.scene()?;
     mesh.positions = scene.positions.clone();
     report.stop_reason = run.stop_reason;
     report.truncated_steps = run.truncated_steps;
+    report.colour_iterations = colour_run_iterations;
     (report.iterations, report.wall_s, report.gaussians, report.passes_ms) =
-        (run.iterations, train_s + run.train_s, scene.len(), run.passes_ms);
+        (run.iterations, train_s + run.train_s + colour_s, scene.len(), run.passes_ms);
     (report.psnr_gs, report.ssim_gs, report.psnr_mesh) =
         evaluate(&mut trainer, &terms.mesh_term, task.eval, &settings)?;
     Ok((scene, report))
@@ -246,6 +266,8 @@ struct FrameStage<'a, 'm> {
     /// The render settings' near plane, which the silhouette and coverage terms share.
     near: f32,
     canonical: bool,
+    /// The colour fit after a later frame's shape: only the SH coefficients move.
+    colour_only: bool,
     weights: ImageWeights,
     terms: FrameTerms,
     mesh: &'m mut ManifoldMesh,
@@ -258,7 +280,19 @@ struct FrameStage<'a, 'm> {
 
 impl Stage for FrameStage<'_, '_> {
     fn rates(&self, it: u32, iterations: u32) -> LearningRates {
-        frame_rates(self.config, self.extent, it, iterations, self.canonical)
+        if !self.colour_only {
+            return frame_rates(self.config, self.extent, it, iterations, self.canonical);
+        }
+        let rates = learning_rates(&self.config.learning_rates, self.extent, it, iterations);
+        let scale = self.config.temporal.colour_lr_scale;
+        LearningRates {
+            positions: 0.0,
+            log_scales: 0.0,
+            rotations: 0.0,
+            opacity_logits: 0.0,
+            sh_dc: scale * rates.sh_dc,
+            sh_rest: scale * rates.sh_rest,
+        }
     }
 
     fn record_step<'a>(
@@ -375,6 +409,7 @@ fn empty_report(frame: usize) -> FrameReport {
     FrameReport {
         frame,
         iterations: 0,
+        colour_iterations: 0,
         stop_reason: StopReason::MaxIterations,
         graph: None,
         lost_views: Vec::new(),

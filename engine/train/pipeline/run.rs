@@ -275,8 +275,18 @@ fn frame_lines(f: &FrameReport) -> String {
         format!("graph [{}], ", levels.join("; "))
     });
     let mut text = format!(
-        "frame {}: {graph}{} iterations ({:?}), {:.1} s, {} Gaussians, PSNR {:.2} dB (Gaussians) {:.2} dB (mesh)",
-        f.frame, f.iterations, f.stop_reason, f.wall_s, f.gaussians, f.psnr_gs, f.psnr_mesh
+        "frame {}: {graph}{} iterations ({:?}){}, {:.1} s, {} Gaussians, PSNR {:.2} dB (Gaussians) {:.2} dB (mesh)",
+        f.frame,
+        f.iterations,
+        f.stop_reason,
+        match f.colour_iterations {
+            0 => String::new(),
+            n => format!(" + {n} colour"),
+        },
+        f.wall_s,
+        f.gaussians,
+        f.psnr_gs,
+        f.psnr_mesh
     );
     if !f.lost_views.is_empty() {
         let views = f.lost_views.join(", ");
