@@ -20,7 +20,7 @@ use crate::topology::{
 };
 use crate::train::fit::{self, learning_rates, scene_extent};
 use crate::train::mesh_term::MeshTerm;
-use crate::train::optimize::{optimize, Schedule, Stage};
+use crate::train::optimize::{optimize, LoopOutcome, Schedule, Stage};
 use crate::train::plateau::{Plateau, StopReason};
 use crate::train::schedule::DensifyWindow;
 use crate::train::{TrainError, Trainer, ViewTarget};
@@ -220,18 +220,17 @@ pub fn optimize_frame(
     if let Some(detail) = run.non_finite {
         return Err(non_finite(detail));
     }
-    let colour_iterations = if canonical { 0 } else { t.colour_iterations };
-    let (mut colour_run_iterations, mut colour_s) = (0, 0.0);
-    if colour_iterations > 0 {
-        stage.colour_only = true;
-        let schedule = Schedule { iterations: colour_iterations, ..schedule };
-        let plateau = Plateau::new(colour_iterations, colour_iterations, task.train.len(), 0.0);
-        let fit = optimize(&mut trainer, &mut stage, &schedule, plateau, &mut settings, &mut rng)?;
+    let colour = if canonical || t.colour_iterations == 0 {
+        None
+    } else {
+        let schedule = Schedule { iterations: t.colour_iterations, ..schedule };
+        let fit = fit_colours(&mut trainer, &mut stage, &schedule, &mut settings, &mut rng)?;
         if let Some(detail) = fit.non_finite {
             return Err(non_finite(detail));
         }
-        (colour_run_iterations, colour_s) = (fit.iterations, fit.train_s);
-    }
+        Some(fit)
+    };
+    let (colour_run_iterations, colour_s) = colour.map_or((0, 0.0), |c| (c.iterations, c.train_s));
     let FrameStage { terms, mesh, .. } = stage;
     let scene = trainer.scene()?;
     mesh.positions = scene.positions.clone();
@@ -243,6 +242,20 @@ pub fn optimize_frame(
     (report.psnr_gs, report.ssim_gs, report.psnr_mesh) =
         evaluate(&mut trainer, &terms.mesh_term, task.eval, &settings)?;
     Ok((scene, report))
+}
+
+/// A later frame's colour fit once its shape is found: `schedule.iterations` steps of the same
+/// loss in which only the SH coefficients move.
+fn fit_colours(
+    trainer: &mut Trainer,
+    stage: &mut FrameStage,
+    schedule: &Schedule,
+    settings: &mut RenderSettings,
+    rng: &mut SplitMix64,
+) -> Result<LoopOutcome, TrainError> {
+    stage.colour_only = true;
+    let (steps, views) = (schedule.iterations, trainer.views());
+    optimize(trainer, stage, schedule, Plateau::new(steps, steps, views, 0.0), settings, rng)
 }
 
 /// The terms a frame adds to the splatting loss, on the GPU.
