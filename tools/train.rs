@@ -4,8 +4,10 @@ use crate::dataset::PixelCentersArg;
 use crate::track::UpArg;
 use anyhow::{bail, Context, Result};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Instant;
 use tagsplat::dataset::LoadOptions;
 use tagsplat::gpu::GpuContext;
 use tagsplat::train::pipeline::{run_train, TrainConfig, TrainJob, TrainProgress, TrainReport};
@@ -76,7 +78,8 @@ pub fn train(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: TrainArgs)
     Ok(())
 }
 
-/// Runs the job with a bar per frame and one overall.
+/// Runs the job with a bar per frame and one overall, or, when stderr is not a terminal (a log
+/// file, CI), a line as each frame starts.
 pub fn run_with_progress(ctx: &Arc<GpuContext>, job: &TrainJob) -> Result<TrainReport> {
     let bars = MultiProgress::new();
     let style = |template| {
@@ -87,7 +90,13 @@ pub fn run_with_progress(ctx: &Arc<GpuContext>, job: &TrainJob) -> Result<TrainR
     let frame_bar = bars.add(
         ProgressBar::new(0).with_style(style("frame {msg:>4} {bar:30} {pos}/{len} it  {per_sec}")),
     );
+    let (plain, started, mut current) = (!std::io::stderr().is_terminal(), Instant::now(), None);
     let mut progress = |p: TrainProgress| {
+        if plain && current != Some(p.frame) {
+            current = Some(p.frame);
+            let (frame, end, s) = (p.frame, p.frames_end, started.elapsed().as_secs_f64());
+            eprintln!("frame {frame} (of {end}) started at {s:.1} s");
+        }
         overall.set_length(p.frames_end as u64);
         overall.set_position(p.frame as u64);
         frame_bar.set_message(p.frame.to_string());
