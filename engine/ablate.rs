@@ -71,6 +71,8 @@ pub struct TemporalAblationJob {
     pub frame0: PathBuf,
     /// The frames each variant trains and is scored on; frame 0 comes from `frame0`.
     pub frames: Range<usize>,
+    /// The variants to run, by name (see [`temporal_ablations`]); empty: all of them.
+    pub variants: Vec<String>,
 }
 
 /// One variant's scores (fractions of the benchmark's size, dB, seconds).
@@ -98,6 +100,14 @@ pub enum AblateError {
     /// The dataset has no ground truth to score against.
     #[error("{0} has no gt/info.json: temporal ablations need a benchmark with ground truth")]
     NoGroundTruth(PathBuf),
+    /// A variant asked for by name is not one of [`temporal_ablations`].
+    #[error("no temporal ablation is named {name:?}; the variants are: {known}")]
+    UnknownVariant {
+        /// The name asked for.
+        name: String,
+        /// Every variant's name, comma-separated.
+        known: String,
+    },
     /// The given train output has no complete frame 0.
     #[error("{}: no finished frame 0 to continue", .0.display())]
     NoFrame0(PathBuf),
@@ -117,8 +127,28 @@ pub enum AblateError {
     },
 }
 
-/// Runs every variant into `out/<n>_<name>/` (a finished variant is resumed, not redone) and
-/// writes `out/ablation.md` and `out/ablation.json`.
+/// The variants named in `names` (every one when empty), each with its place in
+/// [`temporal_ablations`], in that list's order and once each whatever the order and repeats
+/// of `names`. The place numbers the variant's output folder, so a row run alone lands where
+/// a run of all of them puts it.
+pub fn select_temporal_ablations(names: &[String]) -> Result<Vec<(usize, Ablation)>, AblateError> {
+    let all = temporal_ablations();
+    let mut chosen = Vec::new();
+    for name in names {
+        let place = all.iter().position(|a| a.name == name).ok_or_else(|| {
+            let known = all.iter().map(|a| a.name).collect::<Vec<_>>().join(", ");
+            AblateError::UnknownVariant { name: name.clone(), known }
+        })?;
+        chosen.push(place);
+    }
+    chosen.sort_unstable();
+    chosen.dedup();
+    let keep = |i: &usize| names.is_empty() || chosen.binary_search(i).is_ok();
+    Ok(all.into_iter().enumerate().filter(|(i, _)| keep(i)).collect())
+}
+
+/// Runs the job's variants into `out/<n>_<name>/` (a finished variant is resumed, not redone)
+/// and writes their rows to `out/ablation.md` and `out/ablation.json`.
 pub fn run_temporal_ablations(
     ctx: &Arc<GpuContext>,
     job: &TemporalAblationJob,
@@ -129,7 +159,7 @@ pub fn run_temporal_ablations(
             .ok_or_else(|| AblateError::NoGroundTruth(job.data.clone()))?,
     )?;
     let mut rows = Vec::new();
-    for (i, ablation) in temporal_ablations().iter().enumerate() {
+    for (i, ablation) in select_temporal_ablations(&job.variants)? {
         let mut config = job.base.clone();
         (ablation.apply)(&mut config);
         let dir = job.out.join(format!("{i}_{}", ablation.name.replace(['/', ' '], "_")));
@@ -216,4 +246,40 @@ fn write_tables(out: &Path, rows: &[TemporalRow]) -> Result<(), AblateError> {
         serde_json::to_writer_pretty(w, rows).map_err(std::io::Error::other)
     })
     .map_err(io(json.clone()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn names(chosen: &[(usize, Ablation)]) -> Vec<(usize, &'static str)> {
+        chosen.iter().map(|(i, a)| (*i, a.name)).collect()
+    }
+
+    #[test]
+    fn no_names_select_every_variant_in_order() {
+        let all = temporal_ablations();
+        let chosen = select_temporal_ablations(&[]).unwrap();
+        let expected: Vec<_> = all.iter().enumerate().map(|(i, a)| (i, a.name)).collect();
+        assert_eq!(names(&chosen), expected);
+    }
+
+    #[test]
+    fn named_variants_keep_their_place_once_each() {
+        let all = temporal_ablations();
+        let (a, b) = (all[1].name.to_string(), all[all.len() - 1].name.to_string());
+        let chosen = select_temporal_ablations(&[b.clone(), a.clone(), b]).unwrap();
+        assert_eq!(
+            names(&chosen),
+            vec![(1, all[1].name), (all.len() - 1, all[all.len() - 1].name)]
+        );
+    }
+
+    #[test]
+    fn an_unknown_name_is_refused_with_the_known_ones() {
+        let err = select_temporal_ablations(&["full model".into(), "w/o luck".into()]).err();
+        let message = err.expect("an unknown name is refused").to_string();
+        assert!(message.contains("\"w/o luck\""), "{message}");
+        assert!(message.contains("full model, w/o deformation graph"), "{message}");
+    }
 }

@@ -87,6 +87,10 @@ pub struct AblateArgs {
     /// Frames of the temporal variants, A..B (default: all).
     #[arg(long, value_parser = crate::train::parse_range)]
     frames: Option<std::ops::Range<usize>>,
+    /// Only these temporal variants, comma-separated names as the table shows them (default:
+    /// all), e.g. --variants "full model,w/o colour fit".
+    #[arg(long, requires = "temporal", value_delimiter = ',')]
+    variants: Vec<String>,
 }
 
 pub fn ablate(ctx: &Arc<GpuContext>, args: &AblateArgs) -> Result<()> {
@@ -116,6 +120,7 @@ pub fn ablate(ctx: &Arc<GpuContext>, args: &AblateArgs) -> Result<()> {
                 base,
                 frame0: frame0.clone(),
                 frames,
+                variants: args.variants.clone(),
             };
             tagsplat::ablate::run_temporal_ablations(ctx, &job, &mut progress)
                 .with_context(|| format!("temporal ablations of {}", args.data.display()))?;
