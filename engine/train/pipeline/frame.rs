@@ -95,77 +95,166 @@ pub struct FrameTask<'a> {
 /// stops improving; frame 0 runs its fixed iterations with densification and pruning.
 pub fn optimize_frame(
     ctx: &Arc<GpuContext>,
-    task: FrameTask,
+    mut task: FrameTask,
     config: &TrainConfig,
     progress: &mut dyn FnMut(u32, u32),
 ) -> Result<(GaussianScene, FrameReport), TrainError> {
     let canonical = task.previous.is_none();
-    let (w, bg, t) = (&config.loss, config.background, &config.temporal);
-    let iterations = if canonical { config.canonical.iterations } else { t.iterations };
+    let (w, t) = (&config.loss, &config.temporal);
     let weights = ImageWeights { gaussians: w.gaussians.channels(), mesh: w.mesh.channels() };
     let extent = scene_extent(&task.train.iter().map(|v| &v.camera).collect::<Vec<_>>());
     let first = task
         .train
         .first()
         .ok_or(TrainError::NoViews { frame: Some(task.frame), problem: "no training views" })?;
-    let mut settings = RenderSettings {
-        background: bg,
-        near: (extent * 1e-3) as f32,
-        far: (extent * 1e3) as f32,
-        sh_degree: config.sh_degree,
-        mask_mode: false,
-    };
+    let mut settings = render_settings(config, extent);
     let mut rng = SplitMix64::new(config.seed ^ task.frame as u64);
     let mut report = empty_report(task.frame);
 
-    let silhouette = if canonical || t.silhouette == 0.0 {
-        None
-    } else {
-        Some(SilhouetteTerm::new(
-            ctx,
-            &task
-                .train
-                .iter()
-                .map(|v| SilhouetteView::from_mask(v.camera, &v.mask()))
-                .collect::<Vec<_>>(),
-        )?)
-    };
-    let mut start = task.start;
-    let mut train_s = 0.0;
-    if let (false, true) = (canonical, t.graph.nodes > 0) {
+    let silhouette = silhouette_term(ctx, &task, canonical, t)?;
+    let (mut start, mut graph_s) = (std::mem::take(&mut task.start), 0.0);
+    if !canonical && t.graph.nodes > 0 {
         let t0 = Instant::now();
-        let no_silhouette;
-        let silhouette = match &silhouette {
-            Some(s) => s,
-            None => {
-                no_silhouette = SilhouetteTerm::new(ctx, &[])?;
-                &no_silhouette
-            }
-        };
-        let (faces, neighbourhoods) =
-            (task.mesh.live_faces(), Neighbourhoods::from_mesh(task.mesh));
-        let input = GraphInput {
-            frame: task.frame,
-            train: task.train,
-            start: &start,
-            frame0: task.frame0.unwrap_or(&start),
-            faces: &faces,
-            neighbourhoods: &neighbourhoods,
-            silhouette,
-        };
-        let (moved, graph) = solve_graph(ctx, &input, config, weights, &settings, &mut rng)?;
-        (start, report.graph, train_s) = (moved, Some(graph), t0.elapsed().as_secs_f64());
+        let graph = GraphRun { silhouette: silhouette.as_ref(), weights, settings: &settings };
+        let (moved, graph) = deform_start(ctx, &task, &start, config, graph, &mut rng)?;
+        (start, report.graph, graph_s) = (moved, Some(graph), t0.elapsed().as_secs_f64());
     }
 
     let mut trainer = Trainer::new(ctx, &start, task.train)?.with_second_render()?;
     task.mesh.positions = start.positions.clone();
-    let mesh_term = MeshTerm::new(
-        ctx,
-        &start.positions,
-        &task.mesh.live_faces(),
-        first.camera.width,
-        first.camera.height,
-    )?;
+    let terms = frame_terms(ctx, &task, &start, &first.camera, t, silhouette)?;
+    let (schedule, plateau) = frame_schedule(config, canonical, weights, task.train.len());
+    let budget = match config.canonical.budget {
+        0 => covered_pixels(task.train),
+        b => b as usize,
+    };
+    let mut stage = FrameStage {
+        config,
+        extent,
+        diagonal: bounding_diagonal(&start.positions) as f32,
+        near: settings.near,
+        canonical,
+        colour_only: false,
+        weights,
+        terms,
+        mesh: task.mesh,
+        densify_camera: (first.camera, budget),
+        report: &mut report,
+        progress,
+    };
+    let run = optimize(&mut trainer, &mut stage, &schedule, plateau, &mut settings, &mut rng)?;
+    let run = finite(run, task.frame)?;
+    let (colour_iterations, colour_s) = if canonical || t.colour_iterations == 0 {
+        (0, 0.0)
+    } else {
+        let schedule = Schedule { iterations: t.colour_iterations, ..schedule };
+        let fit = fit_colours(&mut trainer, &mut stage, &schedule, &mut settings, &mut rng)?;
+        let fit = finite(fit, task.frame)?;
+        (fit.iterations, fit.train_s)
+    };
+    let FrameStage { terms, mesh, .. } = stage;
+    let scene = trainer.scene()?;
+    mesh.positions = scene.positions.clone();
+    report.stop_reason = run.stop_reason;
+    report.truncated_steps = run.truncated_steps;
+    report.colour_iterations = colour_iterations;
+    (report.iterations, report.wall_s, report.gaussians, report.passes_ms) =
+        (run.iterations, graph_s + run.train_s + colour_s, scene.len(), run.passes_ms);
+    (report.psnr_gs, report.ssim_gs, report.psnr_mesh) =
+        evaluate(&mut trainer, &terms.mesh_term, task.eval, &settings)?;
+    Ok((scene, report))
+}
+
+/// Render settings with the near and far planes at 1e-3 and 1e3 × the cameras' `extent`.
+fn render_settings(config: &TrainConfig, extent: f64) -> RenderSettings {
+    RenderSettings {
+        background: config.background,
+        near: (extent * 1e-3) as f32,
+        far: (extent * 1e3) as f32,
+        sh_degree: config.sh_degree,
+        mask_mode: false,
+    }
+}
+
+/// `run`, or the error naming what went non-finite in it.
+fn finite(mut run: LoopOutcome, frame: usize) -> Result<LoopOutcome, TrainError> {
+    match run.non_finite.take() {
+        None => Ok(run),
+        Some(detail) => Err(TrainError::NonFinite {
+            frame: Some(frame),
+            detail: format!("{detail}; the finished frames are kept"),
+        }),
+    }
+}
+
+/// The silhouette term of a later frame's training masks (None on frame 0 or when its
+/// weight is 0).
+fn silhouette_term(
+    ctx: &Arc<GpuContext>,
+    task: &FrameTask,
+    canonical: bool,
+    t: &TemporalConfig,
+) -> Result<Option<SilhouetteTerm>, TrainError> {
+    if canonical || t.silhouette == 0.0 {
+        return Ok(None);
+    }
+    let views: Vec<_> =
+        task.train.iter().map(|v| SilhouetteView::from_mask(v.camera, &v.mask())).collect();
+    Ok(Some(SilhouetteTerm::new(ctx, &views)?))
+}
+
+/// What the graph stage shares with the refinement.
+struct GraphRun<'a> {
+    /// None when the silhouette weight is 0: the graph then runs with an empty term.
+    silhouette: Option<&'a SilhouetteTerm>,
+    weights: ImageWeights,
+    settings: &'a RenderSettings,
+}
+
+/// `start`, a later frame's extrapolated pose (`task.start` has been taken from the task),
+/// moved by the deformation graph, and the graph's report.
+fn deform_start(
+    ctx: &Arc<GpuContext>,
+    task: &FrameTask,
+    start: &GaussianScene,
+    config: &TrainConfig,
+    run: GraphRun,
+    rng: &mut SplitMix64,
+) -> Result<(GaussianScene, GraphReport), TrainError> {
+    let no_silhouette;
+    let silhouette = match run.silhouette {
+        Some(s) => s,
+        None => {
+            no_silhouette = SilhouetteTerm::new(ctx, &[])?;
+            &no_silhouette
+        }
+    };
+    let (faces, neighbourhoods) = (task.mesh.live_faces(), Neighbourhoods::from_mesh(task.mesh));
+    let input = GraphInput {
+        frame: task.frame,
+        train: task.train,
+        start,
+        frame0: task.frame0.unwrap_or(start),
+        faces: &faces,
+        neighbourhoods: &neighbourhoods,
+        silhouette,
+    };
+    solve_graph(ctx, &input, config, run.weights, run.settings, rng)
+}
+
+/// The mesh (rendered at `camera`'s size), regularizer, temporal-reference and coverage terms
+/// of a frame starting at `start`, with its silhouette term.
+fn frame_terms(
+    ctx: &Arc<GpuContext>,
+    task: &FrameTask,
+    start: &GaussianScene,
+    camera: &Camera,
+    t: &TemporalConfig,
+    silhouette: Option<SilhouetteTerm>,
+) -> Result<FrameTerms, TrainError> {
+    let canonical = task.previous.is_none();
+    let faces = task.mesh.live_faces();
+    let mesh_term = MeshTerm::new(ctx, &start.positions, &faces, camera.width, camera.height)?;
     let mut regs = Regularizers::new(ctx)?;
     regs.upload(&refinement_neighbourhoods(task.mesh, canonical, t)?)?;
     let reference = t
@@ -174,12 +263,24 @@ pub fn optimize_frame(
         .map(|p| GaussianBuffers::from_scene(ctx, p))
         .transpose()?;
     let pixels = task.train.iter().map(|v| v.target.len()).max().unwrap_or(0);
-    let coverage = if canonical {
-        None
-    } else {
-        Some(CoverageTerm::new(ctx, start.len(), pixels, t.coverage_radius)?)
+    let coverage = match canonical {
+        true => None,
+        false => Some(CoverageTerm::new(ctx, start.len(), pixels, t.coverage_radius)?),
     };
-    let c = &config.canonical;
+    Ok(FrameTerms { mesh_term, regs, reference, silhouette, coverage })
+}
+
+/// The refinement's schedule and stopping rule: frame 0 runs all its iterations with the SH
+/// ramp and densification, reading the losses every `stats_every`; a later frame stops at
+/// its plateau, tested once per pass through its `views`.
+fn frame_schedule(
+    config: &TrainConfig,
+    canonical: bool,
+    weights: ImageWeights,
+    views: usize,
+) -> (Schedule, Plateau) {
+    let (c, t) = (&config.canonical, &config.temporal);
+    let iterations = if canonical { c.iterations } else { t.iterations };
     let schedule = Schedule {
         iterations,
         sh_ramp: canonical.then_some((config.sh_degree, config.sh_increase_every)),
@@ -191,57 +292,12 @@ pub fn optimize_frame(
         splat_weights: weights.gaussians,
         checkpoint: false,
     };
-    // Frame 0 runs all its iterations (min = max), reading the losses every `stats_every`.
     let plateau = if canonical {
         Plateau::new(iterations, iterations, config.report.stats_every as usize, 0.0)
     } else {
-        Plateau::new(t.min_iterations, iterations, task.train.len(), t.tolerance)
+        Plateau::new(t.min_iterations, iterations, views, t.tolerance)
     };
-    let budget = if c.budget > 0 { c.budget as usize } else { covered_pixels(task.train) };
-    let mut stage = FrameStage {
-        config,
-        extent,
-        diagonal: bounding_diagonal(&start.positions) as f32,
-        near: settings.near,
-        canonical,
-        colour_only: false,
-        weights,
-        terms: FrameTerms { mesh_term, regs, reference, silhouette, coverage },
-        mesh: task.mesh,
-        densify_camera: (first.camera, budget),
-        report: &mut report,
-        progress,
-    };
-    let non_finite = |detail: String| TrainError::NonFinite {
-        frame: Some(task.frame),
-        detail: format!("{detail}; the finished frames are kept"),
-    };
-    let run = optimize(&mut trainer, &mut stage, &schedule, plateau, &mut settings, &mut rng)?;
-    if let Some(detail) = run.non_finite {
-        return Err(non_finite(detail));
-    }
-    let colour = if canonical || t.colour_iterations == 0 {
-        None
-    } else {
-        let schedule = Schedule { iterations: t.colour_iterations, ..schedule };
-        let fit = fit_colours(&mut trainer, &mut stage, &schedule, &mut settings, &mut rng)?;
-        if let Some(detail) = fit.non_finite {
-            return Err(non_finite(detail));
-        }
-        Some(fit)
-    };
-    let (colour_run_iterations, colour_s) = colour.map_or((0, 0.0), |c| (c.iterations, c.train_s));
-    let FrameStage { terms, mesh, .. } = stage;
-    let scene = trainer.scene()?;
-    mesh.positions = scene.positions.clone();
-    report.stop_reason = run.stop_reason;
-    report.truncated_steps = run.truncated_steps;
-    report.colour_iterations = colour_run_iterations;
-    (report.iterations, report.wall_s, report.gaussians, report.passes_ms) =
-        (run.iterations, train_s + run.train_s + colour_s, scene.len(), run.passes_ms);
-    (report.psnr_gs, report.ssim_gs, report.psnr_mesh) =
-        evaluate(&mut trainer, &terms.mesh_term, task.eval, &settings)?;
-    Ok((scene, report))
+    (schedule, plateau)
 }
 
 /// A later frame's colour fit once its shape is found: `schedule.iterations` steps of the same
