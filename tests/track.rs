@@ -526,3 +526,82 @@ fn track_cli_takes_a_dataset_camera_by_name() {
     assert!(stderr.contains("cam000, cam001, cam002, cam003"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--overlay DIR` with `--data DIR --camera NAME`: one PNG per frame, the camera's image with
+/// each point drawn in its plot colour. A visible point far from the others shows its colour
+/// at its pixel; a pixel far from every point keeps the footage's value.
+#[test]
+fn track_cli_draws_the_points_over_the_cameras_images() {
+    use tagsplat::io::image::read_image;
+    use tagsplat::synth::{generate, SubjectSource, SynthOptions};
+    use tagsplat::track::overlay::{mark_colour, mark_radius};
+    let dir = temp_dir("track-overlay");
+    let data = dir.join("data");
+    let o = SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 2 },
+        views: 4,
+        frames: 3,
+        resolution: 64,
+        samples: 1,
+        track_vertices: 3,
+        track_surface: 3,
+        ..Default::default()
+    };
+    generate(&o, &data).unwrap();
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+        .args(["track".as_ref(), "--sequence".as_ref(), data.join("meshes").as_os_str()])
+        .args(["--points".as_ref(), data.join("points.csv").as_os_str()])
+        .args(["--out".as_ref(), dir.join("tracks.csv").as_os_str()])
+        .args(["--data".as_ref(), data.as_os_str(), "--camera".as_ref(), "cam001".as_ref()])
+        .args(["--overlay".as_ref(), dir.join("overlay").as_os_str()])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let rows: Vec<(usize, f64, f64, bool)> = std::fs::read_to_string(dir.join("tracks.2d.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            let number = |s: &str| s.parse::<f64>().unwrap_or(f64::NAN);
+            (f[1].parse().unwrap(), number(f[2]), number(f[3]), f[4] == "1")
+        })
+        .collect();
+    let points = rows.len() / 3;
+    let footage = tagsplat::dataset::Dataset::load(&data).unwrap();
+    let radius = mark_radius(64, 64);
+    let mut checked = 0;
+    for t in 0..3 {
+        let overlay = read_image(&dir.join(format!("overlay/{t:06}.png"))).unwrap();
+        assert_eq!((overlay.width, overlay.height, overlay.channels), (64, 64, 3));
+        let frame = &rows[t * points..(t + 1) * points];
+        let near = |x: f64, y: f64, skip: usize, reach: f64| {
+            frame.iter().enumerate().any(|(j, r)| j != skip && (r.1 - x).hypot(r.2 - y) <= reach)
+        };
+        for (i, &(f, u, v, visible)) in frame.iter().enumerate() {
+            assert_eq!(f, t);
+            if visible && !near(u, v, i, 2.0 * radius + 2.0) {
+                let (x, y) = (u.floor() as u32, v.floor() as u32);
+                let pixel = [0, 1, 2].map(|c| overlay.at(x, y, c));
+                let want = mark_colour(i);
+                assert!(
+                    pixel.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-6),
+                    "frame {t} point {i}: {pixel:?} against {want:?}"
+                );
+                checked += 1;
+            }
+        }
+        let view = footage.frames[t].views.iter().position(|v| v.camera == 1).unwrap();
+        let image = footage.image(t, view).unwrap();
+        let (x, y) = (0..64 * 64)
+            .map(|p| (p % 64, p / 64))
+            .find(|&(x, y)| !near(x as f64 + 0.5, y as f64 + 0.5, usize::MAX, radius + 1.0))
+            .unwrap();
+        for c in 0..3 {
+            let source = (image.at(x, y, c).clamp(0.0, 1.0) * 255.0).round() / 255.0;
+            assert!((overlay.at(x, y, c) - source).abs() < 1e-6, "footage at ({x}, {y})");
+        }
+    }
+    assert!(checked >= 3, "only {checked} visible points lie apart from the others");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

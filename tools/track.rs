@@ -5,6 +5,7 @@ use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use tagsplat::camera::Camera;
 use tagsplat::dataset::Dataset;
+use tagsplat::io::image::write_png;
 use tagsplat::sequence::orient::{Orientation, SignedAxis, UpAxis};
 use tagsplat::sequence::usd::{write_usda, UsdTracks};
 use tagsplat::sequence::{FrameFormat, MeshSequence};
@@ -12,9 +13,10 @@ use tagsplat::track::bench::{bench_track, TrackBenchReport};
 use tagsplat::track::output::{
     write_image_tracks_csv, write_report_json, write_tracks_csv, write_unbound_csv,
 };
+use tagsplat::track::overlay::{draw_marks, mark_colour, mark_radius, rgb_of, Mark};
 use tagsplat::track::plot::write_plot;
 use tagsplat::track::queries::{read_pixels, read_points};
-use tagsplat::track::{project_tracks, track as track_sequence, Queries, TrackReport};
+use tagsplat::track::{project_tracks, track as track_sequence, ImagePoint, Queries, TrackReport};
 
 #[derive(Args)]
 pub struct TrackArgs {
@@ -38,6 +40,11 @@ pub struct TrackArgs {
     /// `tagsplat dataset info`).
     #[arg(long, requires = "camera")]
     data: Option<PathBuf>,
+    /// With --data and --camera: a folder of PNGs, one per frame (000000.png, ...), each that
+    /// camera's image of the frame with every tracked point drawn in its plot colour, a disk
+    /// where the camera sees it and a ring where the frame's surface hides it.
+    #[arg(long, requires = "data")]
+    overlay: Option<PathBuf>,
     /// Trajectories out: CSV `id,frame,x,y,z`.
     #[arg(long)]
     out: PathBuf,
@@ -79,10 +86,14 @@ pub fn track(args: TrackArgs) -> Result<()> {
                 .with_context(|| format!("cannot create the folder {}", folder.display()))?;
         }
     }
-    let camera = match (&args.camera, &args.data) {
+    let footage = match (&args.camera, &args.data) {
         (Some(name), Some(data)) => Some(dataset_camera(data, &name.to_string_lossy())?),
+        _ => None,
+    };
+    let camera = match (&args.camera, &footage) {
+        (_, Some((dataset, index))) => Some(dataset.cameras[*index]),
         (Some(file), None) => Some(Camera::load_json(file)?),
-        (None, _) => None,
+        (None, None) => None,
     };
     let queries = match (&args.points, &args.pixels, &camera) {
         (Some(points), _, _) => Queries::Points(read_points(points)?),
@@ -106,6 +117,9 @@ pub fn track(args: TrackArgs) -> Result<()> {
     if let Some(camera) = &camera {
         let seen = project_tracks(&sequence.faces, &sequence.frames, &report.points, camera)?;
         write_image_tracks_csv(&args.out.with_extension("2d.csv"), &seen)?;
+        if let (Some(folder), Some((dataset, index))) = (&args.overlay, &footage) {
+            write_overlays(folder, dataset, *index, &seen, report.points.len())?;
+        }
     }
     if let Some(usd) = &args.usd {
         let ids: Vec<String> = report.points.iter().map(|p| p.id.clone()).collect();
@@ -166,18 +180,55 @@ fn report_unbound(args: &TrackArgs, queries: &Queries, report: &TrackReport) -> 
 }
 
 /// `tracks.csv` → `tracks.unbound.csv`.
-/// The camera called `name` in the dataset at `data`; the error lists the names it has.
-fn dataset_camera(data: &Path, name: &str) -> Result<Camera> {
+/// The dataset at `data` and the index of its camera called `name`; the error lists the names
+/// it has.
+fn dataset_camera(data: &Path, name: &str) -> Result<(Dataset, usize)> {
     let dataset = Dataset::load(data)
         .with_context(|| format!("cannot load the dataset {} for --camera", data.display()))?;
     match dataset.camera_names.iter().position(|n| n == name) {
-        Some(i) => Ok(dataset.cameras[i]),
+        Some(i) => Ok((dataset, i)),
         None => bail!(
             "{}: no camera named '{name}'; it has {}",
             data.display(),
             dataset.camera_names.join(", ")
         ),
     }
+}
+
+/// `folder/NNNNNN.png` for every frame of `seen` (frame-major, `points` per frame): camera
+/// `camera`'s image of the frame with the points drawn (`tagsplat::track::overlay`). Frames
+/// where the dataset has no image from that camera are named on stderr.
+fn write_overlays(
+    folder: &Path,
+    dataset: &Dataset,
+    camera: usize,
+    seen: &[ImagePoint],
+    points: usize,
+) -> Result<()> {
+    std::fs::create_dir_all(folder)
+        .with_context(|| format!("cannot create the folder {}", folder.display()))?;
+    let mut missing = Vec::new();
+    for (t, frame) in seen.chunks(points.max(1)).enumerate() {
+        let views = dataset.frames.get(t).map_or(&[][..], |f| &f.views);
+        let Some(view) = views.iter().position(|v| v.camera == camera) else {
+            missing.push(t);
+            continue;
+        };
+        let mut image = rgb_of(&*dataset.image(t, view)?);
+        let marks: Vec<Mark> = frame
+            .iter()
+            .enumerate()
+            .map(|(i, p)| Mark { u: p.u, v: p.v, visible: p.visible, rgb: mark_colour(i) })
+            .collect();
+        let radius = mark_radius(image.width, image.height);
+        draw_marks(&mut image, &marks, radius);
+        write_png(&folder.join(format!("{t:06}.png")), &image)?;
+    }
+    if !missing.is_empty() {
+        let name = &dataset.camera_names[camera];
+        eprintln!("warning: no overlay for frames {missing:?}: the dataset has no image from {name} there");
+    }
+    Ok(())
 }
 
 fn unbound_path(out: &Path) -> PathBuf {

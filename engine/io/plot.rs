@@ -37,12 +37,27 @@ const HEIGHT: f64 = 420.0;
 const INSET: [f64; 4] = [78.0, 16.0, 34.0, 52.0];
 /// Legend rows shown; more series are summarised in one line.
 const LEGEND_ROWS: usize = 8;
-const PALETTE: [&str; 8] =
-    ["#d62728", "#1f77b4", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
+const PALETTE: [[u8; 3]; 8] = [
+    [0xd6, 0x27, 0x28],
+    [0x1f, 0x77, 0xb4],
+    [0x2c, 0xa0, 0x2c],
+    [0xff, 0x7f, 0x0e],
+    [0x94, 0x67, 0xbd],
+    [0x8c, 0x56, 0x4b],
+    [0xe3, 0x77, 0xc2],
+    [0x17, 0xbe, 0xcf],
+];
 
-/// The colour of series `i`, the same in every panel.
-pub fn colour(i: usize) -> &'static str {
+/// The colour of series `i` as 8-bit RGB, the same in every panel (and in `track`'s image
+/// overlays).
+pub fn colour_rgb(i: usize) -> [u8; 3] {
     PALETTE[i % PALETTE.len()]
+}
+
+/// The colour of series `i` as an SVG colour (`#rrggbb`).
+pub fn colour(i: usize) -> String {
+    let [r, g, b] = colour_rgb(i);
+    format!("#{r:02x}{g:02x}{b:02x}")
 }
 
 /// Writes `panels` side by side as one SVG file, atomically.
@@ -148,7 +163,7 @@ fn draw_panel(out: &mut String, panel: &Panel) {
         escape(&panel.y_label)
     );
     for (i, series) in panel.series.iter().enumerate() {
-        draw_series(out, &frame, series, colour(i));
+        draw_series(out, &frame, series, &colour(i));
     }
     draw_legend(out, &panel.series, right);
 }
@@ -168,7 +183,7 @@ fn draw_series(out: &mut String, frame: &Frame, series: &Series, colour: &str) {
 
 fn draw_legend(out: &mut String, series: &[Series], right: f64) {
     let shown = series.len().min(LEGEND_ROWS);
-    let mut rows: Vec<(String, Option<&str>)> = series[..shown]
+    let mut rows: Vec<(String, Option<String>)> = series[..shown]
         .iter()
         .enumerate()
         .map(|(i, s)| (escape(&s.name), Some(colour(i))))

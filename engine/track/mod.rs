@@ -7,13 +7,15 @@
 //! - [`bind`]: query points → bindings, refusing points too far from the surface.
 //! - [`trajectory`]: bindings → positions in every frame.
 //! - [`queries`]: `points.csv` / `pixels.csv` readers; [`output`]: `tracks.csv` / JSON writers.
-//! - [`plot`]: an SVG of the trajectories; [`project`]: tracks seen through a camera.
+//! - [`plot`]: an SVG of the trajectories; [`project`]: tracks seen through a camera;
+//!   [`overlay`]: those drawn over the camera's images.
 //! - [`run`]: one tracking run from queries to report.
 //! - [`bench`](mod@bench): the `bench track` measurement.
 
 pub mod bench;
 pub mod bind;
 pub mod output;
+pub mod overlay;
 pub mod plot;
 pub mod project;
 pub mod queries;
