@@ -179,7 +179,6 @@ fn report_unbound(args: &TrackArgs, queries: &Queries, report: &TrackReport) -> 
     Ok(())
 }
 
-/// `tracks.csv` → `tracks.unbound.csv`.
 /// The dataset at `data` and the index of its camera called `name`; the error lists the names
 /// it has.
 fn dataset_camera(data: &Path, name: &str) -> Result<(Dataset, usize)> {
@@ -231,6 +230,7 @@ fn write_overlays(
     Ok(())
 }
 
+/// `tracks.csv` → `tracks.unbound.csv`.
 fn unbound_path(out: &Path) -> PathBuf {
     out.with_extension("unbound.csv")
 }
