@@ -9,8 +9,8 @@ layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) readonly buffer RestPositions { float rest_positions[]; };
 layout(std430, binding = 1) readonly buffer RestRotations { vec4 rest_rotations[]; };
-layout(std430, binding = 2) readonly buffer BoundNodes { uvec4 bound_nodes[]; };
-layout(std430, binding = 3) readonly buffer BoundWeights { vec4 bound_weights[]; };
+layout(std430, binding = 2) readonly buffer BoundNodes { uint bound_nodes[]; };
+layout(std430, binding = 3) readonly buffer BoundWeights { float bound_weights[]; };
 layout(std430, binding = 4) readonly buffer NodeRest { vec4 node_rest[]; };
 layout(std430, binding = 5) readonly buffer NodeTranslations { float node_translations[]; };
 layout(std430, binding = 6) readonly buffer NodeRotations { vec4 node_rotations[]; };
@@ -23,14 +23,12 @@ void main() {
         return;
     }
     vec3 x = vec3(rest_positions[3u * i], rest_positions[3u * i + 1u], rest_positions[3u * i + 2u]);
-    uvec4 nodes = bound_nodes[i];
-    vec4 weights = bound_weights[i];
     vec3 p = vec3(0.0);
     vec4 q = vec4(0.0);
     for (uint s = 0u; s < NODES_PER_VERTEX; s++) {
-        float w = weights[s];
+        float w = bound_weights[NODES_PER_VERTEX * i + s];
         if (w > 0.0) {
-            uint k = nodes[s];
+            uint k = bound_nodes[NODES_PER_VERTEX * i + s];
             vec4 qk = unit_quat(node_rotations[k]);
             vec3 g = node_rest[k].xyz;
             vec3 t = vec3(node_translations[3u * k], node_translations[3u * k + 1u], node_translations[3u * k + 2u]);
