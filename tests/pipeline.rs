@@ -267,13 +267,14 @@ fn the_colour_fit_gives_a_frame_its_own_shading_and_leaves_its_shape() {
     copy_frame0(&fitted, &frozen).unwrap();
     let with =
         run_train(g.ctx(), &job(&data, &fitted, config.clone(), Some(0..2)), &mut |_| {}).unwrap();
+    let fit_steps = config.temporal.colour_iterations;
     let mut off = config;
     off.temporal.colour_iterations = 0;
     let without = run_train(g.ctx(), &job(&data, &frozen, off, Some(0..2)), &mut |_| {}).unwrap();
 
     let frame1 = |r: &TrainReport| r.frames.iter().find(|f| f.frame == 1).unwrap().clone();
     let (a, b) = (frame1(&with), frame1(&without));
-    assert_eq!((a.colour_iterations, b.colour_iterations), (32, 0));
+    assert_eq!((a.colour_iterations, b.colour_iterations), (fit_steps, 0));
     let mesh = |out: &Path| TriMesh::read_ply(&out.join("meshes/000001.ply")).unwrap();
     assert_eq!(mesh(&fitted).positions, mesh(&frozen).positions, "the fit moves colours only");
     let message = format!(
@@ -281,7 +282,8 @@ fn the_colour_fit_gives_a_frame_its_own_shading_and_leaves_its_shape() {
         a.psnr_gs, a.psnr_mesh, b.psnr_gs, b.psnr_mesh
     );
     eprintln!("{message}");
-    // Measured on lavapipe (AMD EPYC host): 26.92 / 29.38 dB with the fit, 24.64 / 26.97 without.
+    // Measured on lavapipe (AMD EPYC host, the 16-step fit at 20×): 26.77 / 29.12 dB with the
+    // fit, 24.39 / 26.76 without.
     assert!(a.psnr_mesh > b.psnr_mesh + 1.0 && a.psnr_gs > b.psnr_gs + 1.0, "{message}");
     let _ = std::fs::remove_dir_all(&dir);
 }
