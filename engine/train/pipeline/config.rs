@@ -256,7 +256,7 @@ impl Default for TemporalConfig {
         Self {
             iterations: 300,
             min_iterations: 60,
-            tolerance: 0.005,
+            tolerance: 0.02,
             freeze_appearance: true,
             colour_iterations: 16,
             colour_lr_scale: 20.0,
