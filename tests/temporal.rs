@@ -77,12 +77,8 @@ fn the_temporal_stage_tracks_a_run_that_the_previous_stage_loses() {
         per_frame(&old_scores)
     );
     eprintln!("{message}");
-    // Measured on lavapipe (AMD EPYC host), the Laplacian per diagonal²: 2.51 % against 4.98 %
-    // (2.73 % without the coarse graph; 2.40 % against 5.32 % with the Laplacian per unit²);
-    // with the thickness-weighted temporal terms (27 November) 2.49 % against 4.98 %; with the
-    // colour fit (later the same day; the previous stage has none) 2.50 % against 4.98 %; with
-    // 120 graph iterations per level instead of 150 (later still) 2.50 % against 4.98 %, and
-    // the same with the 16-step colour fit at 20×; with a 2 % plateau (late that day) 2.78 %.
+    // Measured on lavapipe (AMD EPYC host, 27 November, today's defaults): 2.78 % against
+    // 4.98 %; 2.50 % with the 0.5 % plateau before it (docs/pipeline.md has the history).
     const BOUND: f64 = 0.035;
     assert!(
         new_scores.tracking_rmse_per_height < BOUND && old_scores.tracking_rmse_per_height > BOUND,
