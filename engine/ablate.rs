@@ -32,6 +32,7 @@ pub fn temporal_ablations() -> Vec<Ablation> {
         Ablation { name: "w/o silhouette term", apply: |c| c.temporal.silhouette = 0.0 },
         Ablation { name: "w/o coverage term", apply: |c| c.temporal.coverage = 0.0 },
         Ablation { name: "w/o limb stiffness", apply: |c| c.temporal.limb_thickness = 0.0 },
+        Ablation { name: "w/o Huber strain", apply: |c| c.loss.huber = 0.0 },
         Ablation { name: "w/o colour fit", apply: |c| c.temporal.colour_iterations = 0 },
         Ablation {
             name: "w/o adaptive iterations",
@@ -45,9 +46,10 @@ pub fn temporal_ablations() -> Vec<Ablation> {
 }
 
 /// The temporal stage before the deformation graph, the silhouette and coverage terms, the
-/// limb stiffness, the adaptive stop and the colour fit: 300 per-vertex iterations per frame
-/// from the extrapolated pose.
+/// limb stiffness, the Huber strain, the adaptive stop and the colour fit: 300 per-vertex
+/// iterations per frame from the extrapolated pose.
 pub fn previous_temporal_stage(c: &mut TrainConfig) {
+    c.loss.huber = 0.0;
     (
         c.temporal.graph.nodes,
         c.temporal.silhouette,

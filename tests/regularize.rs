@@ -68,7 +68,8 @@ fn params(s: &GaussianScene) -> Params {
     }
 }
 
-/// Each term alone (weight 1.5), then all at their default weights.
+/// Each term alone (weight 1.5; edge length and rigidity also with a Huber δ), then all at
+/// their default weights, and with a δ.
 fn weight_sets() -> Vec<(&'static str, Weights)> {
     let zero = Weights {
         scale_2d: 0.0,
@@ -78,6 +79,7 @@ fn weight_sets() -> Vec<(&'static str, Weights)> {
         rigidity: 0.0,
         rotation: 0.0,
         lambda_w: 1.0,
+        huber: 0.0,
     };
     vec![
         ("scale_2d", Weights { scale_2d: 1.5, ..zero }),
@@ -86,7 +88,12 @@ fn weight_sets() -> Vec<(&'static str, Weights)> {
         ("edge_length", Weights { edge_length: 1.5, ..zero }),
         ("rigidity", Weights { rigidity: 1.5, ..zero }),
         ("rotation", Weights { rotation: 1.5, ..zero }),
+        // δ near the residuals' size (noise of 0.2 edge lengths on both frames), so some are
+        // below it and some beyond.
+        ("edge_length huber", Weights { edge_length: 1.5, huber: 0.2, ..zero }),
+        ("rigidity huber", Weights { rigidity: 1.5, huber: 0.2, ..zero }),
         ("all", Weights::default()),
+        ("all huber", Weights { huber: 0.2, ..Weights::default() }),
     ]
 }
 

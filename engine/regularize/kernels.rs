@@ -28,6 +28,7 @@ struct Push {
     w_edge_length: f32,
     w_rigidity: f32,
     w_rotation: f32,
+    huber: f32,
 }
 push_layout!(
     Push: [REGULARIZE_VERTEX, REGULARIZE_GATHER],
@@ -42,6 +43,7 @@ push_layout!(
         w_edge_length,
         w_rigidity,
         w_rotation,
+        huber,
     ]
 );
 
@@ -133,6 +135,7 @@ impl Regularizers {
             w_edge_length: weights.edge_length,
             w_rigidity: weights.rigidity,
             w_rotation: weights.rotation,
+            huber: weights.huber * self.mean_edge_length,
         };
         let groups = self.count.div_ceil(WORKGROUP as usize) as u64;
         self.loss_sums.clear(rec);

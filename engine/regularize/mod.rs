@@ -7,9 +7,12 @@
 //! - `laplacian` = (1/n) Σᵢ ‖δᵢ‖², δᵢ = μᵢ − (1/mᵢ) Σ_{j∈N(i)} μⱼ (eq. 5).
 //! - `normal` = Σᵢ ‖R(q̂ᵢ) e_z − Nᵢ/‖Nᵢ‖‖, Nᵢ = Σ over faces (i, b, c) of (b − i) × (c − i):
 //!   the area-weighted vertex normal from the current positions (eq. 6).
-//! - `edge_length` = Σ over edges ½(sᵢ + sⱼ) |lᵢⱼ − l'ᵢⱼ| (eq. 9).
-//! - `rigidity` = Σᵢ sᵢ Σ_{j∈N(i)} ωᵢⱼ ‖(μ'ⱼ − μ'ᵢ) − ΔRᵢ (μⱼ − μᵢ)‖, ΔRᵢ = R(q̂'ᵢ) R(q̂ᵢ)ᵀ
+//! - `edge_length` = Σ over edges ½(sᵢ + sⱼ) h(|lᵢⱼ − l'ᵢⱼ|) (eq. 9).
+//! - `rigidity` = Σᵢ sᵢ Σ_{j∈N(i)} ωᵢⱼ h(‖(μ'ⱼ − μ'ᵢ) − ΔRᵢ (μⱼ − μᵢ)‖), ΔRᵢ = R(q̂'ᵢ) R(q̂ᵢ)ᵀ
 //!   (eq. 10–11).
+//! - h(r) = r²/(2δ) for r < δ, r − δ/2 beyond: the Huber penalty, δ = `huber` × l̄. δ = 0 is the
+//!   paper's h(r) = r, whose constant slope is indifferent to how a stretch spreads along a
+//!   chain of edges; below δ the penalty is quadratic, so a stretch spreads evenly.
 //! - sᵢ: vertex i's stiffness (1 in the paper; [`stiffness`] lowers it on thick parts).
 //! - `rotation` = Σᵢ Σ_{j∈N(i)} ωᵢⱼ ‖q̂ⱼ ⊗ q̂'ⱼ⁻¹ − q̂ᵢ ⊗ q̂'ᵢ⁻¹‖ (eq. 12).
 //! - ωᵢⱼ = exp(−λ_w · l'ᵢⱼ / l̄), l̄ the mean edge length when the neighbourhoods were built:
@@ -26,7 +29,8 @@ pub mod stiffness;
 pub use kernels::{Regularizers, Temporal};
 pub use neighbourhoods::{Neighbourhoods, BOUNDARY_BIT};
 
-/// Loss weights (defaults 1, 5, 1, 4, 4, 20 in field order) and the temporal weight falloff λ_w.
+/// Loss weights (defaults 1, 5, 1, 4, 4, 20 in field order), the temporal weight falloff λ_w
+/// (default 1) and the Huber δ (default 0).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Weights {
     /// Weight of the flatness term (eq. 4).
@@ -43,6 +47,9 @@ pub struct Weights {
     pub rotation: f32,
     /// Falloff of ωᵢⱼ per mean edge length.
     pub lambda_w: f32,
+    /// δ of the Huber penalty h on the edge-length and rigidity residuals, in mean edge
+    /// lengths (0: the paper's absolute values).
+    pub huber: f32,
 }
 
 impl Default for Weights {
@@ -55,6 +62,7 @@ impl Default for Weights {
             rigidity: 4.0,
             rotation: 20.0,
             lambda_w: 1.0,
+            huber: 0.0,
         }
     }
 }

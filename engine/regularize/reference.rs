@@ -41,9 +41,11 @@ pub fn evaluate(
     losses.normal = normal(nb, params, weights.normal as f64, &mut gp, &mut gq);
     if let Some(prev) = previous {
         let scale = weights.lambda_w as f64 / nb.mean_edge_length as f64;
-        losses.edge_length = edge_length(nb, params, prev, weights.edge_length as f64, &mut gp);
-        losses.rigidity =
-            rigidity(nb, params, prev, scale, weights.rigidity as f64, &mut gp, &mut gq);
+        let huber = Huber(weights.huber as f64 * nb.mean_edge_length as f64);
+        let w = weights.edge_length as f64;
+        losses.edge_length = edge_length(nb, params, prev, huber, w, &mut gp);
+        let w = weights.rigidity as f64;
+        losses.rigidity = rigidity(nb, params, prev, (scale, huber), w, &mut gp, &mut gq);
         losses.rotation = rotation(nb, params, prev, scale, weights.rotation as f64, &mut gq);
     }
     for i in 0..n {
@@ -51,6 +53,26 @@ pub fn evaluate(
         grads.rotations[i] = normalize_backward(params.rotations[i], gq[i]).to_array();
     }
     (losses, grads)
+}
+
+/// The Huber penalty with threshold δ (scene units; 0: the absolute value).
+#[derive(Clone, Copy)]
+struct Huber(f64);
+
+impl Huber {
+    /// h(r) = r²/(2δ) for 0 ≤ r < δ, r − δ/2 beyond.
+    fn value(self, r: f64) -> f64 {
+        if r < self.0 {
+            0.5 * r * r / self.0
+        } else {
+            r - 0.5 * self.0
+        }
+    }
+
+    /// h'(r) / r: the factor that turns a residual vector of length r into h's gradient.
+    fn slope_per_length(self, r: f64) -> f64 {
+        1.0 / r.max(self.0)
+    }
 }
 
 fn p3(a: [f64; 3]) -> DVec3 {
@@ -129,11 +151,12 @@ fn normal(nb: &Neighbourhoods, params: &Params, w: f64, gp: &mut [DVec3], gq: &m
     loss
 }
 
-/// L_len = Σ over edges ½(sᵢ + sⱼ) |l_t − l_{t−1}| (s: stiffness).
+/// L_len = Σ over edges ½(sᵢ + sⱼ) h(|l_t − l_{t−1}|) (s: stiffness, h: [`Huber`]).
 fn edge_length(
     nb: &Neighbourhoods,
     params: &Params,
     prev: &Params,
+    huber: Huber,
     w: f64,
     g: &mut [DVec3],
 ) -> f64 {
@@ -144,9 +167,9 @@ fn edge_length(
             let l0 = (p3(prev.positions[i]) - p3(prev.positions[j as usize])).length();
             let l = d.length();
             let s = 0.5 * (nb.stiffness[i] + nb.stiffness[j as usize]) as f64;
-            loss += s * (l - l0).abs();
+            loss += s * huber.value((l - l0).abs());
             if l > 0.0 && l != l0 {
-                let gd = w * s * (l - l0).signum() * d / l;
+                let gd = w * s * (l - l0) * huber.slope_per_length((l - l0).abs()) * d / l;
                 g[i] += gd;
                 g[j as usize] -= gd;
             }
@@ -160,13 +183,13 @@ fn omega(prev: &Params, i: usize, j: usize, scale: f64) -> f64 {
     (-scale * (p3(prev.positions[i]) - p3(prev.positions[j])).length()).exp()
 }
 
-/// L_rigid = Σᵢ sᵢ Σⱼ ωᵢⱼ ‖(μⱼ' − μᵢ') − ΔRᵢ (μⱼ − μᵢ)‖, ΔRᵢ = Rᵢ' Rᵢᵀ (primes: frame t − 1,
+/// L_rigid = Σᵢ sᵢ Σⱼ ωᵢⱼ h(‖(μⱼ' − μᵢ') − ΔRᵢ (μⱼ − μᵢ)‖), ΔRᵢ = Rᵢ' Rᵢᵀ (primes: frame t − 1,
 /// s: stiffness).
 fn rigidity(
     nb: &Neighbourhoods,
     params: &Params,
     prev: &Params,
-    scale: f64,
+    (scale, huber): (f64, Huber),
     w: f64,
     gp: &mut [DVec3],
     gq: &mut [DVec4],
@@ -185,9 +208,13 @@ fn rigidity(
             let d_prev = p3(prev.positions[j]) - p3(prev.positions[i]);
             let weight = nb.stiffness[i] as f64 * omega(prev, i, j, scale);
             let e = d_prev - delta_r * d;
-            loss += weight * e.length();
-            let Some(u) = e.try_normalize() else { continue };
-            let u = w * weight * u;
+            let r = e.length();
+            loss += weight * huber.value(r);
+            // Phrased as positive to skip a NaN residual too, as the kernel does.
+            if !(r > 0.0) {
+                continue;
+            }
+            let u = w * weight * huber.slope_per_length(r) * e;
             let gd = -(delta_r.transpose() * u);
             gp[j] += gd;
             gp[i] -= gd;
@@ -262,4 +289,22 @@ pub fn normalize_backward(q: [f64; 4], g: DVec4) -> DVec4 {
     }
     let u = q / len;
     (g - u * u.dot(g)) / len
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Huber;
+
+    #[test]
+    fn huber_is_quadratic_below_delta_linear_beyond_and_the_absolute_value_at_zero() {
+        let h = Huber(0.5);
+        assert_eq!(h.value(0.25), 0.0625);
+        assert_eq!(h.value(2.0), 1.75);
+        // Value and slope meet at δ.
+        assert!((h.value(0.5 - 1e-9) - h.value(0.5 + 1e-9)).abs() < 1e-8);
+        assert!((h.slope_per_length(0.5 - 1e-9) * (0.5 - 1e-9) - 1.0).abs() < 1e-8);
+        assert_eq!(h.slope_per_length(2.0) * 2.0, 1.0);
+        let abs = Huber(0.0);
+        assert_eq!((abs.value(0.3), abs.slope_per_length(0.3) * 0.3), (0.3, 1.0));
+    }
 }

@@ -17,6 +17,7 @@ layout(push_constant) uniform Push {
     float w_edge_length;
     float w_rigidity;
     float w_rotation;
+    float huber;         // Huber δ of the edge-length and rigidity residuals, scene units
 } pc;
 
 const uint LOSS_SCALE_2D = 0u;
@@ -29,6 +30,12 @@ const uint LOSS_ROTATION = 5u;
 const uint BOUNDARY_BIT = 0x80000000u;
 
 #include "../common/quaternion.glsl"
+
+// The Huber penalty of a residual length r ≥ 0: r²/(2δ) below δ, r − δ/2 beyond (δ = 0: r).
+// Its gradient is the residual vector / max(r, δ), which bounds it by 1 either way.
+float huber(float r) {
+    return r < pc.huber ? 0.5 * r * r / pc.huber : r - 0.5 * pc.huber;
+}
 #include "../common/fixed_sum.glsl"
 
 // Adds `value` (0 from inactive invocations) to loss sum `slot`: one fixed-point add per

@@ -198,6 +198,10 @@ pub struct PipelineWeights {
     pub rotation: f32,
     /// Falloff λ_w of the temporal neighbour weights, per mean edge length (default 1).
     pub lambda_w: f32,
+    /// Huber δ of the temporal edge-length and rigidity residuals, in mean edge lengths
+    /// (default 0.25; 0: the paper's absolute values). Below δ the penalty is quadratic, so a
+    /// stretch the images leave open spreads evenly along the skin instead of anywhere.
+    pub huber: f32,
 }
 
 /// The initial mesh when none is given (built from the masks).
@@ -298,6 +302,7 @@ impl Default for PipelineWeights {
             rigidity: 0.4,
             rotation: 2.0,
             lambda_w: 1.0,
+            huber: 0.25,
         }
     }
 }
@@ -336,6 +341,7 @@ impl PipelineWeights {
             rigidity: self.rigidity * per,
             rotation: self.rotation * per,
             lambda_w: self.lambda_w,
+            huber: self.huber,
         }
     }
 }
@@ -381,6 +387,7 @@ impl TrainConfig {
             ("loss.rigidity", l.rigidity),
             ("loss.rotation", l.rotation),
             ("loss.lambda_w", l.lambda_w),
+            ("loss.huber", l.huber),
             ("temporal.tolerance", self.temporal.tolerance),
             ("temporal.silhouette", self.temporal.silhouette),
             ("temporal.coverage", self.temporal.coverage),
