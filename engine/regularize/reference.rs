@@ -42,10 +42,9 @@ pub fn evaluate(
     if let Some(prev) = previous {
         let scale = weights.lambda_w as f64 / nb.mean_edge_length as f64;
         let huber = Huber(weights.huber as f64 * nb.mean_edge_length as f64);
-        let w = weights.edge_length as f64;
-        losses.edge_length = edge_length(nb, params, prev, huber, w, &mut gp);
-        let w = weights.rigidity as f64;
-        losses.rigidity = rigidity(nb, params, prev, (scale, huber), w, &mut gp, &mut gq);
+        let (w_edge, w_rigid) = (weights.edge_length as f64, weights.rigidity as f64);
+        losses.edge_length = edge_length(nb, params, prev, huber, w_edge, &mut gp);
+        losses.rigidity = rigidity(nb, params, prev, (scale, huber), w_rigid, &mut gp, &mut gq);
         losses.rotation = rotation(nb, params, prev, scale, weights.rotation as f64, &mut gq);
     }
     for i in 0..n {
@@ -167,9 +166,10 @@ fn edge_length(
             let l0 = (p3(prev.positions[i]) - p3(prev.positions[j as usize])).length();
             let l = d.length();
             let s = 0.5 * (nb.stiffness[i] + nb.stiffness[j as usize]) as f64;
-            loss += s * huber.value((l - l0).abs());
+            let r = (l - l0).abs();
+            loss += s * huber.value(r);
             if l > 0.0 && l != l0 {
-                let gd = w * s * (l - l0) * huber.slope_per_length((l - l0).abs()) * d / l;
+                let gd = w * s * (l - l0) * huber.slope_per_length(r) * d / l;
                 g[i] += gd;
                 g[j as usize] -= gd;
             }

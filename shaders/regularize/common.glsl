@@ -30,13 +30,13 @@ const uint LOSS_ROTATION = 5u;
 const uint BOUNDARY_BIT = 0x80000000u;
 
 #include "../common/quaternion.glsl"
+#include "../common/fixed_sum.glsl"
 
 // The Huber penalty of a residual length r ≥ 0: r²/(2δ) below δ, r − δ/2 beyond (δ = 0: r).
 // Its gradient is the residual vector / max(r, δ), which bounds it by 1 either way.
 float huber(float r) {
     return r < pc.huber ? 0.5 * r * r / pc.huber : r - 0.5 * pc.huber;
 }
-#include "../common/fixed_sum.glsl"
 
 // Adds `value` (0 from inactive invocations) to loss sum `slot`: one fixed-point add per
 // subgroup (order-independent, so runs repeat bit for bit). Must be reached by every
