@@ -379,12 +379,21 @@ fn benchmark_ground_truth_scores_a_perfect_and_an_offset_prediction() {
             "{f:?}"
         );
         assert!((f.chamfer_over_size - want).abs() < 1e-6, "{f:?}");
+        // Lifted off the surface, not slid on it: all of the error is off the surface.
+        assert!(
+            (f.tracking_off_surface_over_size.unwrap() - want).abs() < 1e-6
+                && f.tracking_along_surface_over_size.unwrap() < 1e-6,
+            "{f:?}"
+        );
     }
     // Over 5 points × 3 frames, two of them off by d.
     assert!(
         (s.tracking_rmse_over_size.unwrap() - expect * (2.0f64 / 3.0).sqrt()).abs() < 1e-6,
         "{s:?}"
     );
+    let (off, along) =
+        (s.tracking_off_surface_over_size.unwrap(), s.tracking_along_surface_over_size.unwrap());
+    assert!((off - s.tracking_rmse_over_size.unwrap()).abs() < 1e-6 && along < 1e-6, "{s:?}");
     assert_eq!(
         (s.psnr_gs_first_db, s.psnr_gs_last_db, s.psnr_mesh_last_db),
         (Some(30.5), None, Some(21.0))

@@ -122,13 +122,15 @@ pub fn print_scores(pred: &Path, s: &SequenceSummary, frames: &[FrameScores]) {
         "size {:.4} scene units; {} points, {} Chamfer samples per mesh",
         s.size, s.points, s.chamfer_samples
     );
-    println!("frame  track RMSE %  track max %  Chamfer %  PSNR gs dB  PSNR mesh dB  iters  seconds  stop reason");
+    println!("frame  track RMSE %  off surface %  along %  track max %  Chamfer %  PSNR gs dB  PSNR mesh dB  iters  seconds  stop reason");
     for f in frames {
         let t = &f.train;
         println!(
-            "{:>5}  {:>12}  {:>11}  {:>9}  {:>10}  {:>12}  {:>5}  {:>7}  {}",
+            "{:>5}  {:>12}  {:>13}  {:>7}  {:>11}  {:>9}  {:>10}  {:>12}  {:>5}  {:>7}  {}",
             f.frame,
             cell(f.tracking_rmse_over_size, 3, true),
+            cell(f.tracking_off_surface_over_size, 3, true),
+            cell(f.tracking_along_surface_over_size, 3, true),
             cell(f.tracking_max_over_size, 3, true),
             cell(Some(f.chamfer_over_size), 3, true),
             cell(t.psnr_gs_db, 2, false),
@@ -154,6 +156,11 @@ pub fn print_scores(pred: &Path, s: &SequenceSummary, frames: &[FrameScores]) {
         cell(s.tracking_rmse_over_size, 3, true),
         frame_value(s.tracking_worst_frame),
         cell(s.tracking_max_over_size, 3, true)
+    );
+    println!(
+        "  of which        {}% off the true surface (a surface in the wrong place), {}% along it (points slid on it); squares add up",
+        cell(s.tracking_off_surface_over_size, 3, true),
+        cell(s.tracking_along_surface_over_size, 3, true)
     );
     println!("binding          {:.3}% mean, {:.3}% max distance of the points to the predicted frame-0 surface", s.binding_mean_over_size * 100.0, s.binding_max_over_size * 100.0);
     println!(

@@ -8,6 +8,7 @@
 //!   mesh's surface (point to triangle: no sampling noise floor).
 //! - [`emd`]: earth mover's distance between equal-size surface samples (exact assignment).
 //! - [`tracking`]: MSE / RMSE of tracked points against ground-truth trajectories.
+//! - [`tracking_split`]: that error split into a part off the true surface and a part along it.
 //!
 //! Inputs are plain arrays; [`sample`] draws the surface samples, [`folder`] compares a
 //! prediction folder with a ground-truth folder. Scoring a whole trained sequence against a
@@ -22,6 +23,7 @@ pub mod sample;
 pub mod ssim;
 pub mod surface_chamfer;
 pub mod tracking;
+pub mod tracking_split;
 
 pub use chamfer::{chamfer_distance, chamfer_meshes, ChamferReport};
 pub use emd::{emd_meshes, emd_points, EmdReport};
@@ -31,6 +33,7 @@ pub use sample::{sample_surface, surface_points, SurfaceSample};
 pub use ssim::ssim;
 pub use surface_chamfer::{chamfer_to_surface, SurfaceChamferReport};
 pub use tracking::{tracking_error, TrackingReport};
+pub use tracking_split::{split_on_surface, SurfaceSplit};
 
 /// Why a metric could not be computed.
 #[derive(Debug, thiserror::Error)]

@@ -8,7 +8,7 @@ use crate::io::write_atomically;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-const HEADER: &str = "frame,tracking_rmse_over_size,tracking_max_over_size,chamfer_over_size,psnr_gs_db,psnr_mesh_db,iterations,wall_s,stop_reason";
+const HEADER: &str = "frame,tracking_rmse_over_size,tracking_max_over_size,tracking_off_surface_over_size,tracking_along_surface_over_size,chamfer_over_size,psnr_gs_db,psnr_mesh_db,iterations,wall_s,stop_reason";
 
 /// Writes the three files into `dir` (created when needed), each atomically; returns their
 /// paths.
@@ -42,6 +42,8 @@ fn write_csv(w: &mut impl Write, frames: &[FrameScores]) -> std::io::Result<()> 
         let numbers = [
             f.tracking_rmse_over_size,
             f.tracking_max_over_size,
+            f.tracking_off_surface_over_size,
+            f.tracking_along_surface_over_size,
             Some(f.chamfer_over_size),
             t.psnr_gs_db,
             t.psnr_mesh_db,
@@ -71,7 +73,8 @@ fn quoted(text: &str) -> String {
     }
 }
 
-/// Tracking RMSE / size and Chamfer / size against the frame (a frame without a value is a gap).
+/// Tracking RMSE / size, its part along the true surface, and Chamfer / size against the frame
+/// (a frame without a value is a gap).
 fn score_panel(frames: &[FrameScores]) -> Panel {
     let series = |name: &str, value: &dyn Fn(&FrameScores) -> Option<f64>| Series {
         name: name.into(),
@@ -83,6 +86,7 @@ fn score_panel(frames: &[FrameScores]) -> Panel {
         y_label: "fraction of the subject's size".into(),
         series: vec![
             series("tracking RMSE", &|f| f.tracking_rmse_over_size),
+            series("tracking RMSE, along the surface", &|f| f.tracking_along_surface_over_size),
             series("Chamfer (point to surface)", &|f| Some(f.chamfer_over_size)),
         ],
         equal_scale: false,
@@ -104,6 +108,8 @@ mod tests {
             frame,
             tracking_rmse_over_size: Some(0.5),
             tracking_max_over_size: None,
+            tracking_off_surface_over_size: Some(0.3),
+            tracking_along_surface_over_size: Some(0.4),
             chamfer_over_size: 0.25,
             chamfer_pred_to_gt_over_size: 0.2,
             chamfer_gt_to_pred_over_size: 0.3,
@@ -118,7 +124,11 @@ mod tests {
         let text = String::from_utf8(buf).unwrap();
         assert_eq!(
             text.lines().collect::<Vec<_>>(),
-            [HEADER, "0,0.5,,0.25,,,50,,", "1,0.5,,0.25,,,50,,\"loss rose, twice\""]
+            [
+                HEADER,
+                "0,0.5,,0.3,0.4,0.25,,,50,,",
+                "1,0.5,,0.3,0.4,0.25,,,50,,\"loss rose, twice\""
+            ]
         );
     }
 

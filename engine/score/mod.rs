@@ -5,7 +5,8 @@
 //! - Tracking: `points.csv` bound to the predicted frame-0 mesh at its closest surface point
 //!   (however far: nothing is refused), followed through the predicted frames
 //!   ([`crate::track::track`]); RMSE and largest distance to `tracks.csv` per frame and over
-//!   all points and frames ([`crate::eval::tracking_error`]).
+//!   all points and frames ([`crate::eval::tracking_error`]); the same error split into the
+//!   points' distance to the true surface and the rest, along it ([`crate::eval::split_on_surface`]).
 //! - Chamfer: point-to-surface, per frame ([`crate::eval::chamfer_to_surface`]).
 //! - Held-out PSNR, iterations, wall time, stop reason: `OUT/report.json` ([`train_report`]).
 //!
@@ -19,13 +20,16 @@ pub use files::write_sequence_eval;
 pub use ground_truth::{find_ground_truth, GroundTruth};
 pub use train_report::{read_train_report, FrameTrainStats};
 
-use crate::eval::{chamfer_to_surface, tracking_error, EvalError, TrackingReport};
+use crate::eval::{
+    chamfer_to_surface, split_on_surface, tracking_error, EvalError, SurfaceSplit, TrackingReport,
+};
 use crate::io::trajectories::{TrackPoint, TrajectoriesError};
 use crate::mesh::{MeshError, TriMesh};
 use crate::sequence::{check_same_topology, MeshSequence, SequenceError};
 use crate::track::{track, Queries, TrackError, TrackReport};
 use crate::train::output::mesh_path;
 use serde::Serialize;
+use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -97,6 +101,11 @@ pub struct FrameScores {
     pub tracking_rmse_over_size: Option<f64>,
     /// Largest tracking error of the frame (None as `tracking_rmse_over_size`).
     pub tracking_max_over_size: Option<f64>,
+    /// The RMSE's part off the true surface: the tracked points' distance to it (None as the
+    /// RMSE). Its square and the next one's add up to the RMSE's.
+    pub tracking_off_surface_over_size: Option<f64>,
+    /// The RMSE's part along the true surface: points on the right surface, in the wrong place.
+    pub tracking_along_surface_over_size: Option<f64>,
     /// Point-to-surface Chamfer, and its halves (prediction → truth, truth → prediction).
     pub chamfer_over_size: f64,
     /// Chamfer's prediction → truth half.
@@ -138,6 +147,10 @@ pub struct SequenceSummary {
     pub tracking_rmse_over_size: Option<f64>,
     /// Largest tracking error over all points and scored frames (None as the RMSE).
     pub tracking_max_over_size: Option<f64>,
+    /// The RMSE's parts off and along the true surface, over all points and scored frames.
+    pub tracking_off_surface_over_size: Option<f64>,
+    /// The RMSE's part along the true surface.
+    pub tracking_along_surface_over_size: Option<f64>,
     /// The frame of the highest tracking RMSE.
     pub tracking_worst_frame: Option<FrameValue>,
     /// Mean over the scored frames, and the worst frame (None when no frame was scored).
@@ -189,15 +202,23 @@ pub fn evaluate_sequence(
     let report_path = pred.join("report.json");
     let train = read_train_report(&report_path)?;
     let mut frames = Vec::with_capacity(present.len());
+    let mut split_total = SurfaceSplit::default();
     for (i, &t) in loaded.iter().enumerate().filter(|(_, t)| present.contains(t)) {
-        let chamfer = chamfer_frame(pred, gt, t, (&sequence.frames[i], &sequence.faces), options)?;
+        let truth = TriMesh::read_ply(&gt.mesh_path(t))?;
+        let chamfer =
+            chamfer_frame(pred, gt, t, (&sequence.frames[i], &sequence.faces), &truth, options)?;
+        let split = split_frame(gt, &tracked, i, t, &truth)?;
+        split_total = split_total + split;
         let per_frame = |list: &[(u32, f64)]| {
             list.iter().find(|(f, _)| *f as usize == t).map(|(_, v)| v / gt.size)
         };
+        let (off, along) = split.rms().map(|(o, a)| (o / gt.size, a / gt.size)).unzip();
         frames.push(FrameScores {
             frame: t,
             tracking_rmse_over_size: tracking.as_ref().and_then(|r| per_frame(&r.rmse_per_frame)),
             tracking_max_over_size: tracking.as_ref().and_then(|r| per_frame(&r.max_per_frame)),
+            tracking_off_surface_over_size: off,
+            tracking_along_surface_over_size: along,
             chamfer_over_size: chamfer.mean / gt.size,
             chamfer_pred_to_gt_over_size: chamfer.pred_to_gt / gt.size,
             chamfer_gt_to_pred_over_size: chamfer.gt_to_pred / gt.size,
@@ -208,7 +229,7 @@ pub fn evaluate_sequence(
         gt,
         options,
         &tracked,
-        tracking.as_ref(),
+        (tracking.as_ref(), split_total),
         &frames,
         missing,
         train.is_some().then_some(report_path),
@@ -305,15 +326,36 @@ fn tracking_scores(
     Ok(Some(report))
 }
 
-/// Point-to-surface Chamfer of predicted frame `t` against the true mesh, scene units.
+/// The tracking error of frame `t` (entry `i` of the trajectories) split against the true
+/// mesh `truth`; every `tracks.csv` row of the frame whose point was tracked.
+fn split_frame(
+    gt: &GroundTruth,
+    tracked: &TrackReport,
+    i: usize,
+    t: usize,
+    truth: &TriMesh,
+) -> Result<SurfaceSplit, SequenceEvalError> {
+    let by_id: HashMap<&str, &[f64; 3]> =
+        tracked.points.iter().map(|p| (p.id.as_str(), &p.trajectory[i])).collect();
+    let pairs: Vec<([f64; 3], [f64; 3])> = gt
+        .tracks
+        .iter()
+        .filter(|r| r.frame as usize == t)
+        .filter_map(|r| by_id.get(r.id.as_str()).map(|&&p| (p, r.position)))
+        .collect();
+    split_on_surface(&pairs, (&truth.positions, &truth.faces))
+        .map_err(|source| SequenceEvalError::Metric { path: gt.mesh_path(t), source })
+}
+
+/// Point-to-surface Chamfer of predicted frame `t` against the true mesh `truth`, scene units.
 fn chamfer_frame(
     pred: &Path,
     gt: &GroundTruth,
     t: usize,
     mesh: (&[[f32; 3]], &[[u32; 3]]),
+    truth: &TriMesh,
     options: &SequenceEvalOptions,
 ) -> Result<crate::eval::SurfaceChamferReport, SequenceEvalError> {
-    let truth = TriMesh::read_ply(&gt.mesh_path(t))?;
     chamfer_to_surface(
         mesh,
         (&truth.positions, &truth.faces),
@@ -326,11 +368,13 @@ fn chamfer_frame(
     })
 }
 
+/// The sequence's summary; `tracking` is the tracking error and its split over every scored
+/// frame.
 fn summarize(
     gt: &GroundTruth,
     options: &SequenceEvalOptions,
     tracked: &TrackReport,
-    tracking: Option<&TrackingReport>,
+    (tracking, split): (Option<&TrackingReport>, SurfaceSplit),
     frames: &[FrameScores],
     missing_frames: Vec<usize>,
     train_report: Option<PathBuf>,
@@ -353,6 +397,8 @@ fn summarize(
         binding_max_over_size: bindings.iter().copied().fold(0.0, f64::max),
         tracking_rmse_over_size: tracking.map(|r| r.rmse / gt.size),
         tracking_max_over_size: tracking.map(|r| r.max / gt.size),
+        tracking_off_surface_over_size: split.rms().map(|(o, _)| o / gt.size),
+        tracking_along_surface_over_size: split.rms().map(|(_, a)| a / gt.size),
         tracking_worst_frame: worst(&|f| f.tracking_rmse_over_size),
         chamfer_mean_over_size: (!frames.is_empty())
             .then(|| frames.iter().map(|f| f.chamfer_over_size).sum::<f64>() / frames.len() as f64),
