@@ -68,8 +68,10 @@ fn a_run_writes_a_self_contained_report_that_shows_its_scores_and_renders() {
     let scores: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("eval.json")).unwrap()).unwrap();
     for frame in scores["frames"].as_array().unwrap() {
-        let percent = frame["tracking_rmse_over_size"].as_f64().unwrap() * 100.0;
-        assert!(page.contains(&format!("<td>{percent:.3}</td>")), "frame {}", frame["frame"]);
+        for key in ["tracking_rmse_over_size", "tracking_along_surface_over_size"] {
+            let percent = frame[key].as_f64().unwrap() * 100.0;
+            assert!(page.contains(&format!("<td>{percent:.3}</td>")), "{key} {}", frame["frame"]);
+        }
     }
     println!("report.html: {} bytes", page.len());
 

@@ -66,6 +66,8 @@ struct Eval {
 struct FrameScores {
     frame: usize,
     tracking_rmse_over_size: Option<f64>,
+    /// Absent from the files of evaluations before it was scored.
+    tracking_along_surface_over_size: Option<f64>,
     chamfer_over_size: Option<f64>,
 }
 
@@ -149,7 +151,8 @@ fn frame_table(frames: &[FrameReport], eval: Option<&Eval>) -> String {
          <th>PSNR mesh dB</th>",
     );
     if eval.is_some() {
-        html += "<th>tracking RMSE % of size</th><th>Chamfer % of size</th>";
+        html += "<th>tracking RMSE % of size</th><th>of which along the surface</th>\
+                 <th>Chamfer % of size</th>";
     }
     html += "<th>warnings</th></tr>\n";
     for f in frames {
@@ -167,8 +170,9 @@ fn frame_table(frames: &[FrameReport], eval: Option<&Eval>) -> String {
             let percent = |v: Option<f64>| v.map_or("-".into(), |v| format!("{:.3}", v * 100.0));
             let _ = write!(
                 html,
-                "<td>{}</td><td>{}</td>",
+                "<td>{}</td><td>{}</td><td>{}</td>",
                 percent(s.and_then(|s| s.tracking_rmse_over_size)),
+                percent(s.and_then(|s| s.tracking_along_surface_over_size)),
                 percent(s.and_then(|s| s.chamfer_over_size))
             );
         }
