@@ -26,7 +26,7 @@ use crate::eval::{
 use crate::io::trajectories::{TrackPoint, TrajectoriesError};
 use crate::mesh::{MeshError, TriMesh};
 use crate::sequence::{check_same_topology, MeshSequence, SequenceError};
-use crate::track::{track, Queries, TrackError, TrackReport};
+use crate::track::{track, Queries, TrackError, TrackReport, TrackedPoint};
 use crate::train::output::mesh_path;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -203,11 +203,13 @@ pub fn evaluate_sequence(
     let train = read_train_report(&report_path)?;
     let mut frames = Vec::with_capacity(present.len());
     let mut split_total = SurfaceSplit::default();
+    let by_id: HashMap<&str, &TrackedPoint> =
+        tracked.points.iter().map(|p| (p.id.as_str(), p)).collect();
     for (i, &t) in loaded.iter().enumerate().filter(|(_, t)| present.contains(t)) {
         let truth = TriMesh::read_ply(&gt.mesh_path(t))?;
         let chamfer =
             chamfer_frame(pred, gt, t, (&sequence.frames[i], &sequence.faces), &truth, options)?;
-        let split = split_frame(gt, &tracked, i, t, &truth)?;
+        let split = split_frame(gt, &by_id, i, t, &truth)?;
         split_total = split_total + split;
         let per_frame = |list: &[(u32, f64)]| {
             list.iter().find(|(f, _)| *f as usize == t).map(|(_, v)| v / gt.size)
@@ -327,21 +329,19 @@ fn tracking_scores(
 }
 
 /// The tracking error of frame `t` (entry `i` of the trajectories) split against the true
-/// mesh `truth`; every `tracks.csv` row of the frame whose point was tracked.
+/// mesh `truth`; every `tracks.csv` row of the frame whose point was tracked (`by_id`).
 fn split_frame(
     gt: &GroundTruth,
-    tracked: &TrackReport,
+    by_id: &HashMap<&str, &TrackedPoint>,
     i: usize,
     t: usize,
     truth: &TriMesh,
 ) -> Result<SurfaceSplit, SequenceEvalError> {
-    let by_id: HashMap<&str, &[f64; 3]> =
-        tracked.points.iter().map(|p| (p.id.as_str(), &p.trajectory[i])).collect();
     let pairs: Vec<([f64; 3], [f64; 3])> = gt
         .tracks
         .iter()
         .filter(|r| r.frame as usize == t)
-        .filter_map(|r| by_id.get(r.id.as_str()).map(|&&p| (p, r.position)))
+        .filter_map(|r| by_id.get(r.id.as_str()).map(|p| (p.trajectory[i], r.position)))
         .collect();
     split_on_surface(&pairs, (&truth.positions, &truth.faces))
         .map_err(|source| SequenceEvalError::Metric { path: gt.mesh_path(t), source })

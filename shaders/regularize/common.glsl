@@ -33,9 +33,14 @@ const uint BOUNDARY_BIT = 0x80000000u;
 #include "../common/fixed_sum.glsl"
 
 // The Huber penalty of a residual length r ≥ 0: r²/(2δ) below δ, r − δ/2 beyond (δ = 0: r).
-// Its gradient is the residual vector / max(r, δ), which bounds it by 1 either way.
 float huber(float r) {
     return r < pc.huber ? 0.5 * r * r / pc.huber : r - 0.5 * pc.huber;
+}
+
+// What h's gradient divides a residual vector of length r by: max(r, δ), so the gradient's
+// length stays at most 1 either way.
+float huber_divisor(float r) {
+    return max(r, pc.huber);
 }
 
 // Adds `value` (0 from inactive invocations) to loss sum `slot`: one fixed-point add per

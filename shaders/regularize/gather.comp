@@ -79,7 +79,7 @@ void main() {
                     edge_length += s_edge * huber(abs(l - l_prev));
                 }
                 if (l > 0.0 && l != l_prev) {
-                    gp -= pc.w_edge_length * s_edge * (l - l_prev) / max(abs(l - l_prev), pc.huber) * d / l;
+                    gp -= pc.w_edge_length * s_edge * (l - l_prev) / huber_divisor(abs(l - l_prev)) * d / l;
                 }
                 float omega = exp(-pc.omega_scale * l_prev);
                 // v's own rigidity term with neighbour j.
@@ -87,7 +87,7 @@ void main() {
                 float el = length(e);
                 rigidity += stiffness[v] * omega * huber(el);
                 if (el > 0.0) {
-                    vec3 u = pc.w_rigidity * stiffness[v] * omega * e / max(el, pc.huber);
+                    vec3 u = pc.w_rigidity * stiffness[v] * omega * e / huber_divisor(el);
                     gp += transpose(dr) * u;
                     g_rot -= outerProduct(d, transpose(r_prev) * u);
                 }
@@ -96,7 +96,7 @@ void main() {
                 vec3 e_j = -d_prev + dr_j * d;
                 float el_j = length(e_j);
                 if (el_j > 0.0) {
-                    gp -= transpose(dr_j) * (pc.w_rigidity * stiffness[j] * omega * e_j / max(el_j, pc.huber));
+                    gp -= transpose(dr_j) * (pc.w_rigidity * stiffness[j] * omega * e_j / huber_divisor(el_j));
                 }
                 // Rotation consistency.
                 vec4 diff = rel - quat_mul(unit_quat(rotations[j]), quat_conj(unit_quat(prev_rotations[j])));
