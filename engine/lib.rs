@@ -16,6 +16,7 @@
 //! - [`dataset`]: synchronized multi-view video (own layout, Panoptic, nerfstudio / D-NeRF).
 //! - [`sequence`]: mesh sequences (one face list, positions per frame) and their formats.
 //! - [`geometry`]: closest point and ray casts on a mesh (BVH, f64 triangle routines).
+//! - [`flow`]: optical flow between two images of one camera (sparse pyramidal Lucas–Kanade).
 //! - [`ssim_window`]: the SSIM window and formula the metric and the loss share.
 //! - [`splat`]: differentiable Gaussian splatting (forward, backward, CPU reference).
 //! - [`mesh`]: triangle meshes as plain arrays, with PLY input and output.
@@ -43,6 +44,7 @@ pub mod dataset;
 pub mod deform;
 pub mod demo;
 pub mod eval;
+pub mod flow;
 pub mod geometry;
 pub mod gpu;
 pub mod init;

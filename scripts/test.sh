@@ -23,7 +23,7 @@ TAGSPLAT_FORCE_STAGING=1 cargo test --lib --bins --tests "$@"
 # The GPU kernels again, on the direct memory path, at lavapipe's other subgroup sizes (the run
 # above used its default, 256-bit vectors: 8 lanes). tests/gpu.rs checks that the size took effect.
 kernel_tests=(--test gpu --test sort --test splat --test raster --test loss --test silhouette
-    --test regularize --test optim --test deform)
+    --test regularize --test optim --test deform --test flow)
 if [[ "${VK_ICD_FILENAMES:-}" == *lvp_icd* ]]; then
     echo "== GPU kernels at subgroup size 4 (LP_NATIVE_VECTOR_WIDTH=128)"
     LP_NATIVE_VECTOR_WIDTH=128 cargo test "${kernel_tests[@]}" "$@"

@@ -162,6 +162,13 @@ pub fn print_scores(pred: &Path, s: &SequenceSummary, frames: &[FrameScores]) {
         cell(s.tracking_off_surface_over_size, 3, true),
         cell(s.tracking_along_surface_over_size, 3, true)
     );
+    let share = s.sight.seen_share.map_or("-".into(), |v| format!("{:.0}", v * 100.0));
+    println!(
+        "  by sight        {}% on the points {} training cameras see at frame 0 and at the frame ({share}% of them), {}% on the rest",
+        cell(s.sight.tracking_seen_over_size, 3, true),
+        tagsplat::eval::SEEN_VIEWS,
+        cell(s.sight.tracking_unseen_over_size, 3, true)
+    );
     println!("binding          {:.3}% mean, {:.3}% max distance of the points to the predicted frame-0 surface", s.binding_mean_over_size * 100.0, s.binding_max_over_size * 100.0);
     println!(
         "Chamfer          {}% mean over frames; worst frame {}",

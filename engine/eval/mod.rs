@@ -9,6 +9,7 @@
 //! - [`emd`]: earth mover's distance between equal-size surface samples (exact assignment).
 //! - [`tracking`]: MSE / RMSE of tracked points against ground-truth trajectories.
 //! - [`tracking_split`]: that error split into a part off the true surface and a part along it.
+//! - [`sight`]: that error split into points the cameras see in both frames and the rest.
 //!
 //! Inputs are plain arrays; [`sample`] draws the surface samples, [`folder`] compares a
 //! prediction folder with a ground-truth folder. Scoring a whole trained sequence against a
@@ -20,6 +21,7 @@ pub mod emd;
 pub mod folder;
 pub mod psnr;
 pub mod sample;
+pub mod sight;
 pub mod ssim;
 pub mod surface_chamfer;
 pub mod tracking;
@@ -30,6 +32,7 @@ pub use emd::{emd_meshes, emd_points, EmdReport};
 pub use folder::{evaluate_folders, FolderError, FolderOptions, FolderReport};
 pub use psnr::psnr;
 pub use sample::{sample_surface, surface_points, SurfaceSample};
+pub use sight::{cameras_seeing, seen_in_both, SightSplit, SEEN_VIEWS};
 pub use ssim::ssim;
 pub use surface_chamfer::{chamfer_to_surface, SurfaceChamferReport};
 pub use tracking::{tracking_error, TrackingReport};

@@ -9,7 +9,8 @@
 
 use super::triangle::{closest_on_triangle, interpolate, ray_triangle};
 use super::SurfaceError;
-use glam::{DVec3, Vec3A};
+use crate::camera::Camera;
+use glam::{DVec2, DVec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
 use obvhs::bvh2::Bvh2;
@@ -183,6 +184,16 @@ impl SurfaceBvh {
         // The ray direction is unit, so the hit's ray parameter is a distance.
         self.ray_cast(eye, to_point / distance)
             .is_some_and(|hit| hit.distance < distance * (1.0 - slack))
+    }
+
+    /// `p`'s pixel coordinates in `camera` (pixel (i, j)'s centre at (i + 0.5, j + 0.5)) when
+    /// the camera sees it: in front of it, inside the image, and not hidden by this surface
+    /// (`hides` with `slack`). None otherwise.
+    pub fn sees(&self, camera: &Camera, p: DVec3, slack: f64) -> Option<DVec2> {
+        let uv = camera.project(p)?;
+        let (width, height) = (camera.width as f64, camera.height as f64);
+        let inside = uv.x >= 0.0 && uv.y >= 0.0 && uv.x < width && uv.y < height;
+        (inside && !self.hides(camera.center(), p, slack)).then_some(uv)
     }
 }
 

@@ -17,6 +17,7 @@
 //! the same target (a view's Gaussian and mesh renders): they share the target's loads and
 //! its moments.
 
+pub mod flow;
 mod params;
 pub mod reference;
 pub mod silhouette;

@@ -8,7 +8,7 @@ use crate::io::write_atomically;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-const HEADER: &str = "frame,tracking_rmse_over_size,tracking_max_over_size,tracking_off_surface_over_size,tracking_along_surface_over_size,chamfer_over_size,psnr_gs_db,psnr_mesh_db,iterations,wall_s,stop_reason";
+const HEADER: &str = "frame,tracking_rmse_over_size,tracking_max_over_size,tracking_off_surface_over_size,tracking_along_surface_over_size,tracking_seen_over_size,tracking_unseen_over_size,seen_share,chamfer_over_size,psnr_gs_db,psnr_mesh_db,iterations,wall_s,stop_reason";
 
 /// Writes the three files into `dir` (created when needed), each atomically; returns their
 /// paths.
@@ -44,6 +44,9 @@ fn write_csv(w: &mut impl Write, frames: &[FrameScores]) -> std::io::Result<()> 
             f.tracking_max_over_size,
             f.tracking_off_surface_over_size,
             f.tracking_along_surface_over_size,
+            f.sight.tracking_seen_over_size,
+            f.sight.tracking_unseen_over_size,
+            f.sight.seen_share,
             Some(f.chamfer_over_size),
             t.psnr_gs_db,
             t.psnr_mesh_db,
@@ -110,6 +113,7 @@ mod tests {
             tracking_max_over_size: None,
             tracking_off_surface_over_size: Some(0.3),
             tracking_along_surface_over_size: Some(0.4),
+            sight: crate::score::SightScores { seen_share: Some(0.75), ..Default::default() },
             chamfer_over_size: 0.25,
             chamfer_pred_to_gt_over_size: 0.2,
             chamfer_gt_to_pred_over_size: 0.3,
@@ -126,8 +130,8 @@ mod tests {
             text.lines().collect::<Vec<_>>(),
             [
                 HEADER,
-                "0,0.5,,0.3,0.4,0.25,,,50,,",
-                "1,0.5,,0.3,0.4,0.25,,,50,,\"loss rose, twice\""
+                "0,0.5,,0.3,0.4,,,0.75,0.25,,,50,,",
+                "1,0.5,,0.3,0.4,,,0.75,0.25,,,50,,\"loss rose, twice\""
             ]
         );
     }

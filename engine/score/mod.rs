@@ -6,7 +6,10 @@
 //!   (however far: nothing is refused), followed through the predicted frames
 //!   ([`crate::track::track`]); RMSE and largest distance to `tracks.csv` per frame and over
 //!   all points and frames ([`crate::eval::tracking_error`]); the same error split into the
-//!   points' distance to the true surface and the rest, along it ([`crate::eval::split_on_surface`]).
+//!   points' distance to the true surface and the rest, along it ([`crate::eval::split_on_surface`]);
+//!   and split into points that at least [`SEEN_VIEWS`](crate::eval::SEEN_VIEWS) training cameras
+//!   see at frame 0 and at the frame, and the rest ([`crate::eval::sight`]), when the ground
+//!   truth sits in its dataset (`DIR/gt`, the cameras read from `DIR`).
 //! - Chamfer: point-to-surface, per frame ([`crate::eval::chamfer_to_surface`]).
 //! - Held-out PSNR, iterations, wall time, stop reason: `OUT/report.json` ([`train_report`]).
 //!
@@ -20,8 +23,11 @@ pub use files::write_sequence_eval;
 pub use ground_truth::{find_ground_truth, GroundTruth};
 pub use train_report::{read_train_report, FrameTrainStats};
 
+use crate::camera::Camera;
+use crate::dataset::Dataset;
 use crate::eval::{
-    chamfer_to_surface, split_on_surface, tracking_error, EvalError, SurfaceSplit, TrackingReport,
+    cameras_seeing, chamfer_to_surface, seen_in_both, split_on_surface, tracking_error, EvalError,
+    SightSplit, SurfaceSplit, TrackingReport,
 };
 use crate::io::trajectories::{TrackPoint, TrajectoriesError};
 use crate::mesh::{MeshError, TriMesh};
@@ -106,6 +112,10 @@ pub struct FrameScores {
     pub tracking_off_surface_over_size: Option<f64>,
     /// The RMSE's part along the true surface: points on the right surface, in the wrong place.
     pub tracking_along_surface_over_size: Option<f64>,
+    /// RMSE of the points the training cameras see at frame 0 and here, of the rest, and the
+    /// seen points' share (None without the dataset's cameras or without such points).
+    #[serde(flatten)]
+    pub sight: SightScores,
     /// Point-to-surface Chamfer, and its halves (prediction → truth, truth → prediction).
     pub chamfer_over_size: f64,
     /// Chamfer's prediction → truth half.
@@ -115,6 +125,27 @@ pub struct FrameScores {
     /// The frame's entry of the training report (all None without one).
     #[serde(flatten)]
     pub train: FrameTrainStats,
+}
+
+/// The tracking error split by sight ([`crate::eval::sight`]), fractions of `size`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct SightScores {
+    /// RMSE of the points at least `SEEN_VIEWS` training cameras see at frame 0 and at t.
+    pub tracking_seen_over_size: Option<f64>,
+    /// RMSE of the other points: what no image term can pin.
+    pub tracking_unseen_over_size: Option<f64>,
+    /// The seen points' share of the scored (point, frame) pairs.
+    pub seen_share: Option<f64>,
+}
+
+impl SightScores {
+    fn of(split: &SightSplit, size: f64) -> Self {
+        Self {
+            tracking_seen_over_size: split.seen_rms().map(|v| v / size),
+            tracking_unseen_over_size: split.unseen_rms().map(|v| v / size),
+            seen_share: split.seen_share(),
+        }
+    }
 }
 
 /// A value and the frame it belongs to.
@@ -151,6 +182,9 @@ pub struct SequenceSummary {
     pub tracking_off_surface_over_size: Option<f64>,
     /// The RMSE's part along the true surface.
     pub tracking_along_surface_over_size: Option<f64>,
+    /// The RMSE split by sight over all points and scored frames.
+    #[serde(flatten)]
+    pub sight: SightScores,
     /// The frame of the highest tracking RMSE.
     pub tracking_worst_frame: Option<FrameValue>,
     /// Mean over the scored frames, and the worst frame (None when no frame was scored).
@@ -202,15 +236,16 @@ pub fn evaluate_sequence(
     let report_path = pred.join("report.json");
     let train = read_train_report(&report_path)?;
     let mut frames = Vec::with_capacity(present.len());
-    let mut split_total = SurfaceSplit::default();
+    let (mut split_total, mut sight_total) = (SurfaceSplit::default(), SightSplit::default());
     let by_id: HashMap<&str, &TrackedPoint> =
         tracked.points.iter().map(|p| (p.id.as_str(), p)).collect();
+    let sight = Sight::new(gt)?;
     for (i, &t) in loaded.iter().enumerate().filter(|(_, t)| present.contains(t)) {
         let truth = TriMesh::read_ply(&gt.mesh_path(t))?;
         let chamfer =
             chamfer_frame(pred, gt, t, (&sequence.frames[i], &sequence.faces), &truth, options)?;
-        let split = split_frame(gt, &by_id, i, t, &truth)?;
-        split_total = split_total + split;
+        let (split, seen) = split_frame(gt, &by_id, (i, t), &truth, &sight)?;
+        (split_total, sight_total) = (split_total + split, sight_total + seen);
         let per_frame = |list: &[(u32, f64)]| {
             list.iter().find(|(f, _)| *f as usize == t).map(|(_, v)| v / gt.size)
         };
@@ -221,6 +256,7 @@ pub fn evaluate_sequence(
             tracking_max_over_size: tracking.as_ref().and_then(|r| per_frame(&r.max_per_frame)),
             tracking_off_surface_over_size: off,
             tracking_along_surface_over_size: along,
+            sight: SightScores::of(&seen, gt.size),
             chamfer_over_size: chamfer.mean / gt.size,
             chamfer_pred_to_gt_over_size: chamfer.pred_to_gt / gt.size,
             chamfer_gt_to_pred_over_size: chamfer.gt_to_pred / gt.size,
@@ -231,7 +267,7 @@ pub fn evaluate_sequence(
         gt,
         options,
         &tracked,
-        (tracking.as_ref(), split_total),
+        (tracking.as_ref(), split_total, sight_total),
         &frames,
         missing,
         train.is_some().then_some(report_path),
@@ -329,22 +365,59 @@ fn tracking_scores(
 }
 
 /// The tracking error of frame `t` (entry `i` of the trajectories) split against the true
-/// mesh `truth`; every `tracks.csv` row of the frame whose point was tracked (`by_id`).
+/// mesh `truth` and by sight; every `tracks.csv` row of the frame whose point was tracked
+/// (`by_id`).
 fn split_frame(
     gt: &GroundTruth,
     by_id: &HashMap<&str, &TrackedPoint>,
-    i: usize,
-    t: usize,
+    (i, t): (usize, usize),
     truth: &TriMesh,
-) -> Result<SurfaceSplit, SequenceEvalError> {
-    let pairs: Vec<([f64; 3], [f64; 3])> = gt
+    sight: &Sight,
+) -> Result<(SurfaceSplit, SightSplit), SequenceEvalError> {
+    let rows: Vec<(&str, [f64; 3], [f64; 3])> = gt
         .tracks
         .iter()
         .filter(|r| r.frame as usize == t)
-        .filter_map(|r| by_id.get(r.id.as_str()).map(|p| (p.trajectory[i], r.position)))
+        .filter_map(|r| by_id.get(r.id.as_str()).map(|p| (r.id.as_str(), p.trajectory[i], r.position)))
         .collect();
-    split_on_surface(&pairs, (&truth.positions, &truth.faces))
-        .map_err(|source| SequenceEvalError::Metric { path: gt.mesh_path(t), source })
+    let metric = |source| SequenceEvalError::Metric { path: gt.mesh_path(t), source };
+    let pairs: Vec<([f64; 3], [f64; 3])> = rows.iter().map(|&(_, p, g)| (p, g)).collect();
+    let split = split_on_surface(&pairs, (&truth.positions, &truth.faces)).map_err(metric)?;
+    let mut seen = SightSplit::default();
+    if !sight.cameras.is_empty() {
+        let truths: Vec<[f64; 3]> = rows.iter().map(|&(_, _, g)| g).collect();
+        let now = cameras_seeing(&truths, (&truth.positions, &truth.faces), &sight.cameras)
+            .map_err(metric)?;
+        for ((id, p, g), now) in rows.iter().zip(&now) {
+            let before = sight.frame0.get(*id).map_or(&[][..], Vec::as_slice);
+            let error_sq = glam::DVec3::from(*p).distance_squared(glam::DVec3::from(*g));
+            seen.add_pair(error_sq, seen_in_both(before, now));
+        }
+    }
+    Ok((split, seen))
+}
+
+/// The training cameras of the ground truth's dataset and which of them see each point at
+/// frame 0 (no cameras when the ground truth is not inside a dataset that loads).
+struct Sight {
+    cameras: Vec<Camera>,
+    frame0: HashMap<String, Vec<bool>>,
+}
+
+impl Sight {
+    fn new(gt: &GroundTruth) -> Result<Self, SequenceEvalError> {
+        let dataset = gt.root.parent().and_then(|dir| Dataset::load(dir).ok());
+        let Some(dataset) = dataset else {
+            return Ok(Self { cameras: Vec::new(), frame0: HashMap::new() });
+        };
+        let cameras: Vec<Camera> = dataset.train.iter().map(|&c| dataset.cameras[c]).collect();
+        let truth = TriMesh::read_ply(&gt.mesh_path(0))?;
+        let points: Vec<[f64; 3]> = gt.points.iter().map(|(_, p)| *p).collect();
+        let seen = cameras_seeing(&points, (&truth.positions, &truth.faces), &cameras)
+            .map_err(|source| SequenceEvalError::Metric { path: gt.mesh_path(0), source })?;
+        let frame0 = gt.points.iter().map(|(id, _)| id.clone()).zip(seen).collect();
+        Ok(Self { cameras, frame0 })
+    }
 }
 
 /// Point-to-surface Chamfer of predicted frame `t` against the true mesh `truth`, scene units.
@@ -374,7 +447,7 @@ fn summarize(
     gt: &GroundTruth,
     options: &SequenceEvalOptions,
     tracked: &TrackReport,
-    (tracking, split): (Option<&TrackingReport>, SurfaceSplit),
+    (tracking, split, sight): (Option<&TrackingReport>, SurfaceSplit, SightSplit),
     frames: &[FrameScores],
     missing_frames: Vec<usize>,
     train_report: Option<PathBuf>,
@@ -399,6 +472,7 @@ fn summarize(
         tracking_max_over_size: tracking.map(|r| r.max / gt.size),
         tracking_off_surface_over_size: split.rms().map(|(o, _)| o / gt.size),
         tracking_along_surface_over_size: split.rms().map(|(_, a)| a / gt.size),
+        sight: SightScores::of(&sight, gt.size),
         tracking_worst_frame: worst(&|f| f.tracking_rmse_over_size),
         chamfer_mean_over_size: (!frames.is_empty())
             .then(|| frames.iter().map(|f| f.chamfer_over_size).sum::<f64>() / frames.len() as f64),

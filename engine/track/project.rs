@@ -38,16 +38,13 @@ pub fn project_tracks(
     points: &[TrackedPoint],
     camera: &Camera,
 ) -> Result<Vec<ImagePoint>, TrackError> {
-    let centre = camera.center();
     let mut out = Vec::with_capacity(frames.len() * points.len());
     for (t, positions) in frames.iter().enumerate() {
         let bvh = SurfaceBvh::build(positions, faces)?;
         for point in points {
             let p = DVec3::from(point.trajectory[t]);
             let (u, v) = camera.project(p).map_or((f64::NAN, f64::NAN), |uv| (uv.x, uv.y));
-            let inside =
-                u >= 0.0 && v >= 0.0 && u < camera.width as f64 && v < camera.height as f64;
-            let visible = inside && !bvh.hides(centre, p, SLACK);
+            let visible = bvh.sees(camera, p, SLACK).is_some();
             out.push(ImagePoint { id: point.id.clone(), frame: t, u, v, visible });
         }
     }

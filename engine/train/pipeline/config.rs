@@ -96,6 +96,13 @@ pub struct TemporalConfig {
     /// How far the coverage term searches for a vertex, pixels at the level's resolution
     /// (default 24).
     pub coverage_radius: u32,
+    /// Weight of the optical-flow term: each vertex a training view saw at frame t − 1 pulled
+    /// to where Lucas–Kanade follows its pixel into that view's image at t (0: off).
+    pub flow: f32,
+    /// Weight of the anchor term: each vertex a training view saw at frame 0 pulled to where
+    /// Lucas–Kanade finds its frame-0 pixel in that view's image at t, searched from the
+    /// frame's starting pose, so a slide along the surface does not add up (0: off).
+    pub anchor: f32,
     /// The pose the temporal regularizers (edge length, rigidity, rotation) compare against.
     pub regularizer_reference: ReferencePose,
     /// Thickness, × the subject's thickest parts (the 95th percentile of vertex thickness), up
@@ -267,6 +274,8 @@ impl Default for TemporalConfig {
             silhouette: 10.0,
             coverage: 0.01,
             coverage_radius: 24,
+            flow: 0.0,
+            anchor: 0.0,
             regularizer_reference: ReferencePose::Previous,
             limb_thickness: 0.3,
             graph: GraphConfig::default(),
@@ -391,6 +400,8 @@ impl TrainConfig {
             ("temporal.tolerance", self.temporal.tolerance),
             ("temporal.silhouette", self.temporal.silhouette),
             ("temporal.coverage", self.temporal.coverage),
+            ("temporal.flow", self.temporal.flow),
+            ("temporal.anchor", self.temporal.anchor),
             ("temporal.limb_thickness", self.temporal.limb_thickness),
             ("temporal.colour_lr_scale", self.temporal.colour_lr_scale),
             ("temporal.graph.arap", self.temporal.graph.arap),

@@ -4,10 +4,12 @@
 //! previous frame) — then Adam. Frame 0 also densifies and prunes through the topology.
 
 use super::config::{TemporalConfig, TrainConfig};
+use super::correspondences::{correspondences, SeenPose};
 use super::graph_stage::{solve_graph, GraphInput, GraphReport, ImageWeights};
 use crate::camera::Camera;
 use crate::eval::psnr;
 use crate::gpu::{GpuContext, Recorder};
+use crate::loss::flow::FlowTerm;
 use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm, SilhouetteView};
 use crate::mesh::bounding_diagonal;
 use crate::optim::LearningRates;
@@ -42,6 +44,9 @@ pub struct FrameReport {
     pub stop_reason: StopReason,
     /// The deformation graph's levels (later frames with a graph).
     pub graph: Option<GraphReport>,
+    /// What the flow and anchor terms matched (later frames with either on).
+    #[serde(default)]
+    pub correspondences: Option<CorrespondenceReport>,
     /// Training views left out of this frame: their mask is empty (the subject is lost there).
     pub lost_views: Vec<String>,
     /// Optimisation wall time (evaluation excluded), seconds.
@@ -71,6 +76,18 @@ pub struct FrameReport {
     pub truncated_steps: u32,
 }
 
+/// What a later frame's correspondence terms found in its images.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct CorrespondenceReport {
+    /// (vertex, view) pairs followed from frame t − 1's images.
+    pub flow_pairs: usize,
+    /// (vertex, view) pairs matched to frame 0's images.
+    pub anchor_pairs: usize,
+    /// Views where nothing could be matched (dark, saturated or textureless there, or the
+    /// subject hidden), "flow:" or "anchor:" before the name: the terms skip them.
+    pub unmatched_views: Vec<String>,
+}
+
 /// A frame to optimise: its views, where it starts, and what it keeps fixed.
 pub struct FrameTask<'a> {
     /// The frame index.
@@ -88,6 +105,18 @@ pub struct FrameTask<'a> {
     /// Frame 0's Gaussians, for a graph or regularizers configured against frame 0 (None on
     /// frame 0).
     pub frame0: Option<&'a GaussianScene>,
+    /// Frame t − 1's and frame 0's training views, for the flow and anchor terms (empty on
+    /// frame 0 or with the term off).
+    pub source_views: SourceViews<'a>,
+}
+
+/// The images the correspondence terms match frame t's against.
+#[derive(Clone, Copy, Default)]
+pub struct SourceViews<'a> {
+    /// Frame t − 1's training views (the flow term).
+    pub previous: &'a [ViewTarget],
+    /// Frame 0's training views (the anchor term).
+    pub frame0: &'a [ViewTarget],
 }
 
 /// The optimised Gaussians (or, after a non-finite loss, the error naming it). Later frames
@@ -112,17 +141,24 @@ pub fn optimize_frame(
     let mut report = empty_report(task.frame);
 
     let silhouette = silhouette_term(ctx, &task, canonical, t)?;
+    let matches = match_terms(ctx, &task, &task.start, t)?;
+    report.correspondences = matches.report.clone();
     let (mut start, mut graph_s) = (std::mem::take(&mut task.start), 0.0);
     if !canonical && t.graph.nodes > 0 {
         let t0 = Instant::now();
-        let graph = GraphRun { silhouette: silhouette.as_ref(), weights, settings: &settings };
+        let graph = GraphRun {
+            silhouette: silhouette.as_ref(),
+            matches: &matches,
+            weights,
+            settings: &settings,
+        };
         let (moved, graph) = deform_start(ctx, &task, &start, config, graph, &mut rng)?;
         (start, report.graph, graph_s) = (moved, Some(graph), t0.elapsed().as_secs_f64());
     }
 
     let mut trainer = Trainer::new(ctx, &start, task.train)?.with_second_render()?;
     task.mesh.positions = start.positions.clone();
-    let terms = frame_terms(ctx, &task, &start, &first.camera, t, silhouette)?;
+    let terms = frame_terms(ctx, &task, &start, &first.camera, t, (silhouette, matches))?;
     let (schedule, plateau) = frame_schedule(config, canonical, weights, task.train.len());
     let budget = match config.canonical.budget {
         0 => covered_pixels(task.train),
@@ -203,10 +239,91 @@ fn silhouette_term(
     Ok(Some(SilhouetteTerm::new(ctx, &views)?))
 }
 
+/// A later frame's flow and anchor terms (None where off) and what they matched.
+#[derive(Default)]
+pub struct MatchTerms {
+    pub flow: Option<FlowTerm>,
+    pub anchor: Option<FlowTerm>,
+    report: Option<CorrespondenceReport>,
+}
+
+impl MatchTerms {
+    /// Records both terms with their weights (see [`FlowTerm::record`]).
+    pub fn record<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        (positions, grads): (&'a crate::gpu::GpuBuffer<f32>, &'a crate::gpu::GpuBuffer<f32>),
+        t: &TemporalConfig,
+        near: f32,
+    ) -> crate::gpu::GpuResult<()> {
+        for (term, weight) in [(&self.flow, t.flow), (&self.anchor, t.anchor)] {
+            if let Some(term) = term {
+                term.record(rec, positions, grads, weight, near)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Both terms' weighted losses summed since the last call.
+    pub fn take_loss(&self) -> crate::gpu::GpuResult<f32> {
+        let mut sum = 0.0;
+        for term in [&self.flow, &self.anchor].into_iter().flatten() {
+            sum += term.take_loss()?;
+        }
+        Ok(sum)
+    }
+}
+
+/// The flow and anchor terms of a later frame starting at `start` (none on frame 0 or where
+/// a weight is 0), matched from the task's source views.
+fn match_terms(
+    ctx: &Arc<GpuContext>,
+    task: &FrameTask,
+    start: &GaussianScene,
+    t: &TemporalConfig,
+) -> Result<MatchTerms, TrainError> {
+    let (Some(previous), Some(frame0)) = (task.previous, task.frame0) else {
+        return Ok(MatchTerms::default());
+    };
+    if t.flow <= 0.0 && t.anchor <= 0.0 {
+        return Ok(MatchTerms::default());
+    }
+    let faces = task.mesh.live_faces();
+    let mut report = CorrespondenceReport::default();
+    let mut term = |weight: f32, source: SeenPose, name: &str| -> Result<_, TrainError> {
+        if weight <= 0.0 {
+            return Ok((None, 0));
+        }
+        let found = correspondences(source, &start.positions, &faces, task.train);
+        if let Ok(dir) = std::env::var("TAGSPLAT_DUMP_MATCHES") {
+            let mut text = String::new();
+            for (k, m) in found.targets.iter().enumerate().filter(|(_, m)| m.weight > 0.0) {
+                let (vertex, view) = (k / found.cameras.len(), k % found.cameras.len());
+                let name = &task.train.iter().find(|v| v.camera == found.cameras[view]).unwrap().name;
+                text += &format!("{vertex},{name},{},{}\n", m.u, m.v);
+            }
+            std::fs::write(format!("{dir}/{name}_{}.csv", task.frame), text).unwrap();
+        }
+        let names = found.unmatched_views.iter().map(|v| format!("{name}: {v}"));
+        report.unmatched_views.extend(names);
+        let term = FlowTerm::new(ctx, &found.cameras, &found.targets)?;
+        let pairs = term.pairs();
+        Ok((Some(term), pairs))
+    };
+    let views = task.source_views;
+    let (flow, flow_pairs) =
+        term(t.flow, SeenPose { positions: &previous.positions, views: views.previous }, "flow")?;
+    let (anchor, anchor_pairs) =
+        term(t.anchor, SeenPose { positions: &frame0.positions, views: views.frame0 }, "anchor")?;
+    (report.flow_pairs, report.anchor_pairs) = (flow_pairs, anchor_pairs);
+    Ok(MatchTerms { flow, anchor, report: Some(report) })
+}
+
 /// What the graph stage shares with the refinement.
 struct GraphRun<'a> {
     /// None when the silhouette weight is 0: the graph then runs with an empty term.
     silhouette: Option<&'a SilhouetteTerm>,
+    matches: &'a MatchTerms,
     weights: ImageWeights,
     settings: &'a RenderSettings,
 }
@@ -238,6 +355,7 @@ fn deform_start(
         faces: &faces,
         neighbourhoods: &neighbourhoods,
         silhouette,
+        matches: run.matches,
     };
     solve_graph(ctx, &input, config, run.weights, run.settings, rng)
 }
@@ -250,7 +368,7 @@ fn frame_terms(
     start: &GaussianScene,
     camera: &Camera,
     t: &TemporalConfig,
-    silhouette: Option<SilhouetteTerm>,
+    (silhouette, matches): (Option<SilhouetteTerm>, MatchTerms),
 ) -> Result<FrameTerms, TrainError> {
     let canonical = task.previous.is_none();
     let faces = task.mesh.live_faces();
@@ -267,7 +385,7 @@ fn frame_terms(
         true => None,
         false => Some(CoverageTerm::new(ctx, start.len(), pixels, t.coverage_radius)?),
     };
-    Ok(FrameTerms { mesh_term, regs, reference, silhouette, coverage })
+    Ok(FrameTerms { mesh_term, regs, reference, silhouette, coverage, matches })
 }
 
 /// The refinement's schedule and stopping rule: frame 0 runs all its iterations with the SH
@@ -322,6 +440,8 @@ struct FrameTerms {
     reference: Option<GaussianBuffers>,
     silhouette: Option<SilhouetteTerm>,
     coverage: Option<CoverageTerm>,
+    /// The flow and anchor terms (later frames with either on).
+    matches: MatchTerms,
 }
 
 /// A frame's part of the loop: the mesh, regularizer, silhouette and coverage terms, frame 0's
@@ -395,6 +515,7 @@ impl Stage for FrameStage<'_, '_> {
             let images = (target, trainer.rendered());
             c.record(rec, camera, images, &params.positions, &grads.positions, t.coverage, near)?;
         }
+        terms.matches.record(rec, (&params.positions, &grads.positions), t, near)?;
         rec.end_pass();
         Ok(())
     }
@@ -449,7 +570,8 @@ fn read_losses(
         terms.mesh_term.take_terms()?.total(weights.mesh) / steps,
     );
     let sil = (terms.silhouette.as_ref().map(|s| s.take_loss()).transpose()?.unwrap_or(0.0)
-        + terms.coverage.as_ref().map(|c| c.take_loss()).transpose()?.unwrap_or(0.0))
+        + terms.coverage.as_ref().map(|c| c.take_loss()).transpose()?.unwrap_or(0.0)
+        + terms.matches.take_loss()?)
         / steps;
     let regularizers: Losses<f32> = terms.regs.read_losses()?;
     if !(gs.is_finite()
@@ -481,6 +603,7 @@ fn empty_report(frame: usize) -> FrameReport {
         colour_iterations: 0,
         stop_reason: StopReason::MaxIterations,
         graph: None,
+        correspondences: None,
         lost_views: Vec::new(),
         wall_s: 0.0,
         gaussians: 0,

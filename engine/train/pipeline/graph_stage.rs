@@ -5,6 +5,7 @@
 //! every level stops at its plateau.
 
 use super::config::{ReferencePose, TrainConfig};
+use super::frame::MatchTerms;
 use crate::deform::{build_graph, fit_nodes, GraphDeformer};
 use crate::gpu::{GpuContext, Recorder};
 use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm};
@@ -57,6 +58,8 @@ pub struct GraphInput<'a> {
     pub faces: &'a [[u32; 3]],
     pub neighbourhoods: &'a Neighbourhoods,
     pub silhouette: &'a SilhouetteTerm,
+    /// The flow and anchor terms (empty when off).
+    pub matches: &'a MatchTerms,
 }
 
 /// The loss weights of a step: λ per rgba channel of the Gaussian and mesh renders.
@@ -138,6 +141,12 @@ pub fn solve_graph(
                 config.temporal.coverage,
                 settings.near,
             )?;
+            input.matches.record(
+                &mut rec,
+                (&trainer.params().positions, &trainer.grads().positions),
+                &config.temporal,
+                settings.near,
+            )?;
             deformer.record_gradients(&mut rec, &trainer.grads().positions)?;
             adam_step += 1;
             // Tenfold decay over the level's cap.
@@ -158,6 +167,7 @@ pub fn solve_graph(
                     ("mesh image", mesh_term.take_terms()?.total(weights.mesh)),
                     ("silhouette", input.silhouette.take_loss()?),
                     ("coverage", coverage.take_loss()?),
+                    ("flow and anchor", input.matches.take_loss()?),
                     ("ARAP", deformer.take_arap_loss()?),
                 ];
                 // The policy of every training loop: stop at the first non-finite pass and

@@ -5,6 +5,7 @@
 //! solved first, then every vertex refined, each stage until its loss stops improving.
 
 pub mod config;
+mod correspondences;
 mod frame;
 mod graph_stage;
 mod html_report;

@@ -3,7 +3,7 @@
 //! running the same job again resumes after the last complete frame.
 
 use super::config::TrainConfig;
-use super::frame::{optimize_frame, FrameReport, FrameTask};
+use super::frame::{optimize_frame, FrameReport, FrameTask, SourceViews};
 use super::html_report::write_html_report;
 use super::run_log::RunLog;
 use crate::camera::mean_up;
@@ -176,6 +176,8 @@ fn run_logged(
         log.line(&frame_lines(first))?;
     }
     let frame0 = previous.clone();
+    let temporal = &job.config.temporal;
+    let frame0_views = source_views(&dataset, 0, temporal.anchor, job)?;
     // A range that starts after frame 1 continues from the frame before it (checked above).
     let first = 1.max(frames.start);
     if first > 1 {
@@ -200,6 +202,7 @@ fn run_logged(
         let (train, lost): (Vec<_>, Vec<_>) = train.into_iter().partition(ViewTarget::has_subject);
         let lost_views: Vec<String> = lost.into_iter().map(|v| v.name).collect();
         let start = extrapolate(&previous, before_previous.as_ref());
+        let previous_views = source_views(&dataset, t - 1, temporal.flow, job)?;
         let (scene, frame_report) = if train.is_empty() {
             let report = FrameReport::without_views(t, start.len(), lost_views);
             mesh.positions = start.positions.clone();
@@ -213,6 +216,7 @@ fn run_logged(
                 mesh: &mut mesh,
                 previous: Some(&previous),
                 frame0: Some(&frame0),
+                source_views: SourceViews { previous: &previous_views, frame0: &frame0_views },
             };
             let (scene, report) =
                 optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
@@ -343,6 +347,7 @@ fn canonical_start(
         mesh: &mut mesh,
         previous: None,
         frame0: None,
+        source_views: SourceViews::default(),
     };
     let (scene, frame_report) =
         optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
@@ -406,6 +411,20 @@ fn views(
         load_targets(dataset, t, &dataset.test, config.background, true)?
     };
     Ok((train, eval))
+}
+
+/// Frame `t`'s training views when a correspondence term of `weight` matches against them
+/// (none when it is off).
+fn source_views(
+    dataset: &Dataset,
+    t: usize,
+    weight: f32,
+    job: &TrainJob,
+) -> Result<Vec<ViewTarget>, TrainError> {
+    if weight <= 0.0 {
+        return Ok(Vec::new());
+    }
+    load_targets(dataset, t, &dataset.train, job.config.background, true)
 }
 
 fn write_frame(
