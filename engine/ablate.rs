@@ -34,6 +34,8 @@ pub fn temporal_ablations() -> Vec<Ablation> {
         Ablation { name: "w/o limb stiffness", apply: |c| c.temporal.limb_thickness = 0.0 },
         Ablation { name: "w/o Huber strain", apply: |c| c.loss.huber = 0.0 },
         Ablation { name: "w/o colour fit", apply: |c| c.temporal.colour_iterations = 0 },
+        Ablation { name: "with anchor term", apply: |c| c.temporal.anchor = ANCHOR_WEIGHT },
+        Ablation { name: "with flow term", apply: |c| c.temporal.flow = FLOW_WEIGHT },
         Ablation {
             name: "w/o adaptive iterations",
             apply: |c| {
@@ -45,11 +47,21 @@ pub fn temporal_ablations() -> Vec<Ablation> {
     ]
 }
 
+/// The anchor term's weight in its ablation row and for textured captures (off by default: it
+/// helps where the skin carries a pattern and costs fox_walk's flat-coloured skin;
+/// docs/log/2026-11-28-image-anchors.md).
+pub const ANCHOR_WEIGHT: f32 = 3000.0;
+
+/// The flow term's weight in its ablation row (off by default: on fox_run_textured it moved
+/// the score within the run-to-run spread, docs/log/2026-11-28-image-anchors.md).
+const FLOW_WEIGHT: f32 = 300.0;
+
 /// The temporal stage before the deformation graph, the silhouette and coverage terms, the
-/// limb stiffness, the Huber strain, the adaptive stop and the colour fit: 300 per-vertex
-/// iterations per frame from the extrapolated pose.
+/// limb stiffness, the Huber strain, the adaptive stop, the colour fit and the anchor and flow
+/// terms: 300 per-vertex iterations per frame from the extrapolated pose.
 pub fn previous_temporal_stage(c: &mut TrainConfig) {
     c.loss.huber = 0.0;
+    (c.temporal.anchor, c.temporal.flow) = (0.0, 0.0);
     (
         c.temporal.graph.nodes,
         c.temporal.silhouette,

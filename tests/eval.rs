@@ -458,3 +458,76 @@ fn bad_benchmark_input_names_the_file() {
     assert!(e.contains("0..5") && e.contains("0..2"), "{e}");
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// A Panoptic-layout `train_meta.json` in `root` for `frames` frames: one 64² camera per
+/// (eye, point looked at) of `rig` (image files are not read).
+fn write_rig(root: &std::path::Path, frames: usize, rig: &[([f64; 3], [f64; 3])]) {
+    use glam::DVec3;
+    let w2c: Vec<[[f64; 4]; 4]> = rig
+        .iter()
+        .map(|&(eye, at)| {
+            let camera = tagsplat::camera::Camera::look_at(
+                64,
+                64,
+                40.0,
+                40.0,
+                32.0,
+                32.0,
+                DVec3::from(eye),
+                DVec3::from(at),
+                DVec3::Y,
+            )
+            .unwrap();
+            let m = camera.world_to_camera;
+            std::array::from_fn(|r| std::array::from_fn(|c| m.col(c)[r]))
+        })
+        .collect();
+    let k = [[40.0, 0.0, 31.5], [0.0, 40.0, 31.5], [0.0, 0.0, 1.0]];
+    let per_frame = |f: &dyn Fn(usize, usize) -> serde_json::Value| -> Vec<Vec<serde_json::Value>> {
+        (0..frames).map(|t| (0..rig.len()).map(|c| f(t, c)).collect()).collect()
+    };
+    let meta = serde_json::json!({
+        "w": 64, "h": 64,
+        "k": per_frame(&|_, _| serde_json::json!(k)),
+        "w2c": per_frame(&|_, c| serde_json::json!(w2c[c])),
+        "fn": per_frame(&|t, c| serde_json::json!(format!("c{c:02}/{t:06}.png"))),
+        "cam_id": per_frame(&|_, c| serde_json::json!(c)),
+    });
+    std::fs::write(root.join("train_meta.json"), meta.to_string()).unwrap();
+}
+
+#[test]
+fn the_tracking_error_splits_by_how_many_training_cameras_see_the_points() {
+    use tagsplat::score::{evaluate_sequence, find_ground_truth, GroundTruth, SequenceEvalOptions};
+    let root = temp("sight");
+    let meshes = write_gt(&root, 3);
+    let gt = GroundTruth::read(&find_ground_truth(&root).unwrap()).unwrap();
+    let options = SequenceEvalOptions { chamfer_samples: 500, ..Default::default() };
+    // A prediction slid along the patch by 0.2 on frames 1 and 2.
+    let pred = root.join("pred");
+    std::fs::create_dir_all(pred.join("meshes")).unwrap();
+    for (t, m) in meshes.iter().enumerate() {
+        let mut m = m.clone();
+        m.positions.iter_mut().filter(|_| t > 0).for_each(|v| v[1] += 0.2);
+        m.write_ply(&pred.join(format!("meshes/{t:06}.ply"))).unwrap();
+    }
+    // No dataset around gt/: no cameras, no split.
+    let alone = evaluate_sequence(&pred, &gt, &options).unwrap().summary;
+    assert_eq!(alone.sight, Default::default());
+    // Three cameras above the patch see every point in every frame: all of the error is seen.
+    let patch = [2.0, 2.0, 0.0];
+    let above = [([2.0, 2.0, 6.0], patch), ([0.5, 1.0, 6.0], patch), ([3.5, 3.0, 6.0], patch)];
+    write_rig(&root, 3, &above);
+    let above = evaluate_sequence(&pred, &gt, &options).unwrap().summary;
+    let rmse = above.tracking_rmse_over_size.unwrap();
+    assert_eq!(above.sight.seen_share, Some(1.0), "{above:?}");
+    assert!((above.sight.tracking_seen_over_size.unwrap() - rmse).abs() < 1e-9, "{above:?}");
+    assert_eq!(above.sight.tracking_unseen_over_size, None);
+    // Two of them, and one that looks away: no point has three cameras.
+    let away = [above[0], above[1], ([2.0, 2.0, 6.0], [2.0, 2.0, 12.0])];
+    write_rig(&root, 3, &away);
+    let below = evaluate_sequence(&pred, &gt, &options).unwrap().summary;
+    assert_eq!(below.sight.seen_share, Some(0.0), "{below:?}");
+    assert!((below.sight.tracking_unseen_over_size.unwrap() - rmse).abs() < 1e-9, "{below:?}");
+    std::fs::remove_dir_all(&root).unwrap();
+}

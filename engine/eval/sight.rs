@@ -161,6 +161,9 @@ mod tests {
             Err(EvalError::NoArea)
         ));
         // No cameras: nothing sees anything.
-        assert_eq!(cameras_seeing(&[[0.0; 3]], (&positions, &faces), &[]).unwrap(), vec![Vec::<bool>::new()]);
+        assert_eq!(
+            cameras_seeing(&[[0.0; 3]], (&positions, &faces), &[]).unwrap(),
+            vec![Vec::<bool>::new()]
+        );
     }
 }

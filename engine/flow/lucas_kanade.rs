@@ -118,7 +118,11 @@ impl LucasKanade {
         let side = window_side(self.window_radius);
         let (mut fine, mut coarse) = (Template::new(side), Template::new(side));
         let mut scratch = (&mut fine, &mut coarse);
-        points.iter().zip(guesses).map(|(&p, &g)| self.follow(from, to, [p, g], &mut scratch)).collect()
+        points
+            .iter()
+            .zip(guesses)
+            .map(|(&p, &g)| self.follow(from, to, [p, g], &mut scratch))
+            .collect()
     }
 
     /// One point through the pyramids from where it is guessed to be, coarse to fine; the
@@ -536,7 +540,8 @@ mod tests {
         let texture = Texture::new(1);
         let (prev, next) = (texture.image(w, h, [0.0; 2]), texture.image(w, h, shift));
         let points = grid(w, h, 16, 6);
-        let found = LucasKanade::default().track(gray(&prev, w, h), gray(&next, w, h), &points, &points);
+        let found =
+            LucasKanade::default().track(gray(&prev, w, h), gray(&next, w, h), &points, &points);
         assert_recovered(&points, &found, shift);
     }
 
@@ -568,8 +573,10 @@ mod tests {
         let recovered = errors(&points, &blind, shift).iter().filter(|&&e| e < 0.05).count();
         assert!(recovered * 4 < points.len(), "{recovered} of {}", points.len());
         // A guess three pixels off, as a predicted pose gives, is refined to the motion.
-        let guesses: Vec<[f32; 2]> =
-            points.iter().map(|p| [p[0] + shift[0] as f32 - 3.0, p[1] + shift[1] as f32 + 2.0]).collect();
+        let guesses: Vec<[f32; 2]> = points
+            .iter()
+            .map(|p| [p[0] + shift[0] as f32 - 3.0, p[1] + shift[1] as f32 + 2.0])
+            .collect();
         let checked = tracker.track_consistent(prev, next, &points, &guesses, 0.1);
         assert_recovered(&points, &checked, shift);
         // A non-finite guess is not followed.
@@ -593,14 +600,23 @@ mod tests {
         let image = gray(&texture, 64, 64);
         let outside = [[-1.0, 10.0], [10.0, 63.6], [f32::NAN, 5.0], [5.0, f32::INFINITY]];
         assert_eq!(tracker.track(image, image, &outside, &outside), vec![None; 4]);
-        assert_eq!(tracker.track(image, image, &[[32.0, 32.0]], &[[32.0, 32.0]]), vec![Some([32.0, 32.0])]);
+        assert_eq!(
+            tracker.track(image, image, &[[32.0, 32.0]], &[[32.0, 32.0]]),
+            vec![Some([32.0, 32.0])]
+        );
         assert!(tracker.track(image, image, &[], &[]).is_empty());
         assert!(tracker.track_consistent(image, image, &[], &[], 1.0).is_empty());
 
         let tiny = [0.25];
         for (a, b) in [(gray(&[], 0, 0), gray(&[], 0, 0)), (gray(&tiny, 1, 1), gray(&tiny, 1, 1))] {
-            assert_eq!(tracker.track(a, b, &[[0.0, 0.0], [0.5, 0.5]], &[[0.0, 0.0], [0.5, 0.5]]), vec![None; 2]);
-            assert_eq!(tracker.track_consistent(a, b, &[[0.0, 0.0]], &[[0.0, 0.0]], 1.0), vec![None]);
+            assert_eq!(
+                tracker.track(a, b, &[[0.0, 0.0], [0.5, 0.5]], &[[0.0, 0.0], [0.5, 0.5]]),
+                vec![None; 2]
+            );
+            assert_eq!(
+                tracker.track_consistent(a, b, &[[0.0, 0.0]], &[[0.0, 0.0]], 1.0),
+                vec![None]
+            );
         }
         let mismatched = [gray(&texture, 32, 128), gray(&texture, 64, 63), gray(&tiny, 64, 64)];
         for other in mismatched {
@@ -655,7 +671,8 @@ mod tests {
         let points = grid(w, h, 12, 3);
         assert!(points.len() >= 6000, "{}", points.len());
         let start = std::time::Instant::now();
-        let found = LucasKanade::default().track(gray(&prev, w, h), gray(&next, w, h), &points, &points);
+        let found =
+            LucasKanade::default().track(gray(&prev, w, h), gray(&next, w, h), &points, &points);
         println!("{} points tracked in {:?}", points.len(), start.elapsed());
         let recovered = errors(&points, &found, shift).iter().filter(|&&e| e < 0.05).count();
         assert!(recovered * 100 >= points.len() * 99, "{recovered} of {}", points.len());

@@ -1,5 +1,8 @@
-//! Optical flow between consecutive frames of one camera: where image points moved.
+//! Optical flow between images of one camera: where image points moved ([`LucasKanade`]), and
+//! points followed through a whole sequence of frames ([`ImageTracks`]).
 
 mod lucas_kanade;
+mod tracks;
 
 pub use lucas_kanade::{luma, GrayImage, LucasKanade};
+pub use tracks::ImageTracks;

@@ -378,7 +378,9 @@ fn split_frame(
         .tracks
         .iter()
         .filter(|r| r.frame as usize == t)
-        .filter_map(|r| by_id.get(r.id.as_str()).map(|p| (r.id.as_str(), p.trajectory[i], r.position)))
+        .filter_map(|r| {
+            by_id.get(r.id.as_str()).map(|p| (r.id.as_str(), p.trajectory[i], r.position))
+        })
         .collect();
     let metric = |source| SequenceEvalError::Metric { path: gt.mesh_path(t), source };
     let pairs: Vec<([f64; 3], [f64; 3])> = rows.iter().map(|&(_, p, g)| (p, g)).collect();

@@ -100,8 +100,9 @@ pub struct TemporalConfig {
     /// to where Lucas–Kanade follows its pixel into that view's image at t (0: off).
     pub flow: f32,
     /// Weight of the anchor term: each vertex a training view saw at frame 0 pulled to where
-    /// Lucas–Kanade finds its frame-0 pixel in that view's image at t, searched from the
-    /// frame's starting pose, so a slide along the surface does not add up (0: off).
+    /// that view's image track of its frame-0 pixel is at t (Lucas–Kanade frame to frame, held
+    /// to the frame-0 image, revived near the starting pose when lost), so a slide along the
+    /// surface does not add up (0: off).
     pub anchor: f32,
     /// The pose the temporal regularizers (edge length, rigidity, rotation) compare against.
     pub regularizer_reference: ReferencePose,

@@ -4,7 +4,7 @@
 //! previous frame) — then Adam. Frame 0 also densifies and prunes through the topology.
 
 use super::config::{TemporalConfig, TrainConfig};
-use super::correspondences::{correspondences, SeenPose};
+use super::correspondences::{correspondences, Correspondences, SeenPose, VertexTracks};
 use super::graph_stage::{solve_graph, GraphInput, GraphReport, ImageWeights};
 use crate::camera::Camera;
 use crate::eval::psnr;
@@ -81,7 +81,7 @@ pub struct FrameReport {
 pub struct CorrespondenceReport {
     /// (vertex, view) pairs followed from frame t − 1's images.
     pub flow_pairs: usize,
-    /// (vertex, view) pairs matched to frame 0's images.
+    /// (vertex, view) pairs whose frame-0 pixel is still tracked in the view.
     pub anchor_pairs: usize,
     /// Views where nothing could be matched (dark, saturated or textureless there, or the
     /// subject hidden), "flow:" or "anchor:" before the name: the terms skip them.
@@ -105,18 +105,18 @@ pub struct FrameTask<'a> {
     /// Frame 0's Gaussians, for a graph or regularizers configured against frame 0 (None on
     /// frame 0).
     pub frame0: Option<&'a GaussianScene>,
-    /// Frame t − 1's and frame 0's training views, for the flow and anchor terms (empty on
-    /// frame 0 or with the term off).
-    pub source_views: SourceViews<'a>,
+    /// What the flow and anchor terms match frame t's images against (nothing on frame 0 or
+    /// with the terms off).
+    pub sources: MatchSources<'a>,
 }
 
-/// The images the correspondence terms match frame t's against.
+/// What the correspondence terms match a later frame's images against.
 #[derive(Clone, Copy, Default)]
-pub struct SourceViews<'a> {
+pub struct MatchSources<'a> {
     /// Frame t − 1's training views (the flow term).
     pub previous: &'a [ViewTarget],
-    /// Frame 0's training views (the anchor term).
-    pub frame0: &'a [ViewTarget],
+    /// Frame 0's vertices tracked through the images up to frame t (the anchor term).
+    pub tracks: Option<&'a VertexTracks>,
 }
 
 /// The optimised Gaussians (or, after a non-finite loss, the error naming it). Later frames
@@ -282,39 +282,29 @@ fn match_terms(
     start: &GaussianScene,
     t: &TemporalConfig,
 ) -> Result<MatchTerms, TrainError> {
-    let (Some(previous), Some(frame0)) = (task.previous, task.frame0) else {
-        return Ok(MatchTerms::default());
-    };
+    let Some(previous) = task.previous else { return Ok(MatchTerms::default()) };
     if t.flow <= 0.0 && t.anchor <= 0.0 {
         return Ok(MatchTerms::default());
     }
     let faces = task.mesh.live_faces();
+    let sources = task.sources;
+    let flow = (t.flow > 0.0).then(|| {
+        let source = SeenPose { positions: &previous.positions, views: sources.previous };
+        correspondences(source, &start.positions, &faces, task.train)
+    });
+    let anchor = (sources.tracks.filter(|_| t.anchor > 0.0))
+        .map(|tracks| tracks.targets(&start.positions, &faces, task.train));
     let mut report = CorrespondenceReport::default();
-    let mut term = |weight: f32, source: SeenPose, name: &str| -> Result<_, TrainError> {
-        if weight <= 0.0 {
-            return Ok((None, 0));
-        }
-        let found = correspondences(source, &start.positions, &faces, task.train);
-        if let Ok(dir) = std::env::var("TAGSPLAT_DUMP_MATCHES") {
-            let mut text = String::new();
-            for (k, m) in found.targets.iter().enumerate().filter(|(_, m)| m.weight > 0.0) {
-                let (vertex, view) = (k / found.cameras.len(), k % found.cameras.len());
-                let name = &task.train.iter().find(|v| v.camera == found.cameras[view]).unwrap().name;
-                text += &format!("{vertex},{name},{},{}\n", m.u, m.v);
-            }
-            std::fs::write(format!("{dir}/{name}_{}.csv", task.frame), text).unwrap();
-        }
+    let mut upload = |found: Option<Correspondences>, name: &str| -> Result<_, TrainError> {
+        let Some(found) = found else { return Ok((None, 0)) };
         let names = found.unmatched_views.iter().map(|v| format!("{name}: {v}"));
         report.unmatched_views.extend(names);
         let term = FlowTerm::new(ctx, &found.cameras, &found.targets)?;
         let pairs = term.pairs();
         Ok((Some(term), pairs))
     };
-    let views = task.source_views;
-    let (flow, flow_pairs) =
-        term(t.flow, SeenPose { positions: &previous.positions, views: views.previous }, "flow")?;
-    let (anchor, anchor_pairs) =
-        term(t.anchor, SeenPose { positions: &frame0.positions, views: views.frame0 }, "anchor")?;
+    let (flow, flow_pairs) = upload(flow, "flow")?;
+    let (anchor, anchor_pairs) = upload(anchor, "anchor")?;
     (report.flow_pairs, report.anchor_pairs) = (flow_pairs, anchor_pairs);
     Ok(MatchTerms { flow, anchor, report: Some(report) })
 }

@@ -3,7 +3,8 @@
 //! running the same job again resumes after the last complete frame.
 
 use super::config::TrainConfig;
-use super::frame::{optimize_frame, FrameReport, FrameTask, SourceViews};
+use super::correspondences::{SeenPose, VertexTracks};
+use super::frame::{optimize_frame, FrameReport, FrameTask, MatchSources};
 use super::html_report::write_html_report;
 use super::run_log::RunLog;
 use crate::camera::mean_up;
@@ -177,15 +178,18 @@ fn run_logged(
     }
     let frame0 = previous.clone();
     let temporal = &job.config.temporal;
-    let frame0_views = source_views(&dataset, 0, temporal.anchor, job)?;
     // A range that starts after frame 1 continues from the frame before it (checked above).
     let first = 1.max(frames.start);
+    let mut tracks = start_tracks(&dataset, &out, (&frame0, &mesh), first, job)?;
     if first > 1 {
         previous = out.read_frame(first - 1)?.1;
     }
     let mut before_previous: Option<GaussianScene> = None;
     for t in first..frames.end {
         if out.is_complete(t) {
+            if let Some(tracks) = tracks.as_mut() {
+                replay_tracks(tracks, (&dataset, &out), t, &mesh, job)?;
+            }
             before_previous = Some(std::mem::replace(&mut previous, out.read_frame(t)?.1));
             continue;
         }
@@ -197,12 +201,15 @@ fn run_logged(
             return Err(TrainError::MissingFrame { frame: t, needs: t - 1, out });
         }
         let (train, eval) = views(&dataset, t, &job.config)?;
-        // A view whose mask is empty has lost the subject: it is left out of this frame, and
-        // a frame with no view left keeps its extrapolated pose; the report names both.
-        let (train, lost): (Vec<_>, Vec<_>) = train.into_iter().partition(ViewTarget::has_subject);
-        let lost_views: Vec<String> = lost.into_iter().map(|v| v.name).collect();
+        let (train, lost_views) = with_subject(train);
         let start = extrapolate(&previous, before_previous.as_ref());
         let previous_views = source_views(&dataset, t - 1, temporal.flow, job)?;
+        // The tracks' step is part of the frame's time.
+        let tracks_started = Instant::now();
+        if let Some(tracks) = tracks.as_mut() {
+            tracks.advance(&train, &start.positions, &mesh.live_faces());
+        }
+        let tracks_s = tracks_started.elapsed().as_secs_f64();
         let (scene, frame_report) = if train.is_empty() {
             let report = FrameReport::without_views(t, start.len(), lost_views);
             mesh.positions = start.positions.clone();
@@ -216,7 +223,7 @@ fn run_logged(
                 mesh: &mut mesh,
                 previous: Some(&previous),
                 frame0: Some(&frame0),
-                source_views: SourceViews { previous: &previous_views, frame0: &frame0_views },
+                sources: MatchSources { previous: &previous_views, tracks: tracks.as_ref() },
             };
             let (scene, report) =
                 optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
@@ -227,7 +234,7 @@ fn run_logged(
                         iterations,
                     })
                 })?;
-            (scene, FrameReport { lost_views, ..report })
+            (scene, FrameReport { lost_views, wall_s: report.wall_s + tracks_s, ..report })
         };
         write_frame(&out, t, &mesh, &scene)?;
         log.line(&frame_lines(&frame_report))?;
@@ -297,6 +304,10 @@ fn frame_lines(f: &FrameReport) -> String {
         text +=
             &format!("\nwarning: frame {}: views left out, their mask is empty: {views}", f.frame);
     }
+    if let Some(c) = f.correspondences.as_ref().filter(|c| !c.unmatched_views.is_empty()) {
+        let views = c.unmatched_views.join(", ");
+        text += &format!("\nwarning: frame {}: nothing to match in these views (dark, saturated, textureless or the subject hidden; the correspondence terms skip them): {views}", f.frame);
+    }
     if f.truncated_steps > 0 {
         let n = f.truncated_steps;
         text += &format!("\nwarning: frame {}: {n} steps outgrew the splatter's intersection buffers (rendered without the excess; the buffers grew)", f.frame);
@@ -347,7 +358,7 @@ fn canonical_start(
         mesh: &mut mesh,
         previous: None,
         frame0: None,
-        source_views: SourceViews::default(),
+        sources: MatchSources::default(),
     };
     let (scene, frame_report) =
         optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
@@ -399,6 +410,14 @@ fn initial_mesh(
 
 /// Training and evaluation targets of frame `t` (evaluation on held-out cameras, or the
 /// training ones when there are none).
+/// The views of `views` that show the subject, and the names of those that lost it (an empty
+/// mask): a later frame leaves them out, and a frame with no view left keeps its
+/// extrapolated pose; the report names both.
+fn with_subject(views: Vec<ViewTarget>) -> (Vec<ViewTarget>, Vec<String>) {
+    let (shown, lost): (Vec<_>, Vec<_>) = views.into_iter().partition(ViewTarget::has_subject);
+    (shown, lost.into_iter().map(|v| v.name).collect())
+}
+
 fn views(
     dataset: &Dataset,
     t: usize,
@@ -425,6 +444,45 @@ fn source_views(
         return Ok(Vec::new());
     }
     load_targets(dataset, t, &dataset.train, job.config.background, true)
+}
+
+/// The anchor term's image tracks of frame 0's vertices, stepped through the training views
+/// of frames 1..`first` (the frames a resumed run has on disk; a fresh run steps them as it
+/// goes). None when the term is off.
+fn start_tracks(
+    dataset: &Dataset,
+    out: &SequenceOutput,
+    (frame0, mesh): (&GaussianScene, &ManifoldMesh),
+    first: usize,
+    job: &TrainJob,
+) -> Result<Option<VertexTracks>, TrainError> {
+    if job.config.temporal.anchor <= 0.0 {
+        return Ok(None);
+    }
+    let frame0_views = source_views(dataset, 0, 1.0, job)?;
+    let source = SeenPose { positions: &frame0.positions, views: &frame0_views };
+    let mut tracks = VertexTracks::start(source, &mesh.live_faces());
+    for t in 1..first {
+        replay_tracks(&mut tracks, (dataset, out), t, mesh, job)?;
+    }
+    Ok(Some(tracks))
+}
+
+/// Steps the image tracks to frame `t`, which is on disk, as its training did: its training
+/// views that show the subject, its starting pose extrapolated from frames t − 1 and t − 2.
+fn replay_tracks(
+    tracks: &mut VertexTracks,
+    (dataset, out): (&Dataset, &SequenceOutput),
+    t: usize,
+    mesh: &ManifoldMesh,
+    job: &TrainJob,
+) -> Result<(), TrainError> {
+    let previous = out.read_frame(t - 1)?.1;
+    let before = if t >= 2 { Some(out.read_frame(t - 2)?.1) } else { None };
+    let start = extrapolate(&previous, before.as_ref());
+    let train = load_targets(dataset, t, &dataset.train, job.config.background, true)?;
+    tracks.advance(&with_subject(train).0, &start.positions, &mesh.live_faces());
+    Ok(())
 }
 
 fn write_frame(
