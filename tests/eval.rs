@@ -516,15 +516,15 @@ fn the_tracking_error_splits_by_how_many_training_cameras_see_the_points() {
     assert_eq!(alone.sight, Default::default());
     // Three cameras above the patch see every point in every frame: all of the error is seen.
     let patch = [2.0, 2.0, 0.0];
-    let above = [([2.0, 2.0, 6.0], patch), ([0.5, 1.0, 6.0], patch), ([3.5, 3.0, 6.0], patch)];
-    write_rig(&root, 3, &above);
+    let rig = [([2.0, 2.0, 6.0], patch), ([0.5, 1.0, 6.0], patch), ([3.5, 3.0, 6.0], patch)];
+    write_rig(&root, 3, &rig);
     let above = evaluate_sequence(&pred, &gt, &options).unwrap().summary;
     let rmse = above.tracking_rmse_over_size.unwrap();
     assert_eq!(above.sight.seen_share, Some(1.0), "{above:?}");
     assert!((above.sight.tracking_seen_over_size.unwrap() - rmse).abs() < 1e-9, "{above:?}");
     assert_eq!(above.sight.tracking_unseen_over_size, None);
     // Two of them, and one that looks away: no point has three cameras.
-    let away = [above[0], above[1], ([2.0, 2.0, 6.0], [2.0, 2.0, 12.0])];
+    let away = [rig[0], rig[1], ([2.0, 2.0, 6.0], [2.0, 2.0, 12.0])];
     write_rig(&root, 3, &away);
     let below = evaluate_sequence(&pred, &gt, &options).unwrap().summary;
     assert_eq!(below.sight.seen_share, Some(0.0), "{below:?}");
