@@ -78,13 +78,15 @@ impl ImageTracks {
         next: GrayImage,
         guesses: &[Option<[f32; 2]>],
     ) {
-        let lost = |i: usize| {
-            self.now[i].is_none().then(|| Some((self.first[i]?, guesses.get(i).copied()??)))
-        };
-        let (ids, (sources, near)): (Vec<usize>, (Vec<[f32; 2]>, Vec<[f32; 2]>)) =
-            (0..self.now.len()).filter_map(|i| Some((i, lost(i)??))).unzip();
+        // (point, its first-frame pixel, its guess) of every lost point with both.
+        let lost: Vec<(usize, [f32; 2], [f32; 2])> = (0..self.now.len())
+            .filter(|&i| self.now[i].is_none())
+            .filter_map(|i| Some((i, self.first[i]?, guesses.get(i).copied()??)))
+            .collect();
+        let sources: Vec<[f32; 2]> = lost.iter().map(|l| l.1).collect();
+        let near: Vec<[f32; 2]> = lost.iter().map(|l| l.2).collect();
         let found = lk.track_consistent(first, next, &sources, &near, MAX_ANCHOR_ROUND_TRIP);
-        for (i, p) in ids.into_iter().zip(found) {
+        for ((i, _, _), p) in lost.into_iter().zip(found) {
             self.now[i] = p;
         }
     }

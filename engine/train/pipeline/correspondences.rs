@@ -68,12 +68,13 @@ pub fn correspondences(
     for (v, (before, after)) in pairs.iter().enumerate() {
         let from_pixels = visible_pixels(&from, source.positions, &before.camera);
         let to_pixels = visible_pixels(&to, guess, &after.camera);
-        let (seen, (points, guesses)): (Vec<usize>, (Vec<[f32; 2]>, Vec<[f32; 2]>)) = from_pixels
-            .iter()
-            .zip(&to_pixels)
+        // (vertex, its source pixel, its guessed pixel) of every vertex both poses show.
+        let shown: Vec<(usize, [f32; 2], [f32; 2])> = (from_pixels.iter().zip(&to_pixels))
             .enumerate()
-            .filter_map(|(i, (a, b))| Some((i, ((*a)?, (*b)?))))
-            .unzip();
+            .filter_map(|(i, (a, b))| Some((i, (*a)?, (*b)?)))
+            .collect();
+        let points: Vec<[f32; 2]> = shown.iter().map(|s| s.1).collect();
+        let guesses: Vec<[f32; 2]> = shown.iter().map(|s| s.2).collect();
         let (width, height) = (before.camera.width as usize, before.camera.height as usize);
         let (gray_before, gray_after) = (luma(&before.target), luma(&after.target));
         let tracked = lk.track_consistent(
@@ -84,7 +85,7 @@ pub fn correspondences(
             MAX_ROUND_TRIP_PIXELS,
         );
         let mut matched = 0;
-        for (&i, end) in seen.iter().zip(tracked) {
+        for (&(i, _, _), end) in shown.iter().zip(tracked) {
             let Some([u, w]) = end else { continue };
             if on_mask(after, width, [u, w]) {
                 out.targets[i * pairs.len() + v] = FlowTarget { u, v: w, weight: 1.0, unused: 0.0 };
