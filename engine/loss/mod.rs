@@ -19,6 +19,7 @@
 
 pub mod flow;
 mod params;
+mod pinhole_view;
 pub mod reference;
 pub mod silhouette;
 

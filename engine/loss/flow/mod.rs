@@ -12,6 +12,7 @@ use crate::gpu::{
     push_layout, ComputePipeline, FixedPrecision, FixedSums, GpuBuffer, GpuContext, GpuResult,
     PipelineDesc, Recorder,
 };
+use crate::loss::pinhole_view::PinholeView;
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -34,15 +35,6 @@ struct Push {
 }
 push_layout!(Push: [LOSS_FLOW], [vertices, views, scale, near, tau]);
 
-/// One view as the kernel reads it (flow.comp `View`).
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct GpuView {
-    world_to_camera: [f32; 16],
-    intrinsics: [f32; 4],
-    dims: [u32; 4],
-}
-
 /// Where a vertex should project in one view: index coordinates (pixel centres at integers)
 /// and a confidence (0: no target).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -61,7 +53,7 @@ pub struct FlowTarget {
 /// The flow kernel with every view's camera and the targets uploaded.
 pub struct FlowTerm {
     pipeline: ComputePipeline,
-    views: GpuBuffer<GpuView>,
+    views: GpuBuffer<PinholeView>,
     targets: GpuBuffer<FlowTarget>,
     loss_sum: FixedSums,
     vertices: usize,
@@ -77,14 +69,7 @@ impl FlowTerm {
         cameras: &[Camera],
         targets: &[FlowTarget],
     ) -> Result<Self, crate::gpu::GpuError> {
-        let views: Vec<GpuView> = cameras
-            .iter()
-            .map(|c| GpuView {
-                world_to_camera: c.world_to_camera.to_cols_array().map(|v| v as f32),
-                intrinsics: [c.fx, c.fy, c.cx, c.cy].map(|v| v as f32),
-                dims: [c.width, c.height, 0, 0],
-            })
-            .collect();
+        let views: Vec<PinholeView> = cameras.iter().map(|c| PinholeView::new(c, [0, 0])).collect();
         // An empty buffer cannot be bound: one unused row stands in.
         let rows = if targets.is_empty() { &[FlowTarget::default()][..] } else { targets };
         let pairs = targets.iter().filter(|t| t.weight > 0.0).count();

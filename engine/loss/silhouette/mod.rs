@@ -18,6 +18,7 @@ use crate::gpu::{
     push_layout, ComputePipeline, FixedPrecision, FixedSums, GpuBuffer, GpuContext, GpuResult,
     PipelineDesc, Recorder,
 };
+use crate::loss::pinhole_view::PinholeView;
 use crate::shaders;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -34,15 +35,6 @@ struct Push {
     near: f32,
 }
 push_layout!(Push: [LOSS_SILHOUETTE], [vertices, views, scale, near]);
-
-/// One view as the kernel reads it (silhouette.comp `View`).
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct GpuView {
-    world_to_camera: [f32; 16],
-    intrinsics: [f32; 4],
-    dims: [u32; 4],
-}
 
 /// A view's camera and its mask's distance field (`None`: the mask is empty).
 pub struct SilhouetteView {
@@ -64,7 +56,7 @@ impl SilhouetteView {
 /// buffer its weighted value is summed in.
 pub struct SilhouetteTerm {
     pipeline: ComputePipeline,
-    views: GpuBuffer<GpuView>,
+    views: GpuBuffer<PinholeView>,
     fields: GpuBuffer<f32>,
     loss_sum: FixedSums,
     view_count: usize,
@@ -87,11 +79,8 @@ impl SilhouetteTerm {
             if usable.is_none() {
                 without_mask.push(index);
             }
-            gpu_views.push(GpuView {
-                world_to_camera: c.world_to_camera.to_cols_array().map(|v| v as f32),
-                intrinsics: [c.fx, c.fy, c.cx, c.cy].map(|v| v as f32),
-                dims: [c.width, c.height, fields.len() as u32, usable.is_some() as u32],
-            });
+            // The kernel's words: where the view's field starts, and whether it has one.
+            gpu_views.push(PinholeView::new(c, [fields.len() as u32, usable.is_some() as u32]));
             fields.extend_from_slice(usable.map_or(&[][..], |f| f));
         }
         Ok(Self {
