@@ -27,7 +27,8 @@ pub struct BenchSequenceArgs {
     /// Surface samples per mesh for Chamfer.
     #[arg(long, default_value_t = 5000)]
     chamfer_samples: usize,
-    /// Print one JSON object instead of a table.
+    /// Print one JSON object instead of a table, with the run's provenance (a result file for
+    /// `tagsplat figures`).
     #[arg(long)]
     json: bool,
 }
@@ -57,7 +58,7 @@ pub fn run(context: impl FnOnce() -> Result<Arc<GpuContext>>, a: BenchSequenceAr
     // Rebuilt now that the output folder holds the scores.
     report.files.push(write_html_report(&ctx, &job.out).with_context(what)?);
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        crate::figures::print_result(&report, Some(ctx.info()))?;
     } else {
         print_report(&report);
     }

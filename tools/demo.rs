@@ -16,6 +16,10 @@ pub struct DemoArgs {
     frames: u64,
     #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(32..=4096))]
     resolution: u32,
+    /// Print the report as one JSON object with the run's provenance (a result file for
+    /// `tagsplat figures`) instead of the tables.
+    #[arg(long)]
+    json: bool,
 }
 
 pub fn demo(ctx: &Arc<GpuContext>, args: &DemoArgs) -> Result<()> {
@@ -37,6 +41,9 @@ pub fn demo(ctx: &Arc<GpuContext>, args: &DemoArgs) -> Result<()> {
     let r = run_demo(ctx, &args.out, &options, &mut progress)
         .with_context(|| format!("demo in {}", args.out.display()))?;
     bar.finish_and_clear();
+    if args.json {
+        return crate::figures::print_result(&r, Some(ctx.info()));
+    }
     super::train::print_report(&r.train);
     println!();
     println!(

@@ -59,7 +59,7 @@ pub fn run(gpu: impl FnOnce() -> Result<Arc<GpuContext>>, a: EvalArgs) -> Result
             files.extend(rebuild_report(gpu, dir));
         }
         if a.json {
-            println!("{}", serde_json::to_string_pretty(&eval)?);
+            crate::figures::print_result(&eval, None)?;
         } else {
             println!("{} against {}", eval.pred.display(), eval.ground_truth.display());
             print_scores(&eval.pred, &eval.summary, &eval.frames);

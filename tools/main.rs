@@ -23,6 +23,7 @@ mod bench_sequence;
 mod dataset;
 mod demo;
 mod eval;
+mod figures;
 mod fit;
 mod init_mesh;
 mod synth;
@@ -78,6 +79,9 @@ enum Command {
     Synth(synth::SynthArgs),
     /// Metrics of a prediction folder against a ground-truth folder.
     Eval(eval::EvalArgs),
+    /// Write the README's figures table from result files (`--json` output of the measuring
+    /// commands, kept in benches/results/), or check it (`--check`).
+    Figures(figures::FiguresArgs),
     /// Measure engine kernels against bounds measured in the same run.
     #[command(subcommand)]
     Bench(Bench),
@@ -209,6 +213,7 @@ fn run(cli: Cli) -> Result<()> {
 fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
     match command {
         Command::Devices => devices(gpu.options.device.as_deref()),
+        Command::Figures(args) => figures::run(args),
         Command::Track(args) => track::track(args),
         Command::Convert(args) => track::convert(args),
         Command::InitMesh(args) => init_mesh::run(args),
@@ -227,7 +232,7 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             };
             let report = bench_mesh(&ctx, &config).context("bench mesh")?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                figures::print_result(&report, Some(ctx.info()))?;
             } else {
                 print_mesh_report(&report);
             }
@@ -245,7 +250,7 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             let report = bench_sort(&ctx, n, bits, repetitions as usize, lsd_only)
                 .with_context(|| format!("bench sort --n {n} --bits {bits}"))?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                figures::print_result(&report, Some(ctx.info()))?;
             } else {
                 print_sort_report(&report);
             }
@@ -274,7 +279,7 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
                 bench_train(&ctx, &TrainBenchConfig { scene, iterations: iterations as usize })
                     .context("bench train")?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                figures::print_result(&report, Some(ctx.info()))?;
             } else {
                 print_train_report(&report);
             }
@@ -291,7 +296,7 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             };
             let report = bench_splat(&ctx, &config).context("bench splat")?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                figures::print_result(&report, Some(ctx.info()))?;
             } else {
                 print_splat_report(&report);
             }
@@ -339,10 +344,11 @@ fn devices(wanted: Option<&str>) -> Result<()> {
         let mark = if matches!(chosen, Ok(i) if i == d.index) { "*" } else { " " };
         let c = &d.capabilities;
         println!(
-            "{mark} {}: {} ({}, Vulkan {}.{}, subgroup size {})",
+            "{mark} {}: {} ({}, {}, Vulkan {}.{}, subgroup size {})",
             d.index,
             d.name,
             d.kind_name(),
+            d.driver,
             ash::vk::api_version_major(c.api_version),
             ash::vk::api_version_minor(c.api_version),
             c.subgroup_size

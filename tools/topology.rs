@@ -38,7 +38,7 @@ pub fn bench(ctx: &Arc<GpuContext>, args: &BenchTopologyArgs) -> Result<()> {
     };
     let report = bench_topology(ctx, &config).context("bench topology")?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        crate::figures::print_result(&report, Some(ctx.info()))?;
     } else {
         print_report(&report);
     }

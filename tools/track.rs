@@ -340,7 +340,7 @@ pub struct BenchTrackArgs {
 pub fn bench(args: BenchTrackArgs) -> Result<()> {
     let r = bench_track(args.level, args.queries as usize, args.repetitions as usize)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&r)?);
+        crate::figures::print_result(&r, None)?;
     } else {
         print_bench(&r);
     }

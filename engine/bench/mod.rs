@@ -3,10 +3,11 @@
 //! the splatting renderer's and the mesh rasterizer's forward and backward per view, pass by
 //! pass; full training iterations against splatting alone; and the topology steps (densify,
 //! prune) with the regularizer kernels; and a training run on a benchmark dataset scored against
-//! its ground truth (`sequence`).
+//! its ground truth (`sequence`). Each result can carry its [`Provenance`].
 
 mod copy;
 mod mesh;
+mod provenance;
 mod sequence;
 mod sort;
 mod splat;
@@ -15,7 +16,8 @@ mod train;
 
 pub use copy::{CopyBandwidth, CopyProbe};
 pub use mesh::{bench_mesh, bumpy_sphere, MeshBenchConfig, MeshBenchReport};
-pub use sequence::{bench_sequence, host_cpu_model, SequenceBenchError, SequenceBenchReport};
+pub use provenance::{host_cpu_model, host_description, utc_date_time, Provenance};
+pub use sequence::{bench_sequence, SequenceBenchError, SequenceBenchReport};
 pub use sort::{bench_sort, SortBenchReport};
 pub use splat::{
     bench_splat, random_scene, ring_cameras, BenchWork, SplatBenchConfig, SplatBenchReport,

@@ -32,7 +32,7 @@ pub enum SequenceBenchError {
 /// What [`bench_sequence`] measured and scored.
 #[derive(Clone, Debug, Serialize)]
 pub struct SequenceBenchReport {
-    /// The Vulkan device and the host CPU (`model name` of /proc/cpuinfo, when readable).
+    /// The Vulkan device's name.
     pub device: String,
     /// The host CPU model, `None` when /proc/cpuinfo cannot be read.
     pub cpu: Option<String>,
@@ -79,7 +79,7 @@ pub fn bench_sequence(
         scored.frames.iter().filter(|f| f.frame > 0).filter_map(seconds).collect();
     Ok(SequenceBenchReport {
         device: ctx.info().name.clone(),
-        cpu: host_cpu_model(),
+        cpu: super::host_cpu_model(),
         data: job.data.clone(),
         ground_truth: scored.ground_truth,
         out: job.out.clone(),
@@ -92,11 +92,4 @@ pub fn bench_sequence(
         rows: scored.frames,
         files,
     })
-}
-
-/// The first `model name` of /proc/cpuinfo (None elsewhere or when unreadable).
-pub fn host_cpu_model() -> Option<String> {
-    let text = std::fs::read_to_string("/proc/cpuinfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("model name"))?;
-    Some(line.split_once(':')?.1.trim().to_owned())
 }

@@ -344,11 +344,30 @@ unsafe fn enumerate(
                     .to_string_lossy()
                     .into_owned(),
                 kind: properties.device_type,
+                driver: driver_description(instance, pd, properties.api_version),
                 capabilities: DeviceCapabilities::query(instance, pd),
             }
         })
         .collect();
     Ok((physical_devices, infos))
+}
+
+/// The driver's name and version string (`llvmpipe: Mesa 22.3.6 (LLVM 15.0.6)`), from
+/// VkPhysicalDeviceDriverProperties, core in Vulkan 1.2; "unknown" on an older device (which
+/// the feature check refuses anyway).
+unsafe fn driver_description(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    api_version: u32,
+) -> String {
+    if api_version < vk::API_VERSION_1_2 {
+        return "unknown".into();
+    }
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut properties2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+    instance.get_physical_device_properties2(pd, &mut properties2);
+    let text = |s: Result<&std::ffi::CStr, _>| s.unwrap_or(c"?").to_string_lossy().into_owned();
+    format!("{}: {}", text(driver.driver_name_as_c_str()), text(driver.driver_info_as_c_str()))
 }
 
 /// The compute queue family: one that also writes timestamps if any does.

@@ -17,6 +17,8 @@ pub struct DeviceInfo {
     pub name: String,
     /// Discrete, integrated, virtual, CPU or other.
     pub kind: vk::PhysicalDeviceType,
+    /// The driver's name and version (`llvmpipe: Mesa 22.3.6 (LLVM 15.0.6)`).
+    pub driver: String,
     /// What the device offers of what the engine needs.
     pub capabilities: DeviceCapabilities,
 }
@@ -106,7 +108,7 @@ mod tests {
             full_subgroups: true,
             max_subgroup_size: 32,
         };
-        DeviceInfo { index, name: name.into(), kind, capabilities }
+        DeviceInfo { index, name: name.into(), kind, driver: "test".into(), capabilities }
     }
 
     #[test]

@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# Measures the README's figures and keeps each as a result file in benches/results/ (the
+# command's `--json` output: the figure with its command line, commit, date, device, driver and
+# host), then rewrites the README's table from those files (`tagsplat figures`).
+#
+#   scripts/figures.sh micro          the sort, splatting, training-iteration and mesh benches
+#   scripts/figures.sh demo           the demo
+#   scripts/figures.sh sequences      every benchmark sequence in $BENCH (all frames)
+#   scripts/figures.sh NAME...        one benchmark sequence each (fox_walk, fox_run, ...)
+#   scripts/figures.sh table          only rewrite the README's table
+#
+# BENCH (default ../shared/bench) holds the benchmark sequences; their training runs go to
+# $RUNS/NAME (default /tmp/tagsplat-figures), started afresh unless RESUME=1 (then an interrupted
+# run goes on from its last complete frame). A measurement replaces its result file only when it
+# succeeds. Measure on a quiet host: the figures include times.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+bash scripts/setup.sh
+. scripts/env.sh
+cargo build --release --features cli
+tagsplat=target/release/tagsplat
+BENCH=${BENCH:-../shared/bench}
+RUNS=${RUNS:-/tmp/tagsplat-figures}
+mkdir -p benches/results "$RUNS"
+
+# record NAME COMMAND...: runs `tagsplat COMMAND... --json` into benches/results/NAME.json.
+record() {
+    local name=$1
+    shift
+    local file=benches/results/$name.json
+    echo "== $name: tagsplat $*"
+    "$tagsplat" "$@" --json >"$file.tmp"
+    mv "$file.tmp" "$file"
+}
+
+sequence() {
+    [[ ${RESUME:-0} == 1 ]] || rm -rf "${RUNS:?}/$1"
+    record "sequence-$1" bench sequence --data "$BENCH/$1" --out "$RUNS/$1"
+}
+
+for what in "${@:-table}"; do
+    case $what in
+    micro)
+        record sort bench sort --n 4194304 --bits 32
+        record splat bench splat
+        record train bench train
+        record mesh bench mesh
+        ;;
+    demo)
+        rm -rf "${RUNS:?}/demo"
+        record demo demo --out "$RUNS/demo"
+        ;;
+    sequences)
+        for dir in "$BENCH"/*/; do
+            sequence "$(basename "$dir")"
+        done
+        ;;
+    table) ;;
+    *) sequence "$what" ;;
+    esac
+done
+"$tagsplat" figures
