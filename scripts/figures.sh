@@ -19,7 +19,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/setup.sh
 . scripts/env.sh
 cargo build --release --features cli
-tagsplat=target/release/tagsplat
+tagsplat=${CARGO_TARGET_DIR:-target}/release/tagsplat
 BENCH=${BENCH:-../shared/bench}
 RUNS=${RUNS:-/tmp/tagsplat-figures}
 mkdir -p benches/results "$RUNS"
