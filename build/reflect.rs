@@ -101,7 +101,7 @@ pub fn reflect(spirv: &[u8]) -> Result<Interface, String> {
 
 impl Module {
     fn parse(spirv: &[u8]) -> Result<Self, String> {
-        if spirv.len() % 4 != 0 || spirv.len() < 20 {
+        if !spirv.len().is_multiple_of(4) || spirv.len() < 20 {
             return Err("SPIR-V is not a whole number of words".into());
         }
         let words: Vec<u32> =

@@ -39,7 +39,7 @@ fn run(data: &Path, out: &Path, points: Option<&Path>) -> Result<(), Error> {
     // Train (or resume: frames already in OUT are kept) with a progress line per 100 steps.
     let job = TrainJob::new(data, out, TrainConfig::default());
     let report = run_train(&ctx, &job, &mut |p: TrainProgress| {
-        if p.iteration % 100 == 0 || p.iteration == p.iterations {
+        if p.iteration.is_multiple_of(100) || p.iteration == p.iterations {
             eprintln!(
                 "frame {}/{}: iteration {}/{}",
                 p.frame, p.frames_end, p.iteration, p.iterations

@@ -9,7 +9,8 @@
 #   scripts/figures.sh NAME...        one benchmark sequence each (fox_walk, fox_run, ...)
 #   scripts/figures.sh table          only rewrite the README's table
 #
-# BENCH (default ../shared/bench) holds the benchmark sequences; their training runs go to
+# BENCH (required for sequences) is the folder that holds the benchmark sequences (see
+# docs/benchmarks.md); their training runs go to
 # $RUNS/NAME (default /tmp/tagsplat-figures), started afresh unless RESUME=1 (then an interrupted
 # run goes on from its last complete frame). A measurement replaces its result file only when it
 # succeeds. Measure on a quiet host: the figures include times.
@@ -20,7 +21,6 @@ bash scripts/setup.sh
 . scripts/env.sh
 cargo build --release --features cli
 tagsplat=${CARGO_TARGET_DIR:-target}/release/tagsplat
-BENCH=${BENCH:-../shared/bench}
 RUNS=${RUNS:-/tmp/tagsplat-figures}
 mkdir -p benches/results "$RUNS"
 
@@ -35,6 +35,7 @@ record() {
 }
 
 sequence() {
+    : "${BENCH:?set BENCH to the folder that holds the benchmark sequences}"
     [[ ${RESUME:-0} == 1 ]] || rm -rf "${RUNS:?}/$1"
     record "sequence-$1" bench sequence --data "$BENCH/$1" --out "$RUNS/$1"
 }

@@ -107,14 +107,11 @@ fn gpu_matches_reference() {
     let (positions, rotations) = blend((&scene.positions, &scene.rotations), &graph, &nodes);
     let got = target.to_scene().unwrap();
     for i in 0..scene.len() {
-        for a in 0..3 {
-            assert!((got.positions[i][a] as f64 - positions[i][a]).abs() < 1e-5, "vertex {i}");
+        for (&x, want) in got.positions[i].iter().zip(positions[i]) {
+            assert!((x as f64 - want).abs() < 1e-5, "vertex {i}");
         }
-        for a in 0..4 {
-            assert!(
-                (got.rotations[i][a] as f64 - rotations[i][a]).abs() < 1e-5,
-                "vertex {i} rotation"
-            );
+        for (&x, want) in got.rotations[i].iter().zip(rotations[i]) {
+            assert!((x as f64 - want).abs() < 1e-5, "vertex {i} rotation");
         }
     }
     let (gt, gq, arap) = node_gradients(
@@ -127,17 +124,11 @@ fn gpu_matches_reference() {
     let (_, node_grads) = deformer.read_nodes().unwrap();
     let scale = gt.iter().flatten().chain(gq.iter().flatten()).fold(0.0f64, |m, v| m.max(v.abs()));
     for k in 0..40 {
-        for a in 0..3 {
-            assert!(
-                (node_grads.translations[k][a] - gt[k][a]).abs() < 1e-4 * scale,
-                "node {k} translation"
-            );
+        for (x, want) in node_grads.translations[k].iter().zip(gt[k]) {
+            assert!((x - want).abs() < 1e-4 * scale, "node {k} translation");
         }
-        for a in 0..4 {
-            assert!(
-                (node_grads.rotations[k][a] - gq[k][a]).abs() < 1e-4 * scale,
-                "node {k} rotation"
-            );
+        for (x, want) in node_grads.rotations[k].iter().zip(gq[k]) {
+            assert!((x - want).abs() < 1e-4 * scale, "node {k} rotation");
         }
     }
     let gpu_arap = deformer.take_arap_loss().unwrap() as f64;

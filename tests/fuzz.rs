@@ -617,6 +617,7 @@ fn chunk(rng: &mut SplitMix64, len: usize) -> std::ops::Range<usize> {
     start..(start + 1 + below(rng, 64)).min(len)
 }
 
+#[allow(clippy::ptr_arg)] // a `Mutation`: the table's type takes the Vec other mutations resize
 fn flip_bit(b: &mut Vec<u8>, rng: &mut SplitMix64) {
     if !b.is_empty() {
         let at = below(rng, b.len());
@@ -624,6 +625,7 @@ fn flip_bit(b: &mut Vec<u8>, rng: &mut SplitMix64) {
     }
 }
 
+#[allow(clippy::ptr_arg)] // a `Mutation`: the table's type takes the Vec other mutations resize
 fn set_byte(b: &mut Vec<u8>, rng: &mut SplitMix64) {
     if !b.is_empty() {
         let at = below(rng, b.len());
@@ -735,6 +737,7 @@ fn edit_line(b: &mut Vec<u8>, rng: &mut SplitMix64) {
 
 /// A float or count word over the bytes at a random offset, 4-aligned half the time (the
 /// fields of PC2 and of float-only PLY bodies are).
+#[allow(clippy::ptr_arg)] // a `Mutation`: the table's type takes the Vec other mutations resize
 fn special_word(b: &mut Vec<u8>, rng: &mut SplitMix64) {
     let mut at = below(rng, b.len());
     if rng.next_u64() & 1 == 0 {

@@ -49,7 +49,7 @@ fn rate(buffer: usize, index: usize, coefficients: usize) -> f64 {
         1 => r.log_scales,
         2 => r.rotations,
         3 => r.opacity_logits,
-        _ if (index / 3) % coefficients == 0 => r.sh_dc,
+        _ if (index / 3).is_multiple_of(coefficients) => r.sh_dc,
         _ => r.sh_rest,
     }) as f64
 }

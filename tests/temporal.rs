@@ -88,7 +88,8 @@ fn the_temporal_stage_tracks_a_run_that_the_previous_stage_loses() {
     eprintln!("{message}");
     // Measured on lavapipe (AMD EPYC host, 27 November, release build): 2.69 % against 4.90 %
     // with the Huber strain, 2.78 % against 4.98 % before it (the previous stage's kernel
-    // divides differently by a few ULPs, which 300 steps amplify; docs/pipeline.md).
+    // divides differently by a few ULPs, which 300 steps amplify;
+    // docs/log/2026-11-27-huber-strain.md).
     const BOUND: f64 = 0.035;
     assert!(
         new_scores.tracking_rmse_per_height < BOUND && old_scores.tracking_rmse_per_height > BOUND,

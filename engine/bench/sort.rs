@@ -73,7 +73,7 @@ pub struct SortBenchReport {
 /// Sorts `n` random keys with `bits` significant bits (u64 keys above 32 bits) `repetitions`
 /// times. Speeds use the fastest repetition, of the sort as of the copy bound: both are what
 /// the device can do when the (shared, noisy) machine lets it.
-/// `lsd_only` holds the CPU variant to its LSD passes (see [`crate::sort::RadixTuning::with_max_bucket_len`]).
+/// `lsd_only` holds the CPU variant to its LSD passes (`RadixTuning::with_max_bucket_len`).
 pub fn bench_sort(
     ctx: &Arc<GpuContext>,
     n: usize,

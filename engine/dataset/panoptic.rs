@@ -96,7 +96,7 @@ fn read_meta(
     } else if per_frame.len() != t_count {
         return Err(bad(format!("has {t_count} frames but {TRAIN_META} has {}", per_frame.len())));
     }
-    for t in 0..t_count {
+    for (t, frame) in per_frame.iter_mut().enumerate() {
         let n = meta.cam_id[t].len();
         if meta.k[t].len() != n || meta.w2c[t].len() != n || meta.files[t].len() != n {
             return Err(bad(format!("frame {t}: k, w2c, fn and cam_id differ in length")));
@@ -136,7 +136,7 @@ fn read_meta(
                 }
             }
             let file = inside_dataset(path, &format!("frame {t}: image name"), &meta.files[t][c])?;
-            per_frame[t].push((id, file));
+            frame.push((id, file));
         }
     }
     Ok(())

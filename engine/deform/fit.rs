@@ -62,7 +62,7 @@ fn best_rotation(s: &DMat3) -> DQuat {
     ];
     // Every eigenvalue of n lies within ± its Frobenius norm.
     let shift = n.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
-    if !(shift > 0.0) {
+    if shift.is_nan() || shift <= 0.0 {
         return DQuat::IDENTITY;
     }
     let mut q = [1.0, 0.0, 0.0, 0.0];
@@ -72,7 +72,7 @@ fn best_rotation(s: &DMat3) -> DQuat {
             next[r] = shift * q[r] + (0..4).map(|c| row[c] * q[c]).sum::<f64>();
         }
         let length = next.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if !(length > 0.0) {
+        if length.is_nan() || length <= 0.0 {
             break;
         }
         q = next.map(|v| v / length);

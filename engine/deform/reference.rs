@@ -52,7 +52,7 @@ pub fn blend(
                 let k = graph.bound_nodes[i][s] as usize;
                 let (g, qk) = (rest_of(positions, graph, k), unit(nodes.rotations[k]));
                 p += w * (qk * (x - g) + g + DVec3::from(nodes.translations[k]));
-                q = q + qk * w;
+                q += qk * w;
             }
         }
         let [w, qx, qy, qz] = rotations[i].map(f64::from);

@@ -3,7 +3,7 @@
 //!
 //! A (point, frame t) pair counts as seen when at least [`SEEN_VIEWS`] cameras see the point's
 //! true position both at frame 0 and at frame t (in front of the camera, inside its image, not
-//! hidden by the true surface of that frame: [`SurfaceBvh::sees`]). Only then can an image term
+//! hidden by the true surface of that frame: `SurfaceBvh::sees`). Only then can an image term
 //! compare where the point was with where it is. The two parts' squared errors add up to the
 //! RMSE's, as [`SurfaceSplit`](super::SurfaceSplit)'s do.
 

@@ -1,7 +1,7 @@
 //! Chamfer distance from surface samples to the other mesh's surface.
 //!
 //! Definition, for meshes P (prediction) and G (ground truth), with d(x, S) the distance from x
-//! to the closest point of surface S (point to triangle, through [`SurfaceBvh`]):
+//! to the closest point of surface S (point to triangle, through `SurfaceBvh`):
 //! `mean` = ½ (mean over n samples p of P of d(p, G) + mean over n samples g of G of d(g, P)),
 //! scene units. The samples are area-uniform ([`sample_surface`]). Unlike sample-to-sample
 //! Chamfer ([`super::chamfer_meshes`]) it has no sampling noise floor: a mesh against itself

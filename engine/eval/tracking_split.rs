@@ -2,7 +2,7 @@
 //!
 //! Definition, for a predicted point p, its true position g and the true surface S of the same
 //! frame, with e = ‖p − g‖ and d(p, S) the distance from p to the closest point of S (point to
-//! triangle, through [`SurfaceBvh`]):
+//! triangle, through `SurfaceBvh`):
 //! - off the surface: o = min(d(p, S), e);
 //! - along the surface: a = √(e² − o²).
 //!

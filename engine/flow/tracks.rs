@@ -37,7 +37,8 @@ impl ImageTracks {
         Self { now: first.clone(), first, steps: 0 }
     }
 
-    /// Points still followed.
+    /// Points still followed (for the tests).
+    #[cfg(test)]
     pub fn live(&self) -> usize {
         self.now.iter().flatten().count()
     }

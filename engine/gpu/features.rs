@@ -150,7 +150,8 @@ mod tests {
 
     #[test]
     fn each_missing_feature_is_named() {
-        let cases: [(fn(&mut DeviceCapabilities), &str); 4] = [
+        type BreakIt = fn(&mut DeviceCapabilities);
+        let cases: [(BreakIt, &str); 4] = [
             (|c| c.api_version = vk::API_VERSION_1_1, "Vulkan 1.2"),
             (|c| c.buffer_int64_atomics = false, "64-bit buffer atomics"),
             (|c| c.subgroup_ballot = false, "subgroup ballot"),

@@ -3,7 +3,7 @@
 //! `L = Σ_c λ_c · (0.8 · mean_p w_p |x − y| + 0.2 · mean_{p ∈ V} w_p (1 − S_c(p)))`
 //!
 //! over the four channels of a vec4 image (colour and alpha), with an optional per-pixel weight
-//! `w` (1 without). `S` is the SSIM map of the metric ([`crate::ssim_window`]: 11×11 Gaussian
+//! `w` (1 without). `S` is the SSIM map of the metric (`ssim_window`: 11×11 Gaussian
 //! window, σ = 1.5, C1 = 0.01², C2 = 0.03², population statistics) and `V` the pixels whose
 //! window lies inside the image, so with `w = 1` the SSIM term is exactly one minus the metric.
 //! Colour and mask losses are one run: λ = (λ_colour/3, λ_colour/3, λ_colour/3, λ_mask) scores

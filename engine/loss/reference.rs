@@ -48,8 +48,8 @@ pub fn image_loss(
     }
     if width >= WINDOW && height >= WINDOW {
         let valid = ((width - 2 * RADIUS) * (height - 2 * RADIUS)) as f64;
-        for c in 0..4 {
-            let scale = -channel_weights[c] * LOSS_SHARE_SSIM as f64 / valid;
+        for (c, channel_weight) in channel_weights.iter().enumerate() {
+            let scale = -channel_weight * LOSS_SHARE_SSIM as f64 / valid;
             for y in RADIUS..height - RADIUS {
                 for x in RADIUS..width - RADIUS {
                     let p = y * width + x;

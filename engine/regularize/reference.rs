@@ -210,8 +210,8 @@ fn rigidity(
             let e = d_prev - delta_r * d;
             let r = e.length();
             loss += weight * huber.value(r);
-            // Phrased as positive to skip a NaN residual too, as the kernel does.
-            if !(r > 0.0) {
+            // A NaN residual is skipped too, as the kernel does.
+            if r.is_nan() || r <= 0.0 {
                 continue;
             }
             let u = w * weight * huber.slope_per_length(r) * e;

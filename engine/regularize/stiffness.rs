@@ -3,9 +3,10 @@
 //!
 //! Why: as a running animal's spine flexes, its rig stretches the skin of the flank and belly
 //! with the legs; the temporal terms resist that stretch, and weakening them everywhere lets
-//! the legs lose their shape where they cross (measured, docs/pipeline.md). Thickness tells the
-//! two apart without a skeleton. It is measured against the subject's own thickest parts, so
-//! the same setting finds the limbs of a fox and of a stocky body.
+//! the legs lose their shape where they cross (measured: docs/log/2026-11-26-leg-slide-tries.md,
+//! docs/log/2026-11-27-limb-stiffness.md). Thickness tells the two apart without a skeleton.
+//! It is measured against the subject's own thickest parts, so the same setting finds the
+//! limbs of a fox and of a stocky body.
 
 use crate::geometry::thickness::vertex_thickness;
 use crate::geometry::{SurfaceBvh, SurfaceError};
@@ -21,7 +22,7 @@ const THICKEST_PERCENTILE: f64 = 0.95;
 /// it off too) or no thickness is known.
 pub fn limb_stiffness(mesh: &ManifoldMesh, limb_fraction: f64) -> Result<Vec<f32>, SurfaceError> {
     let off = vec![1.0; mesh.vertex_rows()];
-    if !(limb_fraction > 0.0) {
+    if limb_fraction.is_nan() || limb_fraction <= 0.0 {
         return Ok(off);
     }
     let bvh = SurfaceBvh::build(&mesh.positions, &mesh.live_faces())?;

@@ -667,7 +667,7 @@ impl Reader<'_> {
             }
             None => (0..vertices as u32).collect(),
         };
-        if flat.len() % 3 != 0 {
+        if !flat.len().is_multiple_of(3) {
             return Err(
                 self.error(format!("{} indices is not a whole number of triangles", flat.len()))
             );

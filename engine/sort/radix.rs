@@ -135,6 +135,8 @@ fn bucket_len_for_loop_budget(local_passes: u32) -> u32 {
 }
 
 /// The variant's kernels and scratch memory.
+// One per sorter, built once and never moved in a loop: boxing a variant would save nothing.
+#[allow(clippy::large_enum_variant)]
 enum Passes<K: RadixKey> {
     Subgroups(SubgroupPasses<K>),
     Lanes(LanesPasses),

@@ -307,7 +307,7 @@ fn bounding_sphere(frames: &[Vec<[f32; 3]>]) -> (DVec3, f64) {
 }
 
 fn place_cameras(o: &SynthOptions, center: DVec3, radius: f64) -> Result<Vec<Camera>, SynthError> {
-    if !(radius > 0.0) {
+    if radius.is_nan() || radius <= 0.0 {
         return Err(SynthError::Subject("the subject has no extent".into()));
     }
     let distance = 3.0 * radius;

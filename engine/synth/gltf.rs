@@ -272,9 +272,8 @@ fn read_channels<'s>(
                 values.len()
             ));
         }
-        if times.windows(2).any(|w| !(w[1] > w[0]))
-            || values.iter().flatten().any(|v| !v.is_finite())
-        {
+        let increasing = times.windows(2).all(|w| w[1] > w[0]);
+        if !increasing || values.iter().flatten().any(|v| !v.is_finite()) {
             return Err(format!(
                 "animation channel {c}: times not increasing or values not finite"
             ));

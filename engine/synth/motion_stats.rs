@@ -30,7 +30,7 @@ pub fn motion_stats(frames: &[Vec<[f32; 3]>]) -> MotionStats {
             })
         })
         .collect();
-    if steps.is_empty() || !(size > 0.0) {
+    if steps.is_empty() || size.is_nan() || size <= 0.0 {
         return MotionStats::default();
     }
     steps.sort_unstable_by(f64::total_cmp);

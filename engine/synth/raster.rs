@@ -52,7 +52,7 @@ pub fn render(
     let mut view = Vec::with_capacity(positions.len());
     for (vertex, p) in positions.iter().enumerate() {
         let c = camera.to_camera(DVec3::from(p.map(f64::from)));
-        if !(c.z > 0.0) {
+        if c.z.is_nan() || c.z <= 0.0 {
             return Err(RenderError::BehindCamera { vertex, depth: c.z });
         }
         // Position in sample units: pixel coordinate × S.

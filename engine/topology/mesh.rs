@@ -41,7 +41,7 @@ pub fn next(h: u32) -> u32 {
 /// The previous half-edge in the same face: `3f + (k + 2) % 3` for `h = 3f + k`.
 #[inline]
 pub fn prev(h: u32) -> u32 {
-    if h % 3 == 0 {
+    if h.is_multiple_of(3) {
         h + 2
     } else {
         h - 1

@@ -10,8 +10,9 @@
 //!
 //! - Build: [`ManifoldMesh::new`]`(positions, faces)` for consistently oriented faces, with a
 //!   [`TopologyError`] naming the first non-manifold edge or vertex; [`orient_faces`] makes the
-//!   orientation consistent first; [`weld`] merges duplicate positions; [`import`] does all of
-//!   it for a [`TriMesh`] read from PLY/OBJ and reports each repair.
+//!   orientation consistent first; [`weld`](fn@weld) merges duplicate positions;
+//!   [`import`](fn@import) does all of it for a [`TriMesh`] read from PLY/OBJ and reports each
+//!   repair.
 //! - Walk: [`ManifoldMesh::faces`], [`ManifoldMesh::vertices`], [`ManifoldMesh::edges`] (one
 //!   half-edge per edge), [`ManifoldMesh::outgoing`] and [`ManifoldMesh::ring`] (1-rings,
 //!   counter-clockwise), [`ManifoldMesh::is_boundary_vertex`], [`ManifoldMesh::is_boundary_edge`],
@@ -33,11 +34,11 @@
 //! - [`gaussians_from_mesh`]: one Gaussian per vertex (z axis on the area-weighted
 //!   [`vertex_normals`], s_x = s_y from 1-ring distances, s_z small, opacity high, SH DC from
 //!   vertex colours).
-//! - [`densify`]: faces whose [`face_scores`] pass a threshold split 1→3 at the centroid (new
-//!   Gaussian = average of its corners, [`average_quaternion`]; scale rule), then
+//! - [`densify`](fn@densify): faces whose [`face_scores`] pass a threshold split 1→3 at the
+//!   centroid (new Gaussian = average of its corners, [`average_quaternion`]; scale rule), then
 //!   [`improve_angles`] flips edges that raise the minimum angle.
-//! - [`prune`]: Gaussians meeting [`should_prune`] merge into the 1-ring neighbour of cheapest
-//!   legal collapse, C = w_g·‖pᵢ − pⱼ‖ / mean edge + w_a·‖cᵢ − cⱼ‖; refusals are counted.
+//! - [`prune`](fn@prune): Gaussians meeting [`should_prune`] merge into the 1-ring neighbour of
+//!   cheapest legal collapse, C = w_g·‖pᵢ − pⱼ‖ / mean edge + w_a·‖cᵢ − cⱼ‖; refusals are counted.
 //! - Both compact the mesh, remap the [`GaussianScene`](crate::splat::GaussianScene) with
 //!   [`remap_scene`] and return `old_of_new`: the caller applies that same array to every other
 //!   per-vertex array it keeps (optimizer moments: new rows zero; gradient statistics;
@@ -78,8 +79,8 @@ use crate::mesh::TriMesh;
 use std::path::PathBuf;
 
 /// Why a mesh could not be built, imported, densified or pruned. Vertex and face numbers index
-/// the arrays checked at that step: [`import`] checks positions and indices on the file's rows
-/// and everything else after welding.
+/// the arrays checked at that step: [`import`](fn@import) checks positions and indices on the
+/// file's rows and everything else after welding.
 #[derive(Debug, thiserror::Error)]
 pub enum TopologyError {
     /// A face names a vertex index at or past the number of positions.
@@ -134,7 +135,7 @@ pub enum TopologyError {
         /// The first vertex with a non-finite coordinate.
         vertex: u32,
     },
-    /// [`import`] was asked for a closed mesh and found a boundary edge.
+    /// [`import`](fn@import) was asked for a closed mesh and found a boundary edge.
     #[error("the mesh is open (edge {a}–{b} has one face) where a closed one is needed")]
     Open {
         /// One end of the boundary edge.
@@ -142,15 +143,15 @@ pub enum TopologyError {
         /// The other end of the boundary edge.
         b: u32,
     },
-    /// [`import`] was left with fewer than 4 faces after welding.
+    /// [`import`](fn@import) was left with fewer than 4 faces after welding.
     #[error("the mesh has {faces} faces; at least 4 are needed")]
     TooSmall {
         /// The number of faces left.
         faces: usize,
     },
-    /// Inputs that must agree do not ([`densify`], [`prune`]): a mesh that is not compact,
-    /// a scene whose row count differs from the vertex count or that fails its own check, or
-    /// scores whose length differs from the face rows. The string says which.
+    /// Inputs that must agree do not ([`densify`](fn@densify), [`prune`](fn@prune)): a mesh
+    /// that is not compact, a scene whose row count differs from the vertex count or that fails
+    /// its own check, or scores whose length differs from the face rows. The string says which.
     #[error("mismatched inputs: {0}")]
     Mismatch(String),
     /// Another error, tagged with the file it came from.

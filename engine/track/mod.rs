@@ -2,8 +2,8 @@
 //!
 //! A query point is bound once, on frame 0, to (face, barycentric) — by the closest surface point
 //! for a 3D point, by the first hit of the pixel's ray for a 2D point — and followed through
-//! every frame as Σ bₖ·vₖ(t) (docs/conventions.md, "Tracking"). The surface queries are
-//! [`crate::geometry`]'s.
+//! every frame as Σ bₖ·vₖ(t) (docs/conventions.md, "Tracking"). The surface queries are the
+//! internal `geometry` module's (BVH closest point and ray casts).
 //! - [`bind`]: query points → bindings, refusing points too far from the surface.
 //! - [`trajectory`]: bindings → positions in every frame.
 //! - [`queries`]: `points.csv` / `pixels.csv` readers; [`output`]: `tracks.csv` / JSON writers.

@@ -250,7 +250,7 @@ impl FitConfig {
         ];
         check_ranges(&positive, &non_negative)?;
         check_appearance(self.sh_degree, self.background)?;
-        if !(self.densify.prune_opacity < 1.0) {
+        if self.densify.prune_opacity.is_nan() || self.densify.prune_opacity >= 1.0 {
             return value_error(
                 "densify.prune_opacity",
                 format!("must be below 1 (got {})", self.densify.prune_opacity),

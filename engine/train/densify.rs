@@ -7,6 +7,7 @@ use crate::optim::NEW_ROW;
 use crate::rng::SplitMix64;
 use crate::splat::GaussianScene;
 use glam::{Quat, Vec3};
+use std::cmp::Ordering;
 
 /// Thresholds in scene units (the caller scales the config's extent-relative values).
 #[derive(Clone, Copy, Debug)]
@@ -38,8 +39,8 @@ pub struct DensifyCounts {
 const SPLIT_SHRINK: f32 = 1.6;
 
 /// Applies one step. `mean_grads[i]` is Gaussian i's mean 2D gradient norm in NDC units (NaN
-/// or 0 when never seen). Returns the new scene and, per new row, its old row or
-/// [`NEW_ROW`] (clones and split halves start with fresh optimizer state, as in 3DGS).
+/// or 0 when never seen). Returns the new scene and, per new row, its old row or `NEW_ROW`
+/// (`u32::MAX`: clones and split halves start with fresh optimizer state, as in 3DGS).
 pub fn densify_and_prune(
     scene: &GaussianScene,
     mean_grads: &[f32],
@@ -70,15 +71,18 @@ pub fn densify_and_prune(
             counts.split += 1;
         }
     }
+    // An opacity below the threshold or not comparable with it (NaN) is pruned.
     let pruned = |i: usize| {
-        !(sigmoid(scene.opacity_logits[i]) >= rules.prune_opacity)
-            || max_scale(i) > rules.prune_max_scale
+        matches!(
+            sigmoid(scene.opacity_logits[i]).partial_cmp(&rules.prune_opacity),
+            None | Some(Ordering::Less)
+        ) || max_scale(i) > rules.prune_max_scale
     };
     let mut kept = GaussianScene { sh_degree: scene.sh_degree, ..Default::default() };
     let mut kept_rows = Vec::with_capacity(n);
-    for i in 0..n {
-        if split[i] || pruned(i) {
-            counts.pruned += (!split[i]) as usize;
+    for (i, &was_split) in split.iter().enumerate() {
+        if was_split || pruned(i) {
+            counts.pruned += (!was_split) as usize;
             continue;
         }
         push_row(&mut kept, scene, i, None);

@@ -140,7 +140,7 @@ fn sample_on_pixel_ray(
     let to_centre = centre - origin;
     let b = dir.dot(to_centre);
     let discriminant = b * b - (to_centre.length_squared() - radius * radius);
-    if !(discriminant > 0.0) {
+    if discriminant.is_nan() || discriminant <= 0.0 {
         return None;
     }
     let half = discriminant.sqrt();
@@ -164,7 +164,7 @@ fn color_if_inside(views: &[MaskedView], p: DVec3) -> Option<[f32; 3]> {
             continue;
         }
         let i = px.y as usize * v.camera.width as usize + px.x as usize;
-        if !(v.mask[i] > 0.5) {
+        if v.mask[i].is_nan() || v.mask[i] <= 0.5 {
             return None;
         }
         seen += 1;

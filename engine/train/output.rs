@@ -146,7 +146,7 @@ mod tests {
         let root = std::env::temp_dir().join(format!("tagsplat-output-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&root);
         let out = SequenceOutput::create(&root).unwrap();
-        let positions = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let positions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         let faces = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         for t in 0..2 {
             let moved: Vec<[f32; 3]> =

@@ -3,6 +3,8 @@
 //! with like), improved on the pass before by less than a tolerance, once the minimum is done;
 //! or at the cap. With the minimum at the cap it runs a fixed count, checking every `window`.
 
+use std::cmp::Ordering;
+
 /// Why a stage stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -40,7 +42,7 @@ impl Plateau {
 
     /// Whether iteration `it` (from 1) ends a pass, after which [`Self::check`] wants its loss.
     pub fn pass_ends(&self, it: u32) -> bool {
-        it % self.window == 0 || it >= self.max
+        it.is_multiple_of(self.window) || it >= self.max
     }
 
     /// After iteration `it`: with `pass_loss` the mean loss of the pass that just ended (when
@@ -52,11 +54,11 @@ impl Plateau {
         let loss = pass_loss?;
         let previous = self.last_pass.replace(loss);
         let improved = previous.map(|p| (p - loss) / p.abs().max(f64::MIN_POSITIVE));
-        // Phrased as "not above" so a NaN change stops too (the caller reports the NaN).
+        // "Not above": a NaN change, comparable with nothing, stops too (the caller reports it).
+        let not_above =
+            |change: f64| change.partial_cmp(&self.tolerance) != Some(Ordering::Greater);
         match improved {
-            Some(change) if it >= self.min && !(change > self.tolerance) => {
-                Some(StopReason::Converged)
-            }
+            Some(change) if it >= self.min && not_above(change) => Some(StopReason::Converged),
             _ => None,
         }
     }

@@ -55,7 +55,7 @@ impl DensifyWindow {
     pub fn due(&self, it: u32, iterations: u32) -> bool {
         it > self.from
             && it <= self.until.min(iterations.saturating_sub(self.every))
-            && it % self.every == 0
+            && it.is_multiple_of(self.every)
     }
 }
 

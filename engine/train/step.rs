@@ -289,7 +289,7 @@ impl Trainer {
     }
 
     /// Replaces the Gaussian set: the optimizer's moments follow `old_of_new` (see
-    /// [`Adam::remap`]), the densification statistics restart, the checkpoint is the new set.
+    /// `Adam::remap`), the densification statistics restart, the checkpoint is the new set.
     pub fn replace(&mut self, scene: &GaussianScene, old_of_new: &[u32]) -> Result<(), TrainError> {
         scene.check().map_err(crate::splat::SplatError::from)?;
         self.adam.remap(old_of_new)?;

@@ -24,7 +24,9 @@ pub fn flow_loss(
         for (v, camera) in cameras.iter().enumerate() {
             let target = targets[i * cameras.len() + v];
             let c = camera.to_camera(DVec3::from(*x));
-            if !(target.weight > 0.0) || !(c.z > near) {
+            // A NaN weight or depth is skipped too.
+            let usable = target.weight > 0.0 && c.z > near;
+            if !usable {
                 continue;
             }
             let q =

@@ -42,7 +42,9 @@ pub fn silhouette_loss(
         let mut g = DVec3::ZERO;
         for (camera, field) in &usable {
             let c = camera.to_camera(DVec3::from(*x));
-            if !(c.z > near) {
+            // Behind the near plane or a NaN depth: skipped.
+            let in_front = c.z > near;
+            if !in_front {
                 continue;
             }
             let q =
@@ -85,7 +87,10 @@ pub fn coverage_loss(
     let scale = weight / (w * h) as f64;
     let (mut energy, mut grads) = (0.0, vec![[0.0; 3]; positions.len()]);
     for p in 0..(w * h) {
-        if !(mask[p as usize] > 0.5 && !(coverage[p as usize] >= 0.5)) {
+        // A pixel inside the mask that the render does not cover (a NaN coverage counts as
+        // not covering, a NaN mask as outside).
+        let (inside, covered) = (mask[p as usize] > 0.5, coverage[p as usize] >= 0.5);
+        if !inside || covered {
             continue;
         }
         let centre = DVec2::new((p % w) as f64 + 0.5, (p / w) as f64 + 0.5);

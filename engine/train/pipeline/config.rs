@@ -91,7 +91,7 @@ pub struct TemporalConfig {
     /// Weight of the long-range silhouette term (every vertex inside every mask; 0: off).
     pub silhouette: f32,
     /// Weight of the coverage term (mask pixels the render leaves uncovered pull the nearest
-    /// vertex; 0: off) and how far it searches, pixels at the level's resolution.
+    /// vertex within `coverage_radius`; 0: off).
     pub coverage: f32,
     /// How far the coverage term searches for a vertex, pixels at the level's resolution
     /// (default 24).
@@ -129,12 +129,12 @@ pub struct GraphConfig {
     /// Image downsampling factor of each level, coarse first (1: full resolution).
     pub levels: Vec<u32>,
     /// Most iterations per level (default 120; 150 tracked fox_walk 0.04 points better for
-    /// 7.7 s more a frame, docs/pipeline.md).
+    /// 7.7 s more a frame, docs/log/2026-11-27-time-per-later-frame.md).
     pub iterations: u32,
     /// Fewest iterations per level (default 30).
     pub min_iterations: u32,
-    /// Adam step of node translations, × the mesh's bounding-box diagonal, and of node
-    /// rotations (quaternion units); both decay tenfold over a level's cap.
+    /// Adam step of node translations, × the mesh's bounding-box diagonal (default 2e-3);
+    /// decays tenfold over a level's cap.
     pub translation_lr: f32,
     /// Adam step of node rotations, quaternion units (default 5e-3); decays as `translation_lr`.
     pub rotation_lr: f32,
@@ -182,7 +182,8 @@ impl ReferencePose {
 /// Loss weights and the temporal falloff λ_w (per mean edge length). The regularizers' defaults
 /// (`regularize::Weights`), but the temporal terms at a tenth of them (edge length 0.4, rigidity 0.4, rotation 2): measured on
 /// the demo sequence, the table's 4/4/20 held the surface back (tracking RMSE 0.059 scene units),
-/// none at all let it drift (0.050), a tenth did best (0.043); see docs/pipeline.md, "Defaults chosen by measurement".
+/// none at all let it drift (0.050), a tenth did best (0.043); see
+/// docs/log/2026-11-22-pipeline-defaults-and-demo.md.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PipelineWeights {
@@ -414,7 +415,7 @@ impl TrainConfig {
         ];
         check_ranges(&positive, &non_negative)?;
         check_appearance(self.sh_degree, self.background)?;
-        if !(c.prune_opacity < 1.0) {
+        if c.prune_opacity.is_nan() || c.prune_opacity >= 1.0 {
             return value_error(
                 "canonical.prune_opacity",
                 format!("must be below 1 (got {})", c.prune_opacity),

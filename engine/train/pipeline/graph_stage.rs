@@ -90,7 +90,7 @@ pub fn solve_graph(
         let t0 = Instant::now();
         let wanted = g.nodes_at(level) as usize;
         // A level with another node count starts its own graph on the pose reached so far.
-        if built.as_ref().map_or(true, |(nodes, _)| *nodes != wanted) {
+        if built.as_ref().is_none_or(|(nodes, _)| *nodes != wanted) {
             built = Some((wanted, graph_on(ctx, input, &moved, wanted, config)?));
             adam_step = 0;
         }
