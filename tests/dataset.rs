@@ -80,6 +80,7 @@ fn panoptic_cameras_project_known_points() {
     panoptic(&dir, "test_meta.json", 2, &[5]);
     let d = Dataset::load(&dir).unwrap();
     assert_eq!(d.format, Format::Panoptic);
+    assert_eq!(d.fps, Some(29.97), "Panoptic's HD rate: its files carry none");
     assert_eq!(d.camera_names, ["0", "3", "5"]);
     assert_eq!((d.train.clone(), d.test.clone()), (vec![0, 1], vec![2]));
     assert_eq!(d.frames.len(), 2);
@@ -212,6 +213,7 @@ fn nerfstudio_opengl_cameras_project_known_points() {
     );
     let d = Dataset::load(&dir).unwrap();
     assert_eq!(d.format, Format::Nerfstudio);
+    assert_eq!(d.fps, None, "nerfstudio times are normalised: no frame rate");
     assert_eq!(d.cameras.len(), 3);
     assert_eq!((d.train.clone(), d.test.clone()), (vec![0, 1], vec![2]));
     // Frames sorted by time, views grouped by time across files.
@@ -305,6 +307,7 @@ fn own_layout_with_a_bounded_cache() {
     let budget = 3 * 16 * 16 * 3 * 4; // three RGB images of f32
     let d = Dataset::load(&dir).unwrap().with_cache_bytes(budget);
     assert_eq!(d.format, Format::Own);
+    assert_eq!(d.fps, Some(tagsplat::synth::gltf::FPS), "the own layout's fps");
     assert_eq!(d.test, vec![7], "every eighth camera is held out");
     for t in 0..2 {
         for k in 0..9 {

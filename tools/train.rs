@@ -39,9 +39,20 @@ pub struct TrainArgs {
     /// `tagsplat dataset info`).
     #[arg(long, value_enum)]
     pixel_centers: Option<PixelCentersArg>,
+    /// Frame rate of the exports (GLB, USD, PC2). Default: the layout's (the own layout's `fps`,
+    /// Panoptic's 29.97), 30 when it has none (nerfstudio / D-NeRF).
+    #[arg(long, value_parser = parse_fps)]
+    fps: Option<f64>,
     /// Print the default config as TOML and exit.
     #[arg(long)]
     print_config: bool,
+}
+
+fn parse_fps(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(fps) if fps.is_finite() && fps > 0.0 => Ok(fps),
+        _ => Err(format!("'{text}' is not a positive frame rate")),
+    }
 }
 
 pub(crate) fn parse_range(text: &str) -> Result<std::ops::Range<usize>, String> {
@@ -71,6 +82,7 @@ pub fn train(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: TrainArgs)
         frames: args.frames,
         up: args.up.map(Into::into),
         load: LoadOptions { pixel_centers: args.pixel_centers.map(Into::into) },
+        fps: args.fps,
         ..TrainJob::new(data, out, config)
     };
     let report = run_with_progress(&context()?, &job)?;
@@ -160,4 +172,5 @@ pub fn print_report(r: &TrainReport) {
     for path in &r.outputs {
         println!("wrote {}", path.display());
     }
+    println!("exports: {}", r.export);
 }

@@ -107,6 +107,17 @@ pub enum Format {
     Nerfstudio,
 }
 
+impl Format {
+    /// The layout's name in messages: "own", "Panoptic", "nerfstudio".
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Own => "own",
+            Format::Panoptic => "Panoptic",
+            Format::Nerfstudio => "nerfstudio",
+        }
+    }
+}
+
 /// Where a layout's intrinsics put the centre of pixel (i, j). The engine's cameras use
 /// `HalfInteger` (docs/conventions.md); intrinsics in the other convention are shifted by +0.5
 /// in cx and cy at load time.
@@ -194,6 +205,9 @@ pub struct Dataset {
     pub train: Vec<usize>,
     /// Camera indices held out for evaluation.
     pub test: Vec<usize>,
+    /// Frames per second where the layout says: the own layout's `fps`; Panoptic's HD cameras'
+    /// 29.97 (its files carry none). None for nerfstudio / D-NeRF, whose times are normalised.
+    pub fps: Option<f64>,
     cache: ImageCache,
 }
 
@@ -276,6 +290,7 @@ impl Dataset {
             frames,
             train,
             test,
+            fps: None,
             cache: ImageCache::new(DEFAULT_CACHE_BYTES),
         })
     }

@@ -140,7 +140,7 @@ pub(crate) fn load(dir: &Path) -> Result<Dataset, DatasetError> {
                 .collect(),
         })
         .collect();
-    Dataset::assemble(
+    let dataset = Dataset::assemble(
         dir,
         &meta_path,
         Format::Own,
@@ -149,5 +149,6 @@ pub(crate) fn load(dir: &Path) -> Result<Dataset, DatasetError> {
         frames,
         train,
         test,
-    )
+    )?;
+    Ok(Dataset { fps: Some(meta.fps), ..dataset })
 }

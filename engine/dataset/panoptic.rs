@@ -34,6 +34,9 @@ struct Meta {
 /// Per camera id: its camera, whether it is a test camera.
 type Rig = BTreeMap<i64, (Camera, bool)>;
 
+/// Frames per second of the Panoptic studio's HD cameras; the layout's files carry no rate.
+pub const PANOPTIC_HD_FPS: f64 = 29.97;
+
 /// Reads the layout from `dir`: cameras from both metadata files (sorted by camera id, named by
 /// it), one frame per time step with time = frame index. The intrinsics stay as written
 /// (integer pixel centres); [`Dataset::load`](super::Dataset::load) is the entry point that
@@ -70,7 +73,9 @@ pub(crate) fn load(dir: &Path) -> Result<Dataset, DatasetError> {
     let names = ids.iter().map(|id| id.to_string()).collect();
     let (test, train): (Vec<usize>, Vec<usize>) = (0..ids.len()).partition(|&i| rig[&ids[i]].1);
     let cameras = rig.into_values().map(|(c, _)| c).collect();
-    Dataset::assemble(dir, &train_path, Format::Panoptic, names, cameras, frames, train, test)
+    let dataset =
+        Dataset::assemble(dir, &train_path, Format::Panoptic, names, cameras, frames, train, test)?;
+    Ok(Dataset { fps: Some(PANOPTIC_HD_FPS), ..dataset })
 }
 
 fn read_meta(

@@ -42,6 +42,8 @@ pub struct TrainJob {
     pub up: Option<UpAxis>,
     /// What the dataset's files leave open (the intrinsics' pixel centres).
     pub load: LoadOptions,
+    /// The exports' frame rate; None takes the layout's ([`Dataset::fps`]), or 30 without one.
+    pub fps: Option<f64>,
 }
 
 impl TrainJob {
@@ -57,6 +59,7 @@ impl TrainJob {
             frames: None,
             up: None,
             load: LoadOptions::default(),
+            fps: None,
         }
     }
 }
@@ -95,6 +98,9 @@ pub struct TrainReport {
     pub faces: usize,
     /// The files written: per-frame folders and the sequence exports.
     pub outputs: Vec<PathBuf>,
+    /// Which frames the exports hold, at what frame rate and from where it came, or why there
+    /// are none.
+    pub export: String,
     /// The exports' up axes and how the capture was turned onto them (the capture's up is the
     /// signed axis nearest the cameras' mean up vector).
     pub up_axis: String,
@@ -161,6 +167,7 @@ fn run_logged(
         faces: 0,
         outputs: vec![job.out.join("meshes"), job.out.join("gaussians")],
         up_axis: String::new(),
+        export: String::new(),
         pixel_centers: dataset.pixel_centers,
         background: job.config.background,
     };
@@ -242,13 +249,22 @@ fn run_logged(
         report.frames.push(frame_report);
         finish_report(&mut report, &mesh, started, &job.out)?;
     }
-    if (0..dataset.frames.len()).all(|t| out.is_complete(t)) {
-        let (exported, said) =
-            out.export(0..dataset.frames.len(), fps(&dataset), source, job.up)?;
+    let (frames_done, total) = (complete_prefix(&out, dataset.frames.len()), dataset.frames.len());
+    let (fps, rate) = frame_rate(job, &dataset);
+    report.export = export_sentence(frames_done, total, fps, &rate);
+    if frames_done > 0 {
+        let (exported, said) = out.export(0..frames_done, fps, source, job.up)?;
         report.up_axis = format!("{said}; {}", report.up_axis);
         let names: Vec<String> = exported.iter().map(|p| p.display().to_string()).collect();
-        log.line(&format!("exported ({}): {}", report.up_axis, names.join(", ")))?;
+        log.line(&format!(
+            "exported {} ({}): {}",
+            report.export,
+            report.up_axis,
+            names.join(", ")
+        ))?;
         report.outputs.extend(exported);
+    } else {
+        log.line(&format!("not exported: {}", report.export))?;
     }
     finish_report(&mut report, &mesh, started, &job.out)?;
     let page = write_html_report(ctx, &job.out)?;
@@ -523,13 +539,32 @@ fn capture_up(dataset: &Dataset, said: &mut String) -> SignedAxis {
     source
 }
 
-/// Frames per second of the dataset's clock (10 when it has none).
-fn fps(dataset: &Dataset) -> f64 {
-    let n = dataset.frames.len();
-    let span = dataset.frames[n - 1].time - dataset.frames[0].time;
-    if n > 1 && span > 0.0 {
-        (n - 1) as f64 / span
-    } else {
-        10.0
+/// The exports' frame rate and where it came from: the job's, the layout's, or 30 assumed.
+fn frame_rate(job: &TrainJob, dataset: &Dataset) -> (f64, String) {
+    match (job.fps, dataset.fps) {
+        (Some(fps), _) => (fps, "as asked".into()),
+        (None, Some(fps)) => (fps, format!("the {} layout's", dataset.format.name())),
+        (None, None) => (30.0, format!("assumed: the {} layout has none", dataset.format.name())),
     }
+}
+
+/// Frames 0..k complete on disk: what the exports can hold (a later frame without all before
+/// it cannot join a sequence that plays from frame 0).
+fn complete_prefix(out: &SequenceOutput, frames: usize) -> usize {
+    (0..frames).take_while(|&t| out.is_complete(t)).count()
+}
+
+/// "frames 0-2 of 17 at 29.97 fps (the Panoptic layout's); frame 3 is not trained yet".
+fn export_sentence(done: usize, total: usize, fps: f64, rate: &str) -> String {
+    let held = match done {
+        0 => return "no frame is complete".into(),
+        1 => format!("frame 0 of {total}"),
+        _ => format!("frames 0-{} of {total}", done - 1),
+    };
+    let rest = if done < total {
+        format!("; frame {done} is not trained yet (a run over it extends them)")
+    } else {
+        String::new()
+    };
+    format!("{held} at {fps} fps ({rate}){rest}")
 }
