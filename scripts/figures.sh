@@ -3,7 +3,7 @@
 # command's `--json` output: the figure with its command line, commit, date, device, driver and
 # host), then rewrites the README's table from those files (`tagsplat figures`).
 #
-#   scripts/figures.sh micro          the sort, splatting, training-iteration and mesh benches
+#   scripts/figures.sh micro          the sort, splatting, training-iteration, mesh and BVH benches
 #   scripts/figures.sh demo           the demo
 #   scripts/figures.sh sequences      every benchmark sequence in $BENCH (all frames)
 #   scripts/figures.sh NAME...        one benchmark sequence each (fox_walk, fox_run, ...)
@@ -47,6 +47,7 @@ for what in "${@:-table}"; do
         record splat bench splat
         record train bench train
         record mesh bench mesh
+        record track bench track
         ;;
     demo)
         rm -rf "${RUNS:?}/demo"

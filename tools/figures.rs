@@ -1,7 +1,7 @@
 //! Result files, and the README's table of figures made from them.
 //!
-//! A result file is what a measuring command prints with `--json` (`bench sort|splat|train|mesh`,
-//! `bench sequence`, `demo`), its [`Provenance`] first: the command line, commit, date, device,
+//! A result file is what a measuring command prints with `--json` (`bench
+//! sort|splat|train|mesh|track`, `bench sequence`, `demo`), its [`Provenance`] first: the command line, commit, date, device,
 //! driver and host. The repository keeps them in `benches/results/`; `tagsplat figures` turns
 //! each into one row of the README's table, so a figure there is always one a file holds, and
 //! `--check` (and the test below) fails when the README says anything else.
@@ -122,8 +122,9 @@ fn table_row(v: &Value, link: &str) -> Result<(usize, String)> {
         "bench splat" => (1, splat_figure(v)?, splat_value(v)?),
         "bench train" => (2, train_figure(v)?, train_value(v)?),
         "bench mesh" => (3, mesh_figure(v)?, mesh_value(v)?),
-        "demo" => (4, demo_figure(v)?, demo_value(v)?),
-        "bench sequence" => (5, sequence_figure(v)?, sequence_value(v)?),
+        "bench track" => (4, track_figure(v)?, track_value(v)?),
+        "demo" => (5, demo_figure(v)?, demo_value(v)?),
+        "bench sequence" => (6, sequence_figure(v)?, sequence_value(v)?),
         other => bail!("no table row for results of `tagsplat {other}`"),
     };
     let device = format!("{} on {}", provenance.device, provenance.host);
@@ -195,6 +196,23 @@ fn mesh_value(v: &Value) -> Result<String> {
         "forward {:.0} ms, backward {:.0} ms per view",
         num(v, "forward_ms")?,
         num(v, "backward_ms")?
+    ))
+}
+
+fn track_figure(v: &Value) -> Result<String> {
+    Ok(format!(
+        "[tracking queries](docs/tracking.md) on a {}-triangle mesh (BVH, CPU)",
+        num(v, "triangles")?
+    ))
+}
+
+fn track_value(v: &Value) -> Result<String> {
+    Ok(format!(
+        "build {:.0} ms; {:.0} k closest points/s ({:.0}× brute force), {:.0} k rays/s",
+        num(v, "build_ms")?,
+        num(v, "queries_per_s")? / 1e3,
+        num(v, "queries_per_s")? / num(v, "brute_force_queries_per_s")?,
+        num(v, "rays_per_s")? / 1e3
     ))
 }
 
