@@ -98,6 +98,36 @@ fn copy_and_fill_are_ordered_by_barriers() {
     }
 }
 
+/// Each submission adds its recording, waiting and device time to the context's clock; the
+/// device span lies inside the wait and covers the timed passes within it.
+#[test]
+fn the_clock_splits_a_submission_into_recording_waiting_and_device_time() {
+    let gpu = common::gpu();
+    let n = 1 << 20;
+    let (a, b) = (
+        GpuBuffer::<u32>::new(gpu.ctx(), "a", n).unwrap(),
+        GpuBuffer::<u32>::new(gpu.ctx(), "b", n).unwrap(),
+    );
+    let before = gpu.ctx().clock();
+    let mut recorder = Recorder::new(gpu.ctx()).unwrap();
+    recorder.begin_pass("fill");
+    recorder.fill_buffer(&a, 7);
+    recorder.end_pass();
+    recorder.begin_pass("copy");
+    recorder.copy_buffer(&a, &b, n);
+    recorder.end_pass();
+    let times = recorder.submit_and_wait().unwrap();
+    let c = gpu.ctx().clock().since(&before);
+    assert_eq!(c.submissions, 1);
+    assert!(c.recording_s > 0.0 && c.waiting_s > 0.0, "{c:?}");
+    if gpu.ctx().limits().timestamp_period_ns.is_some() {
+        assert_eq!(c.timed_submissions, 1);
+        let passes: f64 = times.passes.iter().map(|p| p.ms * 1e-3).sum();
+        assert!(c.device_s >= passes * 0.999 && c.device_s <= c.waiting_s, "{c:?} {passes}");
+        assert!(c.host_share(c.recording_s + c.waiting_s).is_some());
+    }
+}
+
 #[test]
 fn oversized_buffer_is_refused_with_the_limit_named() {
     let gpu = common::gpu();

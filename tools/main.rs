@@ -494,6 +494,13 @@ fn print_train_report(r: &TrainBenchReport) {
         r.splat_fwd_bwd_s * 1e3
     );
     println!("loss + Adam + rest  {:.0}% of an iteration", r.overhead_fraction * 100.0);
+    let share = r.host_fraction.map_or("unknown".into(), |f| format!("{:.1}%", f * 100.0));
+    println!(
+        "host                {:.2} ms per iteration ({share}; recording {:.2} ms, {:.1} submissions)",
+        r.host_ms_per_iter,
+        r.clock.recording_s * 1e3 / r.config.iterations as f64,
+        r.clock.submissions as f64 / r.config.iterations as f64
+    );
     println!(
         "image loss alone    {:.2} ms for one render, {:.2} ms for two against one target (same run)",
         r.loss_ms[0], r.loss_ms[1]

@@ -136,7 +136,7 @@ pub fn print_report(r: &TrainReport) {
         println!("resumed: frames {:?} were complete", r.resumed_frames);
     }
     println!(
-        "frame  graph iters  iters  colour  stopped         seconds  Gaussians  PSNR gs  PSNR mesh"
+        "frame  graph iters  iters  colour  stopped         seconds  host  Gaussians  PSNR gs  PSNR mesh"
     );
     for f in &r.frames {
         let graph = f.graph.as_ref().map_or("-".into(), |g| {
@@ -146,8 +146,13 @@ pub fn print_report(r: &TrainReport) {
             .ok()
             .and_then(|v| v.as_str().map(String::from))
             .unwrap_or_default();
+        // The share of the frame's wall time the device waited for the host.
+        let host = match (f.host_s, f.device_s) {
+            (Some(h), Some(d)) if h + d > 0.0 => format!("{:.0}%", 100.0 * h / (h + d)),
+            _ => "-".into(),
+        };
         println!(
-            "{:>5}  {graph:>11}  {:>5}  {:>6}  {stop:<14}  {:>7.1}  {:>9}  {:>7.2}  {:>9.2}",
+            "{:>5}  {graph:>11}  {:>5}  {:>6}  {stop:<14}  {:>7.1}  {host:>4}  {:>9}  {:>7.2}  {:>9.2}",
             f.frame,
             f.iterations,
             f.colour_iterations,

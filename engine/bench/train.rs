@@ -3,7 +3,7 @@
 //! measured in the same run (the floor the loss and optimizer add to).
 
 use super::splat::{bench_splat, random_scene, ring_cameras, SplatBenchConfig};
-use crate::gpu::{GpuBuffer, GpuContext, Recorder};
+use crate::gpu::{ClockReading, GpuBuffer, GpuContext, Recorder};
 use crate::loss::{ImageLoss, LossTarget, LossTerms, ScoredRender};
 use crate::optim::{AdamParams, LearningRates};
 use crate::splat::{GaussianBuffers, RenderSettings, Splatter};
@@ -48,6 +48,14 @@ pub struct TrainBenchReport {
     /// backward) alone on one view, scoring one render, and two renders against the same target
     /// in one run (a view's Gaussian and mesh renders, as `train` does), same run.
     pub loss_ms: [f64; 2],
+    /// Where the timed iterations' wall time went, summed over them: submissions, recording,
+    /// waiting and device time ([`ClockReading`]).
+    pub clock: ClockReading,
+    /// Wall ms per iteration the device was not running a submission (recording, submitting,
+    /// waiting to wake up, reading back, the host's own work): mean over the timed iterations.
+    pub host_ms_per_iter: f64,
+    /// That time's share of the iterations' wall time (None where submissions go untimed).
+    pub host_fraction: Option<f64>,
 }
 
 /// Learning rates of the fit's defaults (their values do not change the work).
@@ -81,16 +89,21 @@ pub fn bench_train(
     drop(splatter);
     let mut trainer = Trainer::new(ctx, &scene, &views)?;
     let (mut walls, mut passes) = (Vec::new(), Vec::new());
+    let mut clock = ClockReading::default();
     for it in 0..c.views + config.iterations {
+        let (start, before) = (Instant::now(), ctx.clock());
         let adam = AdamParams::new(&RATES, it as u32 + 1, trainer.gaussians(), trainer.sh_degree());
-        let start = Instant::now();
         let (times, _) =
             trainer.step(it % c.views, &settings, [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0], &adam)?;
         if it >= c.views {
             walls.push(start.elapsed().as_secs_f64());
             passes.push(super::splat::top_level_ms(&[times]));
+            clock = clock.plus(&ctx.clock().since(&before));
         }
     }
+    let wall_s: f64 = walls.iter().sum();
+    let host_ms_per_iter = (wall_s - clock.device_s) * 1e3 / walls.len().max(1) as f64;
+    let host_fraction = clock.host_share(wall_s);
     let names: Vec<String> = passes
         .first()
         .map(|p: &BTreeMap<String, f64>| p.keys().cloned().collect())
@@ -123,6 +136,9 @@ pub fn bench_train(
         splat_fwd_bwd_s: splat.fwd_bwd_s,
         overhead_fraction: if s_per_iter > 0.0 { 1.0 - splat.fwd_bwd_s / s_per_iter } else { 0.0 },
         loss_ms,
+        clock,
+        host_ms_per_iter,
+        host_fraction,
     })
 }
 

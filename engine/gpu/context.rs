@@ -4,6 +4,7 @@
 
 use super::error::{GpuError, GpuResult, VkContext};
 use super::features::{DeviceCapabilities, REQUIRED_EXTENSIONS};
+use super::host_clock::{ClockReading, HostClock};
 use super::select::{choose_device, DeviceInfo, DEVICE_ENV};
 use super::staging::StagingPool;
 use super::validation::{self, ValidationLog, VALIDATION_ENV, VALIDATION_LAYER};
@@ -71,6 +72,7 @@ pub struct GpuContext {
     validation_enabled: bool,
     staging: Mutex<StagingPool>,
     force_staging: bool,
+    clock: HostClock,
 }
 
 /// Set to 1, forces the staging path (see [`ContextOptions`]).
@@ -171,6 +173,7 @@ impl GpuContext {
             force_staging: options
                 .force_staging
                 .unwrap_or_else(|| std::env::var(FORCE_STAGING_ENV).is_ok_and(|v| v == "1")),
+            clock: HostClock::default(),
         }))
     }
 
@@ -201,6 +204,16 @@ impl GpuContext {
     /// Whether uploads and readbacks go through staging buffers even on host-visible memory.
     pub fn forces_staging(&self) -> bool {
         self.force_staging
+    }
+
+    /// Recording, waiting and device time of every submission so far (see [`ClockReading`]).
+    pub fn clock(&self) -> ClockReading {
+        self.clock.read()
+    }
+
+    /// The running totals each submission adds to.
+    pub(crate) fn host_clock(&self) -> &HostClock {
+        &self.clock
     }
 
     /// The staging buffers (lock held from the host copy to the fence).

@@ -15,6 +15,7 @@ use ash::vk;
 use bytemuck::Pod;
 use std::marker::PhantomData;
 use std::sync::Arc;
+use std::time::Instant;
 
 /// Records commands; `'a` is the lifetime of the buffers and pipelines they use, so none of
 /// them can be dropped before the recorder is submitted or dropped.
@@ -28,6 +29,8 @@ pub struct Recorder<'a> {
     pending_writes: bool,
     /// Submitted and not yet waited for: Drop must wait before freeing.
     in_flight: bool,
+    /// When recording began (the context's host clock counts recording time from here).
+    started: Instant,
     _resources: PhantomData<&'a ()>,
 }
 
@@ -51,6 +54,7 @@ impl<'a> Recorder<'a> {
             timestamps: Timestamps::new(ctx),
             pending_writes: false,
             in_flight: false,
+            started: Instant::now(),
             _resources: PhantomData,
         };
         let alloc_info = vk::CommandBufferAllocateInfo::default()
@@ -65,6 +69,7 @@ impl<'a> Recorder<'a> {
             .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         unsafe { device.begin_command_buffer(recorder.cmd, &begin) }
             .during("vkBeginCommandBuffer")?;
+        recorder.timestamps.mark_span(device, recorder.cmd, false);
         Ok(recorder)
     }
 
@@ -228,7 +233,7 @@ impl<'a> Recorder<'a> {
     /// Submits everything recorded, waits until the GPU has finished, and returns the pass times.
     pub fn submit_and_wait(mut self) -> GpuResult<PassTimes> {
         let device = self.ctx.device();
-        unsafe {
+        let (recording, submitted) = unsafe {
             // Make every write visible to the host, which reads results after the fence.
             let to_host = vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
@@ -242,7 +247,9 @@ impl<'a> Recorder<'a> {
                 &[],
                 &[],
             );
+            self.timestamps.mark_span(device, self.cmd, true);
             device.end_command_buffer(self.cmd).during("vkEndCommandBuffer")?;
+            let (recording, submitted) = (self.started.elapsed(), Instant::now());
             let cmds = [self.cmd];
             let submit = vk::SubmitInfo::default().command_buffers(&cmds);
             {
@@ -252,8 +259,12 @@ impl<'a> Recorder<'a> {
             self.in_flight = true;
             device.wait_for_fences(&[self.fence], true, u64::MAX).during("vkWaitForFences")?;
             self.in_flight = false;
-        }
-        self.timestamps.read(device)
+            (recording, submitted)
+        };
+        let waiting = submitted.elapsed();
+        let (times, device_ms) = self.timestamps.read(device)?;
+        self.ctx.host_clock().add(recording, waiting, device_ms);
+        Ok(times)
     }
 
     fn barrier_if_needed(&mut self) {

@@ -34,6 +34,8 @@ pub(crate) struct Timestamps {
     /// could be written, and that pass goes untimed (begins and ends still pair up).
     passes: Vec<(String, u32, Option<u32>, Option<u32>)>,
     open: Vec<usize>,
+    /// Queries at the submission's first and last command (its device span).
+    span: [Option<u32>; 2],
 }
 
 impl Timestamps {
@@ -46,7 +48,13 @@ impl Timestamps {
             used: 0,
             passes: Vec::new(),
             open: Vec::new(),
+            span: [None, None],
         }
+    }
+
+    /// Marks the submission's first (`end` false) or last command for its device span.
+    pub(crate) fn mark_span(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, end: bool) {
+        self.span[end as usize] = self.write(device, cmd);
     }
 
     pub(crate) fn begin(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, name: &str) {
@@ -87,9 +95,10 @@ impl Timestamps {
         Some(query)
     }
 
-    /// Reads the timestamps of a finished submission.
-    pub(crate) fn read(&self, device: &ash::Device) -> GpuResult<PassTimes> {
-        let Some(period_ns) = self.period_ns else { return Ok(PassTimes::default()) };
+    /// Reads the timestamps of a finished submission: its passes, and its device span in ms
+    /// (None without timestamps).
+    pub(crate) fn read(&self, device: &ash::Device) -> GpuResult<(PassTimes, Option<f64>)> {
+        let Some(period_ns) = self.period_ns else { return Ok((PassTimes::default(), None)) };
         let mut ticks = vec![0u64; self.used as usize];
         for (i, chunk) in ticks.chunks_mut(QUERIES_PER_POOL as usize).enumerate() {
             unsafe {
@@ -102,20 +111,19 @@ impl Timestamps {
             }
             .during("vkGetQueryPoolResults")?;
         }
+        let ms = |start: Option<u32>, end: Option<u32>| {
+            let elapsed =
+                ticks[end? as usize].wrapping_sub(ticks[start? as usize]) & self.valid_mask;
+            Some(elapsed as f64 * period_ns * 1e-6)
+        };
         let passes = self
             .passes
             .iter()
             .filter_map(|(name, depth, start, end)| {
-                let elapsed = ticks[(*end)? as usize].wrapping_sub(ticks[(*start)? as usize])
-                    & self.valid_mask;
-                Some(PassTime {
-                    name: name.clone(),
-                    ms: elapsed as f64 * period_ns * 1e-6,
-                    depth: *depth,
-                })
+                Some(PassTime { name: name.clone(), ms: ms(*start, *end)?, depth: *depth })
             })
             .collect();
-        Ok(PassTimes { passes })
+        Ok((PassTimes { passes }, ms(self.span[0], self.span[1])))
     }
 
     pub(crate) fn destroy(&mut self, device: &ash::Device) {

@@ -51,6 +51,14 @@ pub struct FrameReport {
     pub lost_views: Vec<String>,
     /// Optimisation wall time (evaluation excluded), seconds.
     pub wall_s: f64,
+    /// The whole frame's wall time (setup and evaluation included) split into the device's
+    /// busy time (its submissions' spans) and the rest, the time the device waited for the host;
+    /// None where the queue writes no timestamps.
+    #[serde(default)]
+    pub device_s: Option<f64>,
+    /// The wall time of the frame the device waited for the host (see `device_s`).
+    #[serde(default)]
+    pub host_s: Option<f64>,
     /// Gaussians at the end of the frame.
     pub gaussians: usize,
     /// Held-out (or training, see the run report) PSNR and SSIM of the Gaussian and mesh renders.
@@ -128,6 +136,7 @@ pub fn optimize_frame(
     config: &TrainConfig,
     progress: &mut dyn FnMut(u32, u32),
 ) -> Result<(GaussianScene, FrameReport), TrainError> {
+    let (started, clock) = (Instant::now(), ctx.clock());
     let canonical = task.previous.is_none();
     let (w, t) = (&config.loss, &config.temporal);
     let weights = ImageWeights { gaussians: w.gaussians.channels(), mesh: w.mesh.channels() };
@@ -198,6 +207,10 @@ pub fn optimize_frame(
         (run.iterations, graph_s + run.train_s + colour_s, scene.len(), run.passes_ms);
     (report.psnr_gs, report.ssim_gs, report.psnr_mesh) =
         evaluate(&mut trainer, &terms.mesh_term, task.eval, &settings)?;
+    let (wall, clock) = (started.elapsed().as_secs_f64(), ctx.clock().since(&clock));
+    if clock.host_share(wall).is_some() {
+        (report.device_s, report.host_s) = (Some(clock.device_s), Some(wall - clock.device_s));
+    }
     Ok((scene, report))
 }
 
@@ -596,6 +609,8 @@ fn empty_report(frame: usize) -> FrameReport {
         correspondences: None,
         lost_views: Vec::new(),
         wall_s: 0.0,
+        device_s: None,
+        host_s: None,
         gaussians: 0,
         psnr_gs: 0.0,
         ssim_gs: 0.0,
