@@ -30,7 +30,7 @@ fn benches(c: &mut Criterion) {
 fn bench_views(c: &mut Criterion, ctx: &Arc<GpuContext>) -> Result<(), RasterError> {
     let mesh = bumpy_sphere(TRIANGLES)?;
     let rasterizer = MeshRasterizer::new(ctx, &mesh, RESOLUTION, RESOLUTION)?;
-    let camera = ring_cameras(8, RESOLUTION)[1];
+    let camera = ring_cameras(8, RESOLUTION, RESOLUTION)[1];
     let settings = RasterSettings::scaled_to(&mesh.positions);
     let pixels = (RESOLUTION * RESOLUTION) as usize;
     let (grad_color, grad_mask) =

@@ -28,8 +28,12 @@ fn benches(c: &mut Criterion) {
 }
 
 fn bench_views(c: &mut Criterion, ctx: &Arc<GpuContext>) -> Result<(), SplatError> {
-    let work = BenchWork::new(ctx, &random_scene(GAUSSIANS, 3, 0x5EED), RESOLUTION)?;
-    let camera = ring_cameras(8, RESOLUTION)[1];
+    let work = BenchWork::new(
+        ctx,
+        &random_scene(GAUSSIANS, 3, 0x5EED),
+        (RESOLUTION * RESOLUTION) as usize,
+    )?;
+    let camera = ring_cameras(8, RESOLUTION, RESOLUTION)[1];
     let settings = RenderSettings::default();
     let mut splatter = Splatter::new(ctx)?;
     let mut group = c.benchmark_group("splat_256_20k_sh3");

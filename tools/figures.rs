@@ -150,27 +150,30 @@ fn sort_value(v: &Value) -> Result<String> {
 
 fn splat_figure(v: &Value) -> Result<String> {
     Ok(format!(
-        "[splatting](docs/splatting.md) forward + backward, {} Gaussians, SH {}, {}²",
+        "[splatting](docs/splatting.md), {} Gaussians, SH {}, {} × {}",
         num(v, "config.gaussians")?,
         num(v, "config.sh_degree")?,
-        num(v, "config.resolution")?
+        num(v, "config.width")?,
+        num(v, "config.height")?
     ))
 }
 
 fn splat_value(v: &Value) -> Result<String> {
     Ok(format!(
-        "{:.1} ms per view ({:.1} views/s)",
+        "forward + backward {:.1} ms per view ({:.1} views/s); forward alone {:.1} ms",
         num(v, "fwd_bwd_s")? * 1e3,
-        num(v, "fwd_bwd_per_s")?
+        num(v, "fwd_bwd_per_s")?,
+        num(v, "fwd_s")? * 1e3
     ))
 }
 
 fn train_figure(v: &Value) -> Result<String> {
     Ok(format!(
-        "[training iteration](docs/splatting.md), {} Gaussians, {} views at {}²",
+        "[training iteration](docs/splatting.md), {} Gaussians, {} views of {} × {}",
         num(v, "config.scene.gaussians")?,
         num(v, "config.scene.views")?,
-        num(v, "config.scene.resolution")?
+        num(v, "config.scene.width")?,
+        num(v, "config.scene.height")?
     ))
 }
 

@@ -128,8 +128,8 @@ enum Bench {
         gaussians: usize,
         #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..=1000))]
         views: u64,
-        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=16384))]
-        resolution: u32,
+        #[command(flatten)]
+        size: FrameSize,
         #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=3))]
         sh_degree: u32,
         /// Timed iterations (after a warm-up round over the views).
@@ -146,8 +146,8 @@ enum Bench {
         gaussians: usize,
         #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..=1000))]
         views: u64,
-        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=16384))]
-        resolution: u32,
+        #[command(flatten)]
+        size: FrameSize,
         #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=3))]
         sh_degree: u32,
         /// Rounds over all views; the first is a warm-up.
@@ -259,19 +259,14 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench(Bench::Train {
-            gaussians,
-            views,
-            resolution,
-            sh_degree,
-            iterations,
-            json,
-        }) => {
+        Command::Bench(Bench::Train { gaussians, views, size, sh_degree, iterations, json }) => {
             let ctx = gpu.create()?;
+            let (width, height) = size.get();
             let scene = SplatBenchConfig {
                 gaussians,
                 views: views as usize,
-                resolution,
+                width,
+                height,
                 sh_degree,
                 rounds: 2,
             };
@@ -285,12 +280,14 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench(Bench::Splat { gaussians, views, resolution, sh_degree, rounds, json }) => {
+        Command::Bench(Bench::Splat { gaussians, views, size, sh_degree, rounds, json }) => {
             let ctx = gpu.create()?;
+            let (width, height) = size.get();
             let config = SplatBenchConfig {
                 gaussians,
                 views: views as usize,
-                resolution,
+                width,
+                height,
                 sh_degree,
                 rounds: rounds as usize,
             };
@@ -302,6 +299,28 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             }
             Ok(())
         }
+    }
+}
+
+/// The frame size of the splatting and training benches: `--width` and `--height` (256 each by
+/// default), or `--resolution R` for R × R.
+#[derive(clap::Args)]
+struct FrameSize {
+    /// Frame width, pixels.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(16..=16384))]
+    width: Option<u32>,
+    /// Frame height, pixels.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(16..=16384))]
+    height: Option<u32>,
+    /// Square frames of this side (instead of --width and --height).
+    #[arg(long, conflicts_with_all = ["width", "height"], value_parser = clap::value_parser!(u32).range(16..=16384))]
+    resolution: Option<u32>,
+}
+
+impl FrameSize {
+    fn get(&self) -> (u32, u32) {
+        let side = |v: Option<u32>| self.resolution.or(v).unwrap_or(256);
+        (side(self.width), side(self.height))
     }
 }
 
@@ -425,7 +444,7 @@ fn print_splat_report(r: &SplatBenchReport) {
     println!("device              {}", r.device);
     println!(
         "scene               {} Gaussians, SH degree {}, {} views of {}x{}",
-        c.gaussians, c.sh_degree, c.views, c.resolution, c.resolution
+        c.gaussians, c.sh_degree, c.views, c.width, c.height
     );
     println!("forward             {:.2} ms per view (median wall time)", r.fwd_s * 1e3);
     println!("backward            {:.2} ms per view", r.bwd_s * 1e3);
@@ -438,7 +457,7 @@ fn print_splat_report(r: &SplatBenchReport) {
     println!(
         "walked pairs        {:.0} pixel-Gaussian pairs per view ({:.1} per pixel)",
         r.walked_pairs_per_view,
-        r.walked_pairs_per_view / (c.resolution as f64).powi(2)
+        r.walked_pairs_per_view / (c.width as f64 * c.height as f64)
     );
     println!("copy bandwidth      {:.2} GB/s compute kernel", r.copy.compute_bytes_per_s * 1e-9);
     println!(
@@ -481,7 +500,7 @@ fn print_train_report(r: &TrainBenchReport) {
     println!("device              {}", r.device);
     println!(
         "scene               {} Gaussians, SH degree {}, {} views of {}x{}, no densification",
-        c.gaussians, c.sh_degree, c.views, c.resolution, c.resolution
+        c.gaussians, c.sh_degree, c.views, c.width, c.height
     );
     println!(
         "iteration           {:.1} ms (median of {}) = {:.2} it/s",

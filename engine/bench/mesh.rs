@@ -123,7 +123,7 @@ pub fn bench_mesh(
         GpuBuffer::<f32>::new(ctx, "bench dL/dvertex colour", 3 * mesh.positions.len())?;
     let (mut fwd, mut bwd, mut passes, mut large) = (Vec::new(), Vec::new(), Vec::new(), 0u64);
     for round in 0..config.rounds.max(2) {
-        for camera in ring_cameras(config.views, res) {
+        for camera in ring_cameras(config.views, res, res) {
             let params = rasterizer.params(&camera, &settings)?;
             let start = Instant::now();
             let forward_times = rasterizer.render(&camera, &settings)?;

@@ -24,8 +24,10 @@ pub struct SplatBenchConfig {
     pub gaussians: usize,
     /// Number of [`ring_cameras`].
     pub views: usize,
-    /// Width and height of every view, pixels.
-    pub resolution: u32,
+    /// Width of every view, pixels.
+    pub width: u32,
+    /// Height of every view, pixels.
+    pub height: u32,
     /// Spherical-harmonics degree of the scene and the render.
     pub sh_degree: u32,
     /// Passes over all views; the first is a warm-up and not timed.
@@ -34,7 +36,7 @@ pub struct SplatBenchConfig {
 
 impl Default for SplatBenchConfig {
     fn default() -> Self {
-        Self { gaussians: 20_000, views: 8, resolution: 256, sh_degree: 3, rounds: 3 }
+        Self { gaussians: 20_000, views: 8, width: 256, height: 256, sh_degree: 3, rounds: 3 }
     }
 }
 
@@ -120,16 +122,17 @@ pub fn random_scene(n: usize, sh_degree: u32, seed: u64) -> GaussianScene {
     scene
 }
 
-/// `views` cameras on a horizontal ring of radius 3.5 around the origin, all looking at it, with
-/// a 40° field of view (the unit ball fills about 80% of the frame).
-pub fn ring_cameras(views: usize, resolution: u32) -> Vec<Camera> {
-    let f = resolution as f64 / 2.0 / 20f64.to_radians().tan();
-    let c = resolution as f64 / 2.0;
+/// `views` cameras of `width` × `height` pixels on a horizontal ring of radius 3.5 around the
+/// origin, all looking at it, with a 40° vertical field of view (the unit ball fills about 80%
+/// of the frame's height) and square pixels.
+pub fn ring_cameras(views: usize, width: u32, height: u32) -> Vec<Camera> {
+    let f = height as f64 / 2.0 / 20f64.to_radians().tan();
+    let (cx, cy) = (width as f64 / 2.0, height as f64 / 2.0);
     (0..views)
         .map(|v| {
             let angle = std::f64::consts::TAU * v as f64 / views as f64;
             let eye = DVec3::new(3.5 * angle.cos(), 0.3, 3.5 * angle.sin());
-            Camera::look_at(resolution, resolution, f, f, c, c, eye, DVec3::ZERO, DVec3::Y)
+            Camera::look_at(width, height, f, f, cx, cy, eye, DVec3::ZERO, DVec3::Y)
                 .expect("ring cameras are valid")
         })
         .collect()
@@ -151,16 +154,15 @@ pub struct BenchWork {
 }
 
 impl BenchWork {
-    /// Uploads `scene` and creates the buffers for `resolution²` pixels; fails when an upload,
-    /// an allocation or the zeroing submission fails.
+    /// Uploads `scene` and creates the buffers for views of `pixels` pixels; fails when an
+    /// upload, an allocation or the zeroing submission fails.
     pub fn new(
         ctx: &Arc<GpuContext>,
         scene: &GaussianScene,
-        resolution: u32,
+        pixels: usize,
     ) -> Result<Self, SplatError> {
         let buffers = GaussianBuffers::from_scene(ctx, scene)?;
         let grads = GaussianBuffers::shaped_like(ctx, &buffers)?;
-        let pixels = (resolution * resolution) as usize;
         let work = Self {
             densify_stats: GpuBuffer::from_slice(
                 ctx,
@@ -201,12 +203,10 @@ pub fn bench_splat(
     ctx: &Arc<GpuContext>,
     config: &SplatBenchConfig,
 ) -> Result<SplatBenchReport, SplatError> {
-    let cameras = ring_cameras(config.views, config.resolution);
-    let work = BenchWork::new(
-        ctx,
-        &random_scene(config.gaussians, config.sh_degree, 0x5EED),
-        config.resolution,
-    )?;
+    let cameras = ring_cameras(config.views, config.width, config.height);
+    let pixels = config.width as usize * config.height as usize;
+    let work =
+        BenchWork::new(ctx, &random_scene(config.gaussians, config.sh_degree, 0x5EED), pixels)?;
     let mut splatter = Splatter::new(ctx)?;
     let settings = RenderSettings { sh_degree: config.sh_degree, ..Default::default() };
     let (mut fwd, mut bwd, mut passes, mut intersections, mut pairs) =
@@ -242,8 +242,7 @@ pub fn bench_splat(
     let views = timed_views.max(1) as f64;
     let (intersections_per_view, walked_pairs_per_view) =
         (intersections as f64 / views, pairs as f64 / views);
-    let pixels = (config.resolution as f64).powi(2);
-    let backward_bytes_per_view = BACKWARD_PIXEL_BYTES * pixels
+    let backward_bytes_per_view = BACKWARD_PIXEL_BYTES * pixels as f64
         + (4 + size_of::<Splat>()) as f64 * intersections_per_view
         + BACKWARD_GRADIENT_VALUE_BYTES * (GRAD2D_STRIDE * config.gaussians) as f64;
     let copy = measure_copy(ctx, (backward_bytes_per_view as u64).max(1 << 20))?;

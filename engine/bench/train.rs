@@ -15,7 +15,7 @@ use std::time::Instant;
 /// What the training benchmark runs.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct TrainBenchConfig {
-    /// Scene, cameras and resolution (as the splatting benchmark's; its `rounds` is unused).
+    /// Scene, cameras and frame size (as the splatting benchmark's; its `rounds` is unused).
     pub scene: SplatBenchConfig,
     /// Timed iterations, after one warm-up round over the views.
     pub iterations: usize,
@@ -82,7 +82,7 @@ pub fn bench_train(
     let other = GaussianBuffers::from_scene(ctx, &random_scene(c.gaussians, c.sh_degree, 0xF00D))?;
     let mut splatter = Splatter::new(ctx)?;
     let mut views = Vec::new();
-    for (i, camera) in ring_cameras(c.views, c.resolution).into_iter().enumerate() {
+    for (i, camera) in ring_cameras(c.views, c.width, c.height).into_iter().enumerate() {
         splatter.forward(&other, &camera, &settings)?;
         views.push(ViewTarget { name: format!("ring{i}"), camera, target: splatter.read_rgba()? });
     }
