@@ -103,7 +103,7 @@ fn panoptic_cameras_project_known_points() {
         &image.data[..3]
     );
     // Said otherwise, the intrinsics are read as half-integer centres: cx, cy as written.
-    let half = LoadOptions { pixel_centers: Some(PixelCenters::HalfInteger) };
+    let half = LoadOptions { pixel_centers: Some(PixelCenters::HalfInteger), scale: None };
     let as_written = Dataset::load_with(&dir, &half).unwrap();
     assert_eq!(
         (d.pixel_centers, as_written.pixel_centers),
@@ -362,5 +362,43 @@ fn dataset_info_into_a_closed_pipe_ends_quietly() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.is_empty(), "{stderr}");
     assert_eq!(output.status.code(), Some(141), "{:?}: {stderr}", output.status);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `LoadOptions::scale` scales images, masks and intrinsics together: a point lands on the
+/// same place of the picture, the pixels are area means of the files', and a scale outside
+/// (0, 1] is refused naming the folder.
+#[test]
+fn scaled_views_keep_images_masks_and_cameras_together() {
+    use tagsplat::io::resample::resample_area;
+    use tagsplat::synth::{generate, SubjectSource, SynthOptions};
+    let dir = temp("scaled");
+    let o = SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 2 },
+        views: 3,
+        frames: 1,
+        resolution: 24,
+        seed: 5,
+        ..Default::default()
+    };
+    generate(&o, &dir).unwrap();
+    let full = Dataset::load(&dir).unwrap();
+    let load = |scale| Dataset::load_with(&dir, &LoadOptions { scale, pixel_centers: None });
+    let half = load(Some(0.5)).unwrap();
+    let point = DVec3::new(0.05, 0.1, -0.02);
+    for (a, b) in full.cameras.iter().zip(&half.cameras) {
+        assert_eq!((b.width, b.height), (12, 12));
+        let (pa, pb) = (a.project(point).unwrap(), b.project(point).unwrap());
+        assert!((pb * 2.0 - pa).length() < 1e-9, "{pa} against {pb} × 2");
+    }
+    let (image, original) = (half.image(0, 1).unwrap(), full.image(0, 1).unwrap());
+    assert_eq!((image.width, image.height), (12, 12));
+    assert_eq!(image.data, resample_area(&original, 12, 12).data);
+    assert_eq!(half.mask(0, 1).unwrap().len(), 144);
+    assert!(half.check().is_empty(), "{:?}", half.check());
+    for bad in [0.0, 1.5, f64::NAN] {
+        let error = load(Some(bad)).err().expect("refused").to_string();
+        assert!(error.contains("scaled") && error.contains("(0, 1]"), "{error}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -41,7 +41,7 @@ impl From<PixelCentersArg> for PixelCenters {
 
 pub fn run(command: DatasetCommand) -> Result<()> {
     let DatasetCommand::Info { data, check, json, pixel_centers } = command;
-    let options = LoadOptions { pixel_centers: pixel_centers.map(Into::into) };
+    let options = LoadOptions { pixel_centers: pixel_centers.map(Into::into), scale: None };
     let d = Dataset::load_with(&data, &options)
         .with_context(|| format!("cannot load the dataset in {}", data.display()))?;
     let missing: Vec<String> = d.missing_files().iter().map(|p| p.display().to_string()).collect();

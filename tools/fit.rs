@@ -66,7 +66,7 @@ pub fn fit(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: FitArgs) -> 
             bar.set_message(format!("loss {loss:.4}  {} Gaussians", p.gaussians));
         }
     };
-    let load = LoadOptions { pixel_centers: args.pixel_centers.map(Into::into) };
+    let load = LoadOptions { pixel_centers: args.pixel_centers.map(Into::into), scale: None };
     let job = FitJob { data: data.clone(), frame: args.frame, init: args.init, config, load };
     let outcome = run_fit_job(&ctx, &job, &mut progress)
         .with_context(|| format!("fit of {} frame {}", data.display(), args.frame))?;

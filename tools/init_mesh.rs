@@ -48,7 +48,7 @@ pub struct InitMeshArgs {
 }
 
 pub fn run(a: InitMeshArgs) -> Result<()> {
-    let load = LoadOptions { pixel_centers: a.pixel_centers.map(Into::into) };
+    let load = LoadOptions { pixel_centers: a.pixel_centers.map(Into::into), scale: None };
     let data = Dataset::load_with(&a.data, &load)
         .with_context(|| format!("cannot load the dataset {}", a.data.display()))?;
     let options = InitOptions {

@@ -39,6 +39,10 @@ pub struct TrainArgs {
     /// `tagsplat dataset info`).
     #[arg(long, value_enum)]
     pixel_centers: Option<PixelCentersArg>,
+    /// Scale the views' images, masks and intrinsics together by this factor in (0, 1] (a 4K
+    /// capture at 0.25 trains at 1K; meshes stay in the capture's units).
+    #[arg(long)]
+    scale: Option<f64>,
     /// Frame rate of the exports (GLB, USD, PC2). Default: the layout's (the own layout's `fps`,
     /// Panoptic's 29.97), 30 when it has none (nerfstudio / D-NeRF).
     #[arg(long, value_parser = parse_fps)]
@@ -81,7 +85,7 @@ pub fn train(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: TrainArgs)
         mesh: args.mesh,
         frames: args.frames,
         up: args.up.map(Into::into),
-        load: LoadOptions { pixel_centers: args.pixel_centers.map(Into::into) },
+        load: LoadOptions { pixel_centers: args.pixel_centers.map(Into::into), scale: args.scale },
         fps: args.fps,
         ..TrainJob::new(data, out, config)
     };

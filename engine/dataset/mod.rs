@@ -16,6 +16,7 @@ pub mod panoptic;
 
 use crate::camera::Camera;
 use crate::io::image::{read_image, Image, ImageError};
+use crate::io::resample::resample_area;
 use cache::ImageCache;
 use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
@@ -154,6 +155,9 @@ pub struct LoadOptions {
     /// The pixel-centre convention of the layout's intrinsics; None takes the layout's default
     /// ([`PixelCenters::default_for`]).
     pub pixel_centers: Option<PixelCenters>,
+    /// Scales every view's images, masks and intrinsics together by this factor in (0, 1]
+    /// (a 4K capture at 0.25 trains at 1K); None keeps the files' size.
+    pub scale: Option<f64>,
 }
 
 /// Where a view's mask comes from.
@@ -208,6 +212,8 @@ pub struct Dataset {
     /// Frames per second where the layout says: the own layout's `fps`; Panoptic's HD cameras'
     /// 29.97 (its files carry none). None for nerfstudio / D-NeRF, whose times are normalised.
     pub fps: Option<f64>,
+    /// Each camera's size in the files when the views are scaled ([`LoadOptions::scale`]).
+    source_sizes: Option<Vec<(u32, u32)>>,
     cache: ImageCache,
 }
 
@@ -236,6 +242,15 @@ impl Dataset {
         for camera in &mut dataset.cameras {
             camera.cx += shift;
             camera.cy += shift;
+        }
+        if let Some(scale) = options.scale {
+            if !(scale.is_finite() && scale > 0.0 && scale <= 1.0) {
+                let problem = format!("scale {scale} is outside (0, 1]");
+                return Err(DatasetError::File { path: dir.to_owned(), problem });
+            }
+            if scale != 1.0 {
+                dataset.source_sizes = Some(scale_cameras(&mut dataset.cameras, scale));
+            }
         }
         Ok(dataset)
     }
@@ -291,6 +306,7 @@ impl Dataset {
             train,
             test,
             fps: None,
+            source_sizes: None,
             cache: ImageCache::new(DEFAULT_CACHE_BYTES),
         })
     }
@@ -349,11 +365,18 @@ impl Dataset {
         if !path.is_file() {
             return Err(DatasetError::MissingImage(path.to_owned()));
         }
-        let image = self.cache.get_or_load(path, read_image)?;
-        self.check_size(path, camera, (image.width, image.height))?;
-        Ok(image)
+        self.cache.get_or_load(path, |path| {
+            let image = read_image(path)?;
+            self.check_size(path, camera, (image.width, image.height))?;
+            let c = &self.cameras[camera];
+            Ok(match self.source_sizes {
+                Some(_) => resample_area(&image, c.width, c.height),
+                None => image,
+            })
+        })
     }
 
+    /// Checks a file's size against its camera's as the files have it (before any scaling).
     fn check_size(
         &self,
         path: &Path,
@@ -361,14 +384,16 @@ impl Dataset {
         (width, height): (u32, u32),
     ) -> Result<(), DatasetError> {
         let c = &self.cameras[camera];
-        if (width, height) != (c.width, c.height) {
+        let (camera_width, camera_height) =
+            self.source_sizes.as_ref().map_or((c.width, c.height), |sizes| sizes[camera]);
+        if (width, height) != (camera_width, camera_height) {
             return Err(DatasetError::SizeMismatch {
                 path: path.to_owned(),
                 camera: self.camera_names[camera].clone(),
                 width,
                 height,
-                camera_width: c.width,
-                camera_height: c.height,
+                camera_width,
+                camera_height,
             });
         }
         Ok(())
@@ -442,6 +467,24 @@ pub(crate) fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T
         path: path.to_owned(),
         problem: format!("invalid JSON: {e}"),
     })
+}
+
+/// Scales each camera to `scale` × its size (rounded, at least 1 pixel) and its intrinsics by
+/// the size's actual ratio per axis (pixel centres at half-integers, so coordinates scale as
+/// they are); returns the sizes before.
+fn scale_cameras(cameras: &mut [Camera], scale: f64) -> Vec<(u32, u32)> {
+    let side = |n: u32| ((n as f64 * scale).round() as u32).max(1);
+    cameras
+        .iter_mut()
+        .map(|c| {
+            let before = (c.width, c.height);
+            let (width, height) = (side(c.width), side(c.height));
+            let (sx, sy) = (width as f64 / c.width as f64, height as f64 / c.height as f64);
+            (c.fx, c.cx, c.fy, c.cy) = (c.fx * sx, c.cx * sx, c.fy * sy, c.cy * sy);
+            (c.width, c.height) = (width, height);
+            before
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -10,6 +10,7 @@ pub mod image;
 pub mod pc2;
 pub mod plot;
 pub mod ply;
+pub mod resample;
 pub mod trajectories;
 
 use std::fs::File;

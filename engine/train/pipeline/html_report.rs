@@ -53,6 +53,9 @@ struct Run {
     /// Reports written before the field existed used the layout's default.
     #[serde(default)]
     pixel_centers: Option<PixelCenters>,
+    /// Reports written before the field existed trained at the files' size.
+    #[serde(default)]
+    scale: Option<f64>,
 }
 
 /// `OUT/eval.json` of `tagsplat eval` on a benchmark: the per-frame scores the page shows.
@@ -82,7 +85,8 @@ pub fn write_html_report(ctx: &Arc<GpuContext>, out: &Path) -> Result<PathBuf, T
     })?;
     let eval: Option<Eval> = read_json(&out.join("eval.json"))?;
     let eval_plot = if eval.is_some() { read_text(&out.join("eval.svg"))? } else { None };
-    let dataset = Dataset::load_with(&run.data, &LoadOptions { pixel_centers: run.pixel_centers })?;
+    let load = LoadOptions { pixel_centers: run.pixel_centers, scale: run.scale };
+    let dataset = Dataset::load_with(&run.data, &load)?;
     let views = views_section(ctx, &dataset, out, &run)?;
     let page = page(out, &run, eval.as_ref(), eval_plot.as_deref(), &views);
     let path = out.join("report.html");

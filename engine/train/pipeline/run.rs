@@ -106,6 +106,8 @@ pub struct TrainReport {
     pub up_axis: String,
     /// Where the dataset's intrinsics were read to put pixel centres.
     pub pixel_centers: PixelCenters,
+    /// The factor the views were scaled by (`LoadOptions::scale`), None at the files' size.
+    pub scale: Option<f64>,
     /// The colour behind the renders and the targets they are scored against (the config's).
     pub background: [f32; 3],
 }
@@ -169,6 +171,7 @@ fn run_logged(
         up_axis: String::new(),
         export: String::new(),
         pixel_centers: dataset.pixel_centers,
+        scale: job.load.scale,
         background: job.config.background,
     };
     let source = capture_up(&dataset, &mut report.up_axis);
@@ -277,8 +280,9 @@ fn start_line(ctx: &GpuContext, job: &TrainJob) -> String {
     let frames = job.frames.as_ref().map_or("all".into(), |f| format!("{}..{}", f.start, f.end));
     let mesh = job.mesh.as_ref().map_or("built from the masks".into(), |m| m.display().to_string());
     let config: String = job.config.to_toml().lines().map(|l| format!("\nconfig | {l}")).collect();
+    let scale = job.load.scale.map_or(String::new(), |s| format!(", views scaled by {s}"));
     format!(
-        "tagsplat {} train: data {}, out {}, frames {frames}, frame-0 mesh {mesh}, device {}{config}",
+        "tagsplat {} train: data {}, out {}, frames {frames}, frame-0 mesh {mesh}{scale}, device {}{config}",
         env!("CARGO_PKG_VERSION"),
         job.data.display(),
         job.out.display(),
