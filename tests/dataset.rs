@@ -397,7 +397,8 @@ fn scaled_views_keep_images_masks_and_cameras_together() {
     assert_eq!(half.mask(0, 1).unwrap().len(), 144);
     assert!(half.check().is_empty(), "{:?}", half.check());
     for bad in [0.0, 1.5, f64::NAN] {
-        let error = load(Some(bad)).err().expect("refused").to_string();
+        let Err(error) = load(Some(bad)) else { panic!("scale {bad} accepted") };
+        let error = error.to_string();
         assert!(error.contains("scaled") && error.contains("(0, 1]"), "{error}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
