@@ -120,7 +120,8 @@ pub fn run_demo(
             subject: SubjectSource::Procedural { subdivisions: 3 },
             views: options.views,
             frames: options.frames,
-            resolution: options.resolution,
+            width: options.resolution,
+            height: options.resolution,
             ..Default::default()
         };
         generate(&synth, &data)?;

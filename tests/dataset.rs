@@ -296,7 +296,8 @@ fn own_layout_with_a_bounded_cache() {
         subject: SubjectSource::Procedural { subdivisions: 2 },
         views: 9,
         frames: 2,
-        resolution: 16,
+        width: 16,
+        height: 16,
         seed: 4,
         samples: 1,
         track_vertices: 3,
@@ -377,7 +378,8 @@ fn scaled_views_keep_images_masks_and_cameras_together() {
         subject: SubjectSource::Procedural { subdivisions: 2 },
         views: 3,
         frames: 1,
-        resolution: 24,
+        width: 24,
+        height: 24,
         seed: 5,
         ..Default::default()
     };

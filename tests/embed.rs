@@ -70,7 +70,8 @@ fn an_embedding_program_reconstructs_renders_and_tracks_from_the_root_api() {
         subject: SubjectSource::Procedural { subdivisions: 3 },
         views: 8,
         frames: 2,
-        resolution: 96,
+        width: 96,
+        height: 96,
         seed: 9,
         samples: 2,
         ..Default::default()

@@ -7,8 +7,9 @@ mod common;
 
 use common::{gpu, rng};
 use glam::DVec3;
+use std::sync::Arc;
 use tagsplat::camera::Camera;
-use tagsplat::gpu::{GpuBuffer, Recorder};
+use tagsplat::gpu::{GpuBuffer, GpuContext, Recorder};
 use tagsplat::loss::silhouette::reference::silhouette_loss;
 use tagsplat::loss::silhouette::{self, SilhouetteTerm, SilhouetteView};
 
@@ -100,9 +101,20 @@ fn gpu_matches_reference_and_adds_to_gradients() {
     let test = gpu();
     let ctx = test.ctx();
     let views = views(1);
+    // One buffer for every field, then a buffer per view (as a device with a small
+    // maxStorageBufferRange splits a large capture).
+    let field_bytes = (SIZE * SIZE) as u64 * 4;
+    for (limit, buffers) in [(u64::MAX, 1), (field_bytes, 3)] {
+        let term = SilhouetteTerm::with_buffer_limit(ctx, &views, limit).unwrap();
+        assert_eq!(term.field_buffers(), buffers);
+        assert_eq!(term.views_without_mask(), &[3]);
+        check_against_reference(ctx, &term, &views);
+    }
+}
+
+/// The term's gradient, added on top of 0.25 everywhere, and value against the f64 reference.
+fn check_against_reference(ctx: &Arc<GpuContext>, term: &SilhouetteTerm, views: &[SilhouetteView]) {
     let pts = points(500, 2);
-    let term = SilhouetteTerm::new(ctx, &views).unwrap();
-    assert_eq!(term.views_without_mask(), &[3]);
     let flat: Vec<f32> = pts.iter().flatten().map(|&v| v as f32).collect();
     let positions = GpuBuffer::from_slice(ctx, "positions", &flat).unwrap();
     let grads = GpuBuffer::from_slice(ctx, "gradients", &vec![0.25f32; flat.len()]).unwrap();
@@ -111,7 +123,7 @@ fn gpu_matches_reference_and_adds_to_gradients() {
     rec.submit_and_wait().unwrap();
     let pts32: Vec<[f64; 3]> =
         flat.chunks(3).map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]).collect();
-    let (value, expect) = silhouette_loss(&pts32, &views, 3.0, 0.01);
+    let (value, expect) = silhouette_loss(&pts32, views, 3.0, 0.01);
     let got = grads.read().unwrap();
     let scale = expect.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     for (i, e) in expect.iter().enumerate() {

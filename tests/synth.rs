@@ -26,7 +26,8 @@ fn small(seed: u64) -> SynthOptions {
         subject: SubjectSource::Procedural { subdivisions: 3 },
         views: 3,
         frames: 3,
-        resolution: 48,
+        width: 48,
+        height: 48,
         seed,
         samples: 2,
         track_vertices: 20,
@@ -207,8 +208,10 @@ fn deterministic_for_a_seed() {
 #[test]
 fn images_are_antialiased_and_the_subject_is_in_view() {
     let dir = temp("aa");
-    generate(&small(2), &dir).unwrap();
+    // A landscape frame, as studio cameras deliver (the subject fits its shorter side).
+    generate(&SynthOptions { width: 64, height: 40, ..small(2) }, &dir).unwrap();
     let mask = read_image(&dir.join("masks/cam001/000001.png")).unwrap();
+    assert_eq!((mask.width, mask.height), (64, 40));
     assert!(mask.data.iter().any(|&v| v > 0.0 && v < 1.0), "edge pixels have partial coverage");
     // The border rows and columns are background: the subject fits the frame.
     let (w, h) = (mask.width, mask.height);
@@ -216,8 +219,15 @@ fn images_are_antialiased_and_the_subject_is_in_view() {
         assert_eq!(mask.at(i, 0, 0), 0.0);
         assert_eq!(mask.at(i, h - 1, 0), 0.0);
     }
+    for j in 0..h {
+        assert_eq!(mask.at(0, j, 0), 0.0);
+        assert_eq!(mask.at(w - 1, j, 0), 0.0);
+    }
     let image = read_image(&dir.join("images/cam001/000001.png")).unwrap();
-    assert_eq!(image.channels, 3);
+    assert_eq!((image.width, image.height, image.channels), (64, 40, 3));
+    let data = Dataset::load(&dir).unwrap();
+    assert!(data.cameras.iter().all(|c| (c.width, c.height) == (64, 40)));
+    assert!(data.check().is_empty());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -23,6 +23,10 @@ pub struct InitMeshArgs {
     /// Target edge length of the remeshed surface, pixels of the typical view.
     #[arg(long, default_value_t = InitOptions::default().edge_pixels)]
     edge_pixels: f64,
+    /// The most pixels the subject's box diagonal counts when the voxel and edge lengths are
+    /// set (a finer capture adds no vertices).
+    #[arg(long, default_value_t = InitOptions::default().max_subject_pixels)]
+    max_subject_pixels: f64,
     /// Isotropic remeshing rounds (0: keep the marching-tetrahedra mesh).
     #[arg(long, default_value_t = InitOptions::default().remesh_rounds)]
     remesh_rounds: usize,
@@ -57,6 +61,7 @@ pub fn run(a: InitMeshArgs) -> Result<()> {
         max_grid_bytes: a.grid_mib.saturating_mul(1 << 20),
         vertices: a.vertices,
         edge_pixels: a.edge_pixels,
+        max_subject_pixels: a.max_subject_pixels,
         remesh_rounds: a.remesh_rounds,
         colors: !a.no_colors,
         ..InitOptions::default()

@@ -22,9 +22,15 @@ pub struct SynthArgs {
     views: usize,
     #[arg(long, default_value_t = 8)]
     frames: usize,
-    /// Image width and height, pixels.
+    /// Image width and height, pixels (--width and --height override it).
     #[arg(long, default_value_t = 256)]
     resolution: u32,
+    /// Image width, pixels (default: --resolution).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height, pixels (default: --resolution).
+    #[arg(long)]
+    height: Option<u32>,
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Supersampling: samples per pixel along each axis.
@@ -52,7 +58,8 @@ pub fn run(a: SynthArgs) -> Result<()> {
         subject,
         views: a.views,
         frames: a.frames,
-        resolution: a.resolution,
+        width: a.width.unwrap_or(a.resolution),
+        height: a.height.unwrap_or(a.resolution),
         seed: a.seed,
         samples: a.samples,
         track_vertices: a.track_vertices,
@@ -72,8 +79,8 @@ pub fn run(a: SynthArgs) -> Result<()> {
         );
         return Ok(());
     }
-    println!("wrote {}: {} views × {} frames at {}² px, {} vertices / {} faces, {} tracked points, subject radius {:.4} scene units, {:.2} s",
-        a.out.display(), report.views, report.frames, report.resolution, report.vertices, report.faces, report.tracked_points, report.radius, seconds);
+    println!("wrote {}: {} views × {} frames at {} × {} px, {} vertices / {} faces, {} tracked points, subject radius {:.4} scene units, {:.2} s",
+        a.out.display(), report.views, report.frames, report.width, report.height, report.vertices, report.faces, report.tracked_points, report.radius, seconds);
     let m = report.motion_per_frame;
     println!("vertex motion per frame ({:?}): mean {:.3}, 90th percentile {:.3}, max {:.3} of the subject's size", report.motion, m.mean, m.p90, m.max);
     if let Some(problem) = &report.manifold_problem {

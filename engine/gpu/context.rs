@@ -33,6 +33,8 @@ pub struct DeviceLimits {
     pub max_storage_buffer_range: u64,
     /// `maxMemoryAllocationSize`: the largest single allocation, in bytes.
     pub max_memory_allocation_size: u64,
+    /// The size of the largest device-local memory heap, bytes (on a CPU device: host memory).
+    pub device_memory_bytes: u64,
     /// `maxComputeWorkGroupCount`: workgroups per dispatch along x, y and z.
     pub max_workgroup_count: [u32; 3],
     /// `maxComputeWorkGroupInvocations`: invocations in one workgroup.
@@ -50,6 +52,14 @@ pub struct DeviceLimits {
     /// The largest subgroup size the device may use (the default size without subgroup size
     /// control).
     pub max_subgroup_size: u32,
+}
+
+impl DeviceLimits {
+    /// The largest buffer the engine can bind as storage: under both `maxStorageBufferRange`
+    /// and `maxMemoryAllocationSize`.
+    pub fn max_buffer_bytes(&self) -> u64 {
+        self.max_storage_buffer_range.min(self.max_memory_allocation_size)
+    }
 }
 
 /// A Vulkan instance and logical device with one compute queue, its allocator and pipeline
@@ -427,6 +437,17 @@ unsafe fn create_device(
     Ok((device, queue_family))
 }
 
+/// The largest heap flagged device-local (any heap when none is).
+unsafe fn largest_device_heap(
+    instance: &ash::Instance,
+    physical_device: vk::PhysicalDevice,
+) -> u64 {
+    let memory = instance.get_physical_device_memory_properties(physical_device);
+    let heaps = &memory.memory_heaps[..memory.memory_heap_count as usize];
+    let local = heaps.iter().filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL));
+    local.map(|h| h.size).max().or_else(|| heaps.iter().map(|h| h.size).max()).unwrap_or(0)
+}
+
 unsafe fn read_limits(
     instance: &ash::Instance,
     physical_device: vk::PhysicalDevice,
@@ -442,6 +463,7 @@ unsafe fn read_limits(
     DeviceLimits {
         max_storage_buffer_range: limits.max_storage_buffer_range as u64,
         max_memory_allocation_size: maintenance3.max_memory_allocation_size,
+        device_memory_bytes: largest_device_heap(instance, physical_device),
         max_workgroup_count: limits.max_compute_work_group_count,
         max_workgroup_invocations: limits.max_compute_work_group_invocations,
         max_shared_memory_bytes: limits.max_compute_shared_memory_size,

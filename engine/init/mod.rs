@@ -32,6 +32,7 @@ pub mod remesh;
 
 use crate::camera::Camera;
 use crate::dataset::{Dataset, DatasetError};
+use crate::io::host::parallel_map;
 use crate::io::image::Image;
 use crate::mesh::TriMesh;
 use crate::topology::ManifoldMesh;
@@ -54,6 +55,10 @@ pub struct InitOptions {
     pub mask_hole_fraction: f64,
     /// Target edge length of the remeshed surface, pixels of the typical view.
     pub edge_pixels: f64,
+    /// The most pixels the subject's box diagonal counts in the typical view when the voxel
+    /// and the edge length are set: beyond it a finer capture adds no vertices (a 1080² view
+    /// would otherwise give a mesh of ~90 000 vertices and take minutes to build).
+    pub max_subject_pixels: f64,
     /// Wanted vertex count; overrides `edge_pixels`.
     pub vertices: Option<usize>,
     /// Remeshing rounds; 0 keeps the marching-tetrahedra mesh as it is.
@@ -70,6 +75,7 @@ impl Default for InitOptions {
             max_grid_bytes: 256 << 20,
             mask_hole_fraction: 0.005,
             edge_pixels: 3.0,
+            max_subject_pixels: 400.0,
             vertices: None,
             remesh_rounds: 6,
             colors: true,
@@ -189,7 +195,8 @@ pub struct InitReport {
     pub bounds_lo: [f64; 3],
     /// Upper corner of the box the hull was carved in, scene units.
     pub bounds_hi: [f64; 3],
-    /// Size of one pixel at the box centre in the typical view, scene units.
+    /// The length `voxel_pixels` and `edge_pixels` count in, scene units: one pixel at the box
+    /// centre in the typical view, or the box diagonal over `max_subject_pixels` if longer.
     pub pixel: f64,
     /// Grid vertex spacing, scene units, and vertex counts of the grid that gave the mesh.
     pub voxel: f64,
@@ -256,15 +263,16 @@ pub fn init_mesh(
             frames: dataset.frames.len(),
         });
     };
-    let mut views = Vec::new();
-    for (k, v) in f.views.iter().enumerate().filter(|(_, v)| dataset.train.contains(&v.camera)) {
-        views.push(HullView {
+    let chosen: Vec<(usize, &crate::dataset::View)> =
+        f.views.iter().enumerate().filter(|(_, v)| dataset.train.contains(&v.camera)).collect();
+    let views = parallel_map(&chosen, |&(k, v)| {
+        Ok::<_, InitError>(HullView {
             name: dataset.camera_names[v.camera].clone(),
             camera: dataset.cameras[v.camera],
             mask: dataset.mask(frame, k)?,
             image: if options.colors { Some(dataset.image(frame, k)?) } else { None },
-        });
-    }
+        })
+    })?;
     init_mesh_from_views(&views, options)
 }
 
@@ -278,20 +286,20 @@ pub fn init_mesh_from_views(
     let names = |vs: &mut dyn Iterator<Item = &HullView>| {
         vs.map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ")
     };
-    let mut mask_hole_pixels = 0;
-    let fields: Vec<ViewField> = views
-        .iter()
-        .map(|v| {
-            let (w, h) = (v.camera.width as usize, v.camera.height as usize);
-            let mut mask = v.mask.clone();
-            mask_hole_pixels +=
-                holes::fill_small_holes(&mut mask, w, h, options.mask_hole_fraction);
-            ViewField {
-                camera: v.camera,
-                distance: distance::SignedDistance::from_mask(&mask, w, h),
-            }
-        })
-        .collect();
+    // Each view's field on its own: the views are done side by side.
+    let filled = parallel_map(views, |v| {
+        let (w, h) = (v.camera.width as usize, v.camera.height as usize);
+        let mut mask = v.mask.clone();
+        let holes = holes::fill_small_holes(&mut mask, w, h, options.mask_hole_fraction);
+        let field = ViewField {
+            camera: v.camera,
+            distance: distance::SignedDistance::from_mask(&mask, w, h),
+        };
+        Ok::<_, std::convert::Infallible>((field, holes))
+    });
+    let (fields, holes): (Vec<ViewField>, Vec<usize>) =
+        filled.unwrap_or_else(|never| match never {}).into_iter().unzip();
+    let mask_hole_pixels: usize = holes.iter().sum();
     let empty: Vec<&HullView> = views.iter().filter(|v| !v.mask.iter().any(|&m| m > 0.5)).collect();
     if empty.len() == views.len() {
         return Err(InitError::EmptyMasks { count: views.len(), names: names(&mut views.iter()) });
@@ -315,7 +323,7 @@ pub fn init_mesh_from_views(
     })?;
     let mut seconds =
         StageSeconds { silhouettes: start.elapsed().as_secs_f64(), ..StageSeconds::default() };
-    let pixel = typical_pixel(&fields, aabb);
+    let pixel = typical_pixel(&fields, aabb).max(aabb.size().length() / options.max_subject_pixels);
     let field =
         HullField { views: fields, tolerance: options.tolerance, far: 1e3 * aabb.size().length() };
 
@@ -373,7 +381,11 @@ pub fn init_mesh_from_views(
 
 fn check(views: &[HullView], o: &InitOptions) -> Result<(), InitError> {
     let bad = |m: String| Err(InitError::Options(m));
-    for (value, name) in [(o.voxel_pixels, "voxel width"), (o.edge_pixels, "edge length")] {
+    for (value, name) in [
+        (o.voxel_pixels, "voxel width"),
+        (o.edge_pixels, "edge length"),
+        (o.max_subject_pixels, "subject diagonal"),
+    ] {
         if !(value > 0.0 && value.is_finite()) {
             return bad(format!("{name} {value} pixels must be positive"));
         }

@@ -2,10 +2,12 @@
 //!
 //! - [`ply`]: generic PLY (ascii and binary in, binary little-endian out).
 //! - [`image`]: PNG / EXR as float arrays.
+//! - [`host`]: work spread over the host's threads, the process's peak memory.
 //! - [`pc2`]: the point-cache container; [`trajectories`]: the trajectory CSV.
 //! - [`write_atomically`]: every output goes to a temporary name and is renamed into place, so a
 //!   crash never leaves a half-written file behind.
 
+pub mod host;
 pub mod image;
 pub mod pc2;
 pub mod plot;

@@ -84,7 +84,7 @@ impl MotionPreset {
 }
 
 /// What [`generate`] writes. [`generate`] rejects views outside 1..=1000, frames outside
-/// 1..=100000, resolution outside 8..=8192 and samples outside 1..=16.
+/// 1..=100000, a width or height outside 8..=8192 and samples outside 1..=16.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SynthOptions {
     /// What to animate.
@@ -93,8 +93,10 @@ pub struct SynthOptions {
     pub views: usize,
     /// Number of captured frames.
     pub frames: usize,
-    /// Width and height of every image, pixels.
-    pub resolution: u32,
+    /// Width of every image, pixels.
+    pub width: u32,
+    /// Height of every image, pixels.
+    pub height: u32,
     /// Seed of the camera azimuth offset and of the tracked-point choice.
     pub seed: u64,
     /// Samples per pixel along each axis (4 → 16 samples).
@@ -113,7 +115,8 @@ impl Default for SynthOptions {
             subject: SubjectSource::Procedural { subdivisions: 4 },
             views: 8,
             frames: 8,
-            resolution: 256,
+            width: 256,
+            height: 256,
             seed: 0,
             samples: 4,
             track_vertices: 100,
@@ -184,8 +187,10 @@ pub struct SynthReport {
     pub views: usize,
     /// Number of captured frames.
     pub frames: usize,
-    /// Width and height of every image, pixels.
-    pub resolution: u32,
+    /// Width of every image, pixels.
+    pub width: u32,
+    /// Height of every image, pixels.
+    pub height: u32,
     /// Number of tracked points written (vertices plus surface points).
     pub tracked_points: usize,
     /// `None` for a closed manifold; otherwise why not (allowed for glTF input only).
@@ -274,7 +279,8 @@ pub fn generate(options: &SynthOptions, out: &Path) -> Result<SynthReport, Synth
         faces: subject.faces.len(),
         views: options.views,
         frames: options.frames,
-        resolution: options.resolution,
+        width: options.width,
+        height: options.height,
         tracked_points: tracks.len(),
         manifold_problem,
         radius,
@@ -288,7 +294,8 @@ fn check_options(o: &SynthOptions) -> Result<(), SynthError> {
     match () {
         _ if o.views == 0 || o.views > 1000 => bad("views must be 1..=1000"),
         _ if o.frames == 0 || o.frames > 100_000 => bad("frames must be 1..=100000"),
-        _ if !(8..=8192).contains(&o.resolution) => bad("resolution must be 8..=8192 pixels"),
+        _ if !(8..=8192).contains(&o.width) => bad("width must be 8..=8192 pixels"),
+        _ if !(8..=8192).contains(&o.height) => bad("height must be 8..=8192 pixels"),
         _ if !(1..=16).contains(&o.samples) => bad("samples per pixel axis must be 1..=16"),
         _ => Ok(()),
     }
@@ -312,8 +319,9 @@ fn place_cameras(o: &SynthOptions, center: DVec3, radius: f64) -> Result<Vec<Cam
     }
     let distance = 3.0 * radius;
     let half_angle = (radius / distance).asin();
-    let size = o.resolution as f64;
-    let focal = 0.5 * size * 0.9 / half_angle.tan();
+    // The subject fills 90 % of the shorter side.
+    let (width, height) = (o.width as f64, o.height as f64);
+    let focal = 0.5 * width.min(height) * 0.9 / half_angle.tan();
     let offset = SplitMix64::new(o.seed ^ 0x6361_6d65_7261).next_f64() * std::f64::consts::TAU;
     (0..o.views)
         .map(|k| {
@@ -326,12 +334,12 @@ fn place_cameras(o: &SynthOptions, center: DVec3, radius: f64) -> Result<Vec<Cam
                 elevation.cos() * azimuth.cos(),
             );
             Camera::look_at(
-                o.resolution,
-                o.resolution,
+                o.width,
+                o.height,
                 focal,
                 focal,
-                0.5 * size,
-                0.5 * size,
+                0.5 * width,
+                0.5 * height,
                 center + distance * dir,
                 center,
                 DVec3::Y,

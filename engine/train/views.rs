@@ -4,9 +4,11 @@
 use super::TrainError;
 use crate::camera::Camera;
 use crate::dataset::Dataset;
+use crate::io::host::parallel_map;
 use crate::io::image::Image;
 
 /// One view of one frame as a training target (see the module docs).
+#[derive(Clone)]
 pub struct ViewTarget {
     /// The camera's name.
     pub name: String,
@@ -82,17 +84,18 @@ pub fn load_targets(
             TrainError::FrameRange { frames, data, available }
         })?
         .views;
-    let mut targets = Vec::new();
-    for (index, view) in views.iter().enumerate().filter(|(_, v)| cameras.contains(&v.camera)) {
+    let chosen: Vec<(usize, &crate::dataset::View)> =
+        views.iter().enumerate().filter(|(_, v)| cameras.contains(&v.camera)).collect();
+    // Decoding dominates loading a capture; the views decode side by side.
+    parallel_map(&chosen, |&(index, view)| {
         let image = dataset.image(frame, index)?;
         let mask = if use_masks { Some(dataset.mask(frame, index)?) } else { None };
-        targets.push(ViewTarget {
+        Ok(ViewTarget {
             name: dataset.camera_names[view.camera].clone(),
             camera: dataset.cameras[view.camera],
             target: composite(&image, mask.as_deref(), background),
-        });
-    }
-    Ok(targets)
+        })
+    })
 }
 
 fn composite(image: &Image, mask: Option<&[f32]>, background: [f32; 3]) -> Vec<[f32; 4]> {

@@ -6,7 +6,9 @@
 // centres, continued outside the image by the distance to its border; s = weight / (vertices ·
 // views with a mask). The gradient pulls a vertex outside a mask towards it from any distance.
 // Each invocation writes only its own gradient row (adds to it), so no atomics but the loss's
-// (a fixed-point sum: order-independent, so runs repeat bit for bit).
+// (a fixed-point sum: order-independent, so runs repeat bit for bit). The views' fields may be
+// split over several buffers (engine/loss/silhouette/mod.rs): one dispatch scores the views
+// first_view .. first_view + views, whose fields are in the bound buffer.
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #include "../common/grid.glsl"
@@ -14,15 +16,16 @@
 #include "../common/pinhole.glsl"
 layout(local_size_x_id = 0) in;
 
-// Mirrors engine/loss/silhouette/mod.rs (`GpuView`).
+// Mirrors engine/loss/pinhole_view.rs (`PinholeView`).
 struct View {
     mat4 world_to_camera;
     vec4 intrinsics;  // fx, fy, cx, cy (pixel centres at +0.5)
-    uvec4 dims;       // width, height, offset of its field in `fields`, 1 when it has a mask
+    uvec4 dims;       // width, height, offset of its field in its buffer, 1 when it has a mask
 };
 
 layout(push_constant) uniform Push {
     uint vertices;
+    uint first_view;
     uint views;
     float scale;  // s above
     float near;
@@ -61,7 +64,7 @@ void main() {
     if (i < pc.vertices) {
         vec3 x = vec3(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
         vec3 grad = vec3(0.0);
-        for (uint v = 0u; v < pc.views; v++) {
+        for (uint v = pc.first_view; v < pc.first_view + pc.views; v++) {
             View view = views[v];
             vec3 c = (view.world_to_camera * vec4(x, 1.0)).xyz;
             // Phrased as positive so a NaN position is skipped too.

@@ -221,6 +221,9 @@ pub struct InitMeshConfig {
     pub vertices: u32,
     /// Target edge length, pixels of the typical view, when `vertices` is 0 (default 3).
     pub edge_pixels: f64,
+    /// The most pixels the subject's diagonal counts when `edge_pixels` is converted (default
+    /// 400): a capture finer than that gets no denser first mesh.
+    pub max_subject_pixels: f64,
 }
 
 /// How often the pipeline reads its losses back.
@@ -320,7 +323,7 @@ impl Default for PipelineWeights {
 
 impl Default for InitMeshConfig {
     fn default() -> Self {
-        Self { vertices: 0, edge_pixels: 3.0 }
+        Self { vertices: 0, edge_pixels: 3.0, max_subject_pixels: 400.0 }
     }
 }
 
@@ -380,6 +383,7 @@ impl TrainConfig {
             ("learning_rates.positions", r.positions),
             ("learning_rates.positions_final", r.positions_final),
             ("init.edge_pixels", self.init.edge_pixels as f32),
+            ("init.max_subject_pixels", self.init.max_subject_pixels as f32),
             ("position_lr_scale", self.position_lr_scale),
             ("report.stats_every", self.report.stats_every as f32),
             ("temporal.graph.translation_lr", self.temporal.graph.translation_lr),

@@ -11,6 +11,7 @@ use crate::camera::mean_up;
 use crate::dataset::{Dataset, LoadOptions, PixelCenters};
 use crate::gpu::GpuContext;
 use crate::init::{init_mesh, InitOptions};
+use crate::io::host::peak_resident_bytes;
 use crate::io::write_atomically;
 use crate::mesh::TriMesh;
 use crate::sequence::orient::{SignedAxis, UpAxis};
@@ -110,6 +111,26 @@ pub struct TrainReport {
     pub scale: Option<f64>,
     /// The colour behind the renders and the targets they are scored against (the config's).
     pub background: [f32; 3],
+    /// Where the time before frame 0's first iteration went.
+    pub startup: Startup,
+    /// The most memory the process has held so far, bytes (None where the system does not
+    /// say).
+    pub peak_host_bytes: Option<u64>,
+}
+
+/// Where a run's time went before frame 0's first iteration, seconds from the run's start.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Startup {
+    /// Reading the dataset's metadata.
+    pub dataset_s: f64,
+    /// Building the frame-0 mesh from the masks, their decoding included (0 with a given mesh
+    /// or a frame 0 already on disk).
+    pub mesh_s: f64,
+    /// Decoding frame 0's training and evaluation views.
+    pub views_s: f64,
+    /// From the run's start to the end of frame 0's first iteration (None when frame 0 was on
+    /// disk already).
+    pub first_iteration_s: Option<f64>,
 }
 
 /// Runs (or resumes) `job`; `OUT/report.json` is rewritten after every frame, `OUT/report.html`
@@ -173,6 +194,8 @@ fn run_logged(
         pixel_centers: dataset.pixel_centers,
         scale: job.load.scale,
         background: job.config.background,
+        startup: Startup { dataset_s: started.elapsed().as_secs_f64(), ..Default::default() },
+        peak_host_bytes: None,
     };
     let source = capture_up(&dataset, &mut report.up_axis);
     report.frames = earlier_frame_reports(&job.out, &report.resumed_frames);
@@ -180,7 +203,7 @@ fn run_logged(
         log.line(&format!("resuming: frames {:?} are complete on disk", report.resumed_frames))?;
     }
     let (mut mesh, mut previous) =
-        canonical_start(ctx, &dataset, job, &out, &mut report, progress)?;
+        canonical_start(ctx, (&dataset, job), (&out, log), (&mut report, started), progress)?;
     if let Some(first) =
         report.frames.iter().find(|f| f.frame == 0 && !report.resumed_frames.contains(&0))
     {
@@ -211,6 +234,8 @@ fn run_logged(
             return Err(TrainError::MissingFrame { frame: t, needs: t - 1, out });
         }
         let (train, eval) = views(&dataset, t, &job.config)?;
+        // Without held-out cameras every training view is scored, those that lost the subject too.
+        let eval = eval.unwrap_or_else(|| train.clone());
         let (train, lost_views) = with_subject(train);
         let start = extrapolate(&previous, before_previous.as_ref());
         let previous_views = source_views(&dataset, t - 1, temporal.flow, job)?;
@@ -353,10 +378,9 @@ fn earlier_frame_reports(out: &Path, complete: &[usize]) -> Vec<FrameReport> {
 /// Frame 0: read back when complete, else optimised from the initial mesh and written.
 fn canonical_start(
     ctx: &Arc<GpuContext>,
-    dataset: &Dataset,
-    job: &TrainJob,
-    out: &SequenceOutput,
-    report: &mut TrainReport,
+    (dataset, job): (&Dataset, &TrainJob),
+    (out, log): (&SequenceOutput, &RunLog),
+    (report, started): (&mut TrainReport, Instant),
     progress: &mut dyn FnMut(TrainProgress),
 ) -> Result<(ManifoldMesh, GaussianScene), TrainError> {
     if out.is_complete(0) {
@@ -365,25 +389,41 @@ fn canonical_start(
             .map_err(|e| TopologyError::InFile { path: out.mesh_path(0), source: Box::new(e) })?;
         return Ok((topology, scene));
     }
-    let (mut mesh, colors) = initial_mesh(dataset, job)?;
+    let stage = Instant::now();
+    let (mut mesh, colors) = initial_mesh(dataset, job, log)?;
+    report.startup.mesh_s = stage.elapsed().as_secs_f64();
     let init = InitConfig { sh_degree: job.config.sh_degree, ..Default::default() };
     let start = gaussians_from_mesh(&mesh, &colors, &init);
+    let stage = Instant::now();
     let (train, eval) = views(dataset, 0, &job.config)?;
+    report.startup.views_s = stage.elapsed().as_secs_f64();
+    log.line(&format!(
+        "frame 0: {} training and {} evaluation views decoded in {:.1} s",
+        train.len(),
+        eval.as_ref().map_or(0, Vec::len),
+        report.startup.views_s
+    ))?;
+    let eval = eval.as_ref().unwrap_or(&train);
     let frames = job.frames.clone().unwrap_or(0..dataset.frames.len());
     let task = FrameTask {
         frame: 0,
         train: &train,
-        eval: &eval,
+        eval,
         start,
         mesh: &mut mesh,
         previous: None,
         frame0: None,
         sources: MatchSources::default(),
     };
+    let first_iteration = &mut report.startup.first_iteration_s;
     let (scene, frame_report) =
         optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
+            first_iteration.get_or_insert_with(|| started.elapsed().as_secs_f64());
             progress(TrainProgress { frame: 0, frames_end: frames.end, iteration, iterations })
         })?;
+    if let Some(s) = report.startup.first_iteration_s {
+        log.line(&format!("frame 0: first iteration done {s:.1} s after the start"))?;
+    }
     write_frame(out, 0, &mesh, &scene)?;
     report.frames.push(frame_report);
     // Later frames start from the topology as written, exactly as a resumed run reads it back
@@ -398,6 +438,7 @@ fn canonical_start(
 fn initial_mesh(
     dataset: &Dataset,
     job: &TrainJob,
+    log: &RunLog,
 ) -> Result<(ManifoldMesh, Vec<[f32; 3]>), TrainError> {
     let (mesh, path) = match &job.mesh {
         Some(path) => {
@@ -411,9 +452,16 @@ fn initial_mesh(
             let options = InitOptions {
                 vertices,
                 edge_pixels: job.config.init.edge_pixels,
+                max_subject_pixels: job.config.init.max_subject_pixels,
                 ..Default::default()
             };
             let built = init_mesh(dataset, 0, &options)?;
+            let (r, s) = (&built.report, &built.report.seconds);
+            log.line(&format!(
+                "frame-0 mesh from {} masks: {} vertices, {} faces in {:.1} s (views read and \
+                 silhouettes {:.1} s, surface {:.1} s, remeshing {:.1} s, colours {:.1} s)",
+                r.views, r.vertices, r.faces, s.total, s.silhouettes, s.extract, s.remesh, s.color
+            ))?;
             (built.mesh, dataset.root.join("(mesh from masks)"))
         }
     };
@@ -428,8 +476,6 @@ fn initial_mesh(
     Ok((imported.mesh, colors))
 }
 
-/// Training and evaluation targets of frame `t` (evaluation on held-out cameras, or the
-/// training ones when there are none).
 /// The views of `views` that show the subject, and the names of those that lost it (an empty
 /// mask): a later frame leaves them out, and a frame with no view left keeps its
 /// extrapolated pose; the report names both.
@@ -438,16 +484,18 @@ fn with_subject(views: Vec<ViewTarget>) -> (Vec<ViewTarget>, Vec<String>) {
     (shown, lost.into_iter().map(|v| v.name).collect())
 }
 
+/// Training and evaluation targets of frame `t`: evaluation on the held-out cameras, None
+/// when there are none (the training views serve, without a second copy).
 fn views(
     dataset: &Dataset,
     t: usize,
     config: &TrainConfig,
-) -> Result<(Vec<ViewTarget>, Vec<ViewTarget>), TrainError> {
+) -> Result<(Vec<ViewTarget>, Option<Vec<ViewTarget>>), TrainError> {
     let train = load_targets(dataset, t, &dataset.train, config.background, true)?;
     let eval = if dataset.test.is_empty() {
-        load_targets(dataset, t, &dataset.train, config.background, true)?
+        None
     } else {
-        load_targets(dataset, t, &dataset.test, config.background, true)?
+        Some(load_targets(dataset, t, &dataset.test, config.background, true)?)
     };
     Ok((train, eval))
 }
@@ -526,6 +574,7 @@ fn finish_report(
     out: &Path,
 ) -> Result<(), TrainError> {
     report.total_wall_s = started.elapsed().as_secs_f64();
+    report.peak_host_bytes = peak_resident_bytes();
     report.vertices = mesh.positions.len();
     report.faces = mesh.live_faces().len();
     let path = out.join("report.json");

@@ -1,0 +1,85 @@
+//! The host machine as the loaders use it: work spread over its threads (decoding a capture's
+//! images), and the most memory the process has held (reported by long runs).
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// `f` applied to every item on up to `available_parallelism` threads, the results in the
+/// items' order, so the outcome never depends on scheduling. On failure the error of the
+/// first failing item in item order is returned (items after a failure may not be run).
+pub fn parallel_map<T: Sync, R: Send, E: Send>(
+    items: &[T],
+    f: impl Fn(&T) -> Result<R, E> + Sync,
+) -> Result<Vec<R>, E> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(items.len());
+    if threads <= 1 {
+        return items.iter().map(f).collect();
+    }
+    // Items are handed out one at a time: decode times differ by file, so fixed chunks would
+    // leave threads idle.
+    let next = AtomicUsize::new(0);
+    let failed_at = AtomicUsize::new(usize::MAX);
+    let mut done: Vec<(usize, Result<R, E>)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut mine = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        if i >= items.len() || i > failed_at.load(Ordering::Relaxed) {
+                            break mine;
+                        }
+                        let result = f(&items[i]);
+                        if result.is_err() {
+                            failed_at.fetch_min(i, Ordering::Relaxed);
+                        }
+                        mine.push((i, result));
+                    }
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|w| w.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+            .collect()
+    });
+    done.sort_unstable_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, r)| r).collect()
+}
+
+/// The peak resident memory of this process so far, bytes (`VmHWM` of `/proc/self/status`);
+/// None where the system does not say (not Linux).
+pub fn peak_resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 =
+        line.trim_start_matches("VmHWM:").trim().trim_end_matches("kB").trim().parse().ok()?;
+    Some(kib * 1024)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn results_keep_the_items_order_and_the_first_error_wins() {
+        let items: Vec<u32> = (0..1000).collect();
+        let squares = parallel_map(&items, |&x| Ok::<_, ()>(x * x)).unwrap();
+        assert_eq!(squares, items.iter().map(|x| x * x).collect::<Vec<_>>());
+        let failing = parallel_map(&items, |&x| if x % 100 == 37 { Err(x) } else { Ok(x) });
+        assert_eq!(failing, Err(37));
+        assert_eq!(parallel_map(&[] as &[u32], |&x| Ok::<_, ()>(x)), Ok(vec![]));
+    }
+
+    #[test]
+    fn peak_memory_covers_a_buffer_just_touched() {
+        if !cfg!(target_os = "linux") {
+            assert_eq!(peak_resident_bytes(), None);
+            return;
+        }
+        let before = peak_resident_bytes().expect("Linux has VmHWM in /proc/self/status");
+        let block = vec![1u8; 64 << 20];
+        std::hint::black_box(&block);
+        let after = peak_resident_bytes().unwrap();
+        assert!(after >= before && after >= 64 << 20, "{before} → {after}");
+    }
+}
