@@ -368,6 +368,50 @@ fn bad_inputs_are_named() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Two frames of the procedural subject at `width` × `height` with a fixed first mesh and no
+/// densification, so only the pixels differ between sizes; the run's report.
+fn run_at(dir: &Path, width: u32, height: u32) -> TrainReport {
+    let g = gpu();
+    let options = SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 3 },
+        views: 4,
+        frames: 2,
+        width,
+        height,
+        samples: 1,
+        ..Default::default()
+    };
+    generate(&options, &dir.join("data")).unwrap();
+    let mut config = quick_config();
+    config.init.vertices = 400;
+    config.canonical.iterations = 10;
+    (config.canonical.densify_from, config.canonical.densify_until) = (20, 20);
+    config.temporal.iterations = 5;
+    config.temporal.min_iterations = 5;
+    config.temporal.graph.iterations = 5;
+    config.temporal.graph.min_iterations = 5;
+    run_train(g.ctx(), &job(&dir.join("data"), &dir.join("out"), config, None), &mut |_| {})
+        .unwrap()
+}
+
+#[test]
+fn the_memory_estimate_bounds_what_the_buffers_hold() {
+    let dir = temp("memory");
+    let (small, large) = (run_at(&dir.join("small"), 64, 48), run_at(&dir.join("large"), 192, 144));
+    for report in [&small, &large] {
+        let (held, estimate) = (report.peak_device_bytes, report.memory_estimate.device_bytes);
+        assert!(held > 0 && held <= estimate, "{held} bytes held, {estimate} estimated");
+        assert!(report.peak_host_bytes.is_some_and(|b| b > 0) || !cfg!(target_os = "linux"));
+    }
+    // What grows with the pixels (nine times as many here) grows no faster than the model's
+    // per-pixel parts (the fixed part of the estimate is the same for both).
+    let grown = large.peak_device_bytes as i64 - small.peak_device_bytes as i64;
+    let modelled =
+        large.memory_estimate.device_bytes as i64 - small.memory_estimate.device_bytes as i64;
+    assert!(grown > 0 && grown <= modelled, "buffers grew {grown} bytes, the model {modelled}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Later frames that lose the subject: views with an empty mask are left out and named, a
 /// frame with none left keeps its extrapolated pose, and every frame is still written.
 #[test]

@@ -2,14 +2,25 @@
 
 use anyhow::{Context, Result};
 use std::path::PathBuf;
+use tagsplat::dataset::background::background_share;
 use tagsplat::dataset::{Dataset, LoadOptions, PixelCenters};
+use tagsplat::gpu::GpuContext;
+use tagsplat::io::host::total_memory_bytes;
+use tagsplat::train::memory::{mib, refusal, CaptureMemory};
+
+/// Past this share of non-black background pixels the images carry a background.
+const BACKGROUND_SHARE: f64 = 0.05;
 
 #[derive(clap::Subcommand)]
 pub enum DatasetCommand {
-    /// Cameras, frames, resolution, and missing files (with --check: every file decoded).
+    /// Cameras, frames, resolution, the memory a run needs on the chosen device, whether the
+    /// images carry a background, and missing files (with --check: every file decoded).
     Info {
         #[arg(long)]
         data: PathBuf,
+        /// The scale a run would use (`train --scale`), for the memory it needs.
+        #[arg(long, default_value_t = 1.0)]
+        scale: f64,
         /// Decode every image and mask: sizes, corrupt files, frames with empty masks.
         #[arg(long)]
         check: bool,
@@ -39,11 +50,17 @@ impl From<PixelCentersArg> for PixelCenters {
     }
 }
 
-pub fn run(command: DatasetCommand) -> Result<()> {
-    let DatasetCommand::Info { data, check, json, pixel_centers } = command;
-    let options = LoadOptions { pixel_centers: pixel_centers.map(Into::into), scale: None };
+pub fn run(command: DatasetCommand, ctx: &GpuContext) -> Result<()> {
+    let DatasetCommand::Info { data, scale, check, json, pixel_centers } = command;
+    let options = LoadOptions { pixel_centers: pixel_centers.map(Into::into), scale: Some(scale) };
     let d = Dataset::load_with(&data, &options)
         .with_context(|| format!("cannot load the dataset in {}", data.display()))?;
+    let host_shared = ctx.info().shares_host_memory();
+    let memory = CaptureMemory::of_dataset(&d, host_shared, scale);
+    let at = |s| CaptureMemory::of_dataset(&d, host_shared, s);
+    let refused = refusal(at, scale, ctx.limits(), total_memory_bytes());
+    let background = background_share(&d, 0)
+        .with_context(|| format!("cannot read frame 0 of {}", data.display()))?;
     let missing: Vec<String> = d.missing_files().iter().map(|p| p.display().to_string()).collect();
     let problems: Vec<String> =
         if check { d.check().iter().map(ToString::to_string).collect() } else { Vec::new() };
@@ -61,6 +78,7 @@ pub fn run(command: DatasetCommand) -> Result<()> {
     let views: usize = d.frames.iter().map(|f| f.views.len()).sum();
     if json {
         let out = serde_json::json!({ "root": d.root, "format": d.format, "pixel_centers": d.pixel_centers, "cameras": cameras, "frames": d.frames.len(), "views": views,
+            "scale": scale, "device": ctx.info().name, "memory": memory, "refused": refused, "background_share": background,
             "times": [d.frames.first().map(|f| f.time), d.frames.last().map(|f| f.time)], "missing": missing, "problems": problems });
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
@@ -92,6 +110,25 @@ pub fn run(command: DatasetCommand) -> Result<()> {
             c["split"].as_str().unwrap_or("")
         );
     }
+    println!(
+        "memory    about {} on the device, {} on the host at scale {scale} ({}{})",
+        mib(memory.device_bytes),
+        mib(memory.host_bytes),
+        ctx.info().name,
+        if host_shared { ", whose memory is the host's" } else { "" }
+    );
+    if let Some(why) = &refused {
+        println!("          refused there: {why}");
+    }
+    let said = if background > BACKGROUND_SHARE {
+        "a background behind the subject: the masks say what is subject"
+    } else {
+        "none: composited over black"
+    };
+    println!(
+        "backdrop  {said} ({:.0} % of frame 0's background pixels are not black)",
+        100.0 * background
+    );
     println!("missing   {} file(s)", missing.len());
     for m in missing.iter().take(20) {
         println!("  {m}");

@@ -238,7 +238,7 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             }
             Ok(())
         }
-        Command::Dataset(command) => dataset::run(command),
+        Command::Dataset(command) => dataset::run(command, &*gpu.create()?),
         Command::Synth(args) => synth::run(args),
         Command::Fit(args) => fit::fit(|| gpu.create(), args),
         Command::Train(args) => train::train(|| gpu.create(), args),

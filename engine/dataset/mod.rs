@@ -9,6 +9,7 @@
 //! Loading reads only the metadata and checks that every file exists; images are decoded on
 //! demand through a bounded cache ([`cache::ImageCache`], 1 GiB by default).
 
+pub mod background;
 pub mod cache;
 pub mod nerfstudio;
 pub mod own;
@@ -311,6 +312,12 @@ impl Dataset {
         })
     }
 
+    /// Camera `camera`'s image size in the files (before any [`LoadOptions::scale`]).
+    pub fn file_size(&self, camera: usize) -> (u32, u32) {
+        let c = &self.cameras[camera];
+        self.source_sizes.as_ref().map_or((c.width, c.height), |sizes| sizes[camera])
+    }
+
     /// Replaces the image cache with one of `bytes` capacity.
     pub fn with_cache_bytes(mut self, bytes: usize) -> Self {
         self.cache = ImageCache::new(bytes);
@@ -383,9 +390,7 @@ impl Dataset {
         camera: usize,
         (width, height): (u32, u32),
     ) -> Result<(), DatasetError> {
-        let c = &self.cameras[camera];
-        let (camera_width, camera_height) =
-            self.source_sizes.as_ref().map_or((c.width, c.height), |sizes| sizes[camera]);
+        let (camera_width, camera_height) = self.file_size(camera);
         if (width, height) != (camera_width, camera_height) {
             return Err(DatasetError::SizeMismatch {
                 path: path.to_owned(),
@@ -472,13 +477,18 @@ pub(crate) fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T
 /// Scales each camera to `scale` × its size (rounded, at least 1 pixel) and its intrinsics by
 /// the size's actual ratio per axis (pixel centres at half-integers, so coordinates scale as
 /// they are); returns the sizes before.
-fn scale_cameras(cameras: &mut [Camera], scale: f64) -> Vec<(u32, u32)> {
+/// An image's size scaled by `scale` as the loader scales it: each side rounded, at least 1.
+pub fn scaled_size((width, height): (u32, u32), scale: f64) -> (u32, u32) {
     let side = |n: u32| ((n as f64 * scale).round() as u32).max(1);
+    (side(width), side(height))
+}
+
+fn scale_cameras(cameras: &mut [Camera], scale: f64) -> Vec<(u32, u32)> {
     cameras
         .iter_mut()
         .map(|c| {
             let before = (c.width, c.height);
-            let (width, height) = (side(c.width), side(c.height));
+            let (width, height) = scaled_size(before, scale);
             let (sx, sy) = (width as f64 / c.width as f64, height as f64 / c.height as f64);
             (c.fx, c.cx, c.fy, c.cy) = (c.fx * sx, c.cx * sx, c.fy * sy, c.cy * sy);
             (c.width, c.height) = (width, height);

@@ -259,6 +259,7 @@ pub(crate) fn allocate(
             return Err(GpuError::OutOfMemory { name: name.into(), bytes, reason: e.to_string() });
         }
     };
+    ctx.buffer_usage().add(allocation.size());
     let bound = unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
     if let Err(e) = bound.during("vkBindBufferMemory") {
         free(ctx, raw, allocation);
@@ -270,6 +271,7 @@ pub(crate) fn allocate(
 /// Destroys a buffer made by [`allocate`] and frees its memory.
 pub(crate) fn free(ctx: &GpuContext, raw: vk::Buffer, allocation: Allocation) {
     unsafe { ctx.device().destroy_buffer(raw, None) };
+    ctx.buffer_usage().remove(allocation.size());
     if let Some(allocator) = ctx.allocator().as_mut() {
         // Freeing only fails for an allocation of another allocator: a bug, not input.
         allocator.free(allocation).expect("allocation belongs to this context");

@@ -7,6 +7,7 @@ use super::features::{DeviceCapabilities, REQUIRED_EXTENSIONS};
 use super::host_clock::{ClockReading, HostClock};
 use super::select::{choose_device, DeviceInfo, DEVICE_ENV};
 use super::staging::StagingPool;
+use super::usage::{BufferBytes, BufferUsage};
 use super::validation::{self, ValidationLog, VALIDATION_ENV, VALIDATION_LAYER};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -83,6 +84,7 @@ pub struct GpuContext {
     staging: Mutex<StagingPool>,
     force_staging: bool,
     clock: HostClock,
+    buffers: BufferUsage,
 }
 
 /// Set to 1, forces the staging path (see [`ContextOptions`]).
@@ -184,6 +186,7 @@ impl GpuContext {
                 .force_staging
                 .unwrap_or_else(|| std::env::var(FORCE_STAGING_ENV).is_ok_and(|v| v == "1")),
             clock: HostClock::default(),
+            buffers: BufferUsage::default(),
         }))
     }
 
@@ -219,6 +222,16 @@ impl GpuContext {
     /// Recording, waiting and device time of every submission so far (see [`ClockReading`]).
     pub fn clock(&self) -> ClockReading {
         self.clock.read()
+    }
+
+    /// Device memory held by buffers now, and the most held at once so far.
+    pub fn buffer_bytes(&self) -> BufferBytes {
+        self.buffers.read()
+    }
+
+    /// The totals every buffer allocation and free updates.
+    pub(crate) fn buffer_usage(&self) -> &BufferUsage {
+        &self.buffers
     }
 
     /// The running totals each submission adds to.

@@ -13,6 +13,7 @@ mod select;
 mod shader;
 mod staging;
 mod timing;
+mod usage;
 mod validation;
 
 pub use buffer::{BufferBinding, GpuBuffer};
@@ -27,4 +28,5 @@ pub use select::{choose_device, DeviceInfo, DEVICE_ENV};
 pub(crate) use shader::push_layout;
 pub use shader::Shader;
 pub use timing::{PassTime, PassTimes};
+pub use usage::BufferBytes;
 pub use validation::{ValidationLog, VALIDATION_ENV};

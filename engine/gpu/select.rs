@@ -35,6 +35,11 @@ impl DeviceInfo {
         }
     }
 
+    /// Whether the device's memory is the host's (a CPU device, an integrated GPU).
+    pub fn shares_host_memory(&self) -> bool {
+        matches!(self.kind, vk::PhysicalDeviceType::CPU | vk::PhysicalDeviceType::INTEGRATED_GPU)
+    }
+
     fn rank(&self) -> u32 {
         match self.kind {
             vk::PhysicalDeviceType::DISCRETE_GPU => 0,

@@ -46,14 +46,23 @@ pub fn parallel_map<T: Sync, R: Send, E: Send>(
     done.into_iter().map(|(_, r)| r).collect()
 }
 
+/// The host's physical memory, bytes (`MemTotal` of `/proc/meminfo`); None where the system
+/// does not say (not Linux).
+pub fn total_memory_bytes() -> Option<u64> {
+    proc_kib("/proc/meminfo", "MemTotal:").map(|kib| kib * 1024)
+}
+
 /// The peak resident memory of this process so far, bytes (`VmHWM` of `/proc/self/status`);
 /// None where the system does not say (not Linux).
 pub fn peak_resident_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: u64 =
-        line.trim_start_matches("VmHWM:").trim().trim_end_matches("kB").trim().parse().ok()?;
-    Some(kib * 1024)
+    proc_kib("/proc/self/status", "VmHWM:").map(|kib| kib * 1024)
+}
+
+/// The value of line `key` (`Key:   1234 kB`) of a /proc file, in KiB.
+fn proc_kib(path: &str, key: &str) -> Option<u64> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let line = text.lines().find(|l| l.starts_with(key))?;
+    line[key.len()..].trim().trim_end_matches("kB").trim().parse().ok()
 }
 
 #[cfg(test)]
@@ -81,5 +90,7 @@ mod tests {
         std::hint::black_box(&block);
         let after = peak_resident_bytes().unwrap();
         assert!(after >= before && after >= 64 << 20, "{before} → {after}");
+        let total = total_memory_bytes().expect("Linux has MemTotal in /proc/meminfo");
+        assert!(total >= after, "{total} bytes of memory, {after} held");
     }
 }

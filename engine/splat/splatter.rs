@@ -185,6 +185,42 @@ impl Splatter {
         Ok(frame)
     }
 
+    /// Grows the intersection buffers to hold `scene` seen from `camera`, exactly as
+    /// [`Self::forward`] would, but runs only the projection and the tile count (no sort, no
+    /// rasterization); the next forward starts from scratch.
+    pub fn reserve_for(
+        &mut self,
+        scene: &GaussianBuffers,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<(), SplatError> {
+        let frame = self.prepare_forward(scene, camera, settings)?;
+        let mut rec = Recorder::new(&self.ctx)?;
+        self.record_count(&mut rec, scene, &frame)?;
+        rec.submit_and_wait()?;
+        self.finish_forward(frame)?;
+        self.last_frame = None;
+        Ok(())
+    }
+
+    /// Records the projection and the tile counts' scan: the intersection count ends in
+    /// `tile_offsets[gaussians]`.
+    fn record_count<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        scene: &'a GaussianBuffers,
+        frame: &FrameParams,
+    ) -> Result<(), SplatError> {
+        rec.begin_pass("project");
+        rec.fill_buffer(&self.tile_offsets, 0);
+        self.kernels.project(rec, frame, scene, &self.splats, &self.tile_offsets)?;
+        rec.end_pass();
+        rec.begin_pass("bin");
+        self.scan.record(rec, &self.tile_offsets, scene.len() + 1)?;
+        rec.end_pass();
+        Ok(())
+    }
+
     /// Records the whole forward of `frame` (from [`Self::prepare_forward`]): project, count
     /// and scan tiles, emit and sort the intersections, find tile runs, rasterize.
     pub fn record_forward<'a>(
@@ -195,12 +231,8 @@ impl Splatter {
     ) -> Result<(), SplatError> {
         let (tiles_x, tiles_y) = tile_grid(frame.width(), frame.height());
         let tile_bits = u32::BITS - (tiles_x * tiles_y).saturating_sub(1).leading_zeros();
-        rec.begin_pass("project");
-        rec.fill_buffer(&self.tile_offsets, 0);
-        self.kernels.project(rec, frame, scene, &self.splats, &self.tile_offsets)?;
-        rec.end_pass();
+        self.record_count(rec, scene, frame)?;
         rec.begin_pass("bin");
-        self.scan.record(rec, &self.tile_offsets, scene.len() + 1)?;
         // Unfilled slots keep all-ones keys: they sort last and name no tile.
         rec.fill_buffer(&self.keys, u32::MAX);
         self.kernels.emit_intersections(

@@ -8,6 +8,7 @@ pub mod densify;
 mod fit;
 pub mod init;
 mod job;
+pub mod memory;
 mod mesh_term;
 mod optimize;
 pub mod output;
@@ -140,6 +141,14 @@ pub enum TrainError {
         path: PathBuf,
         /// The I/O error.
         error: std::io::Error,
+    },
+    /// The capture cannot fit this device even at its smallest working set.
+    #[error("{}: {problem}", data.display())]
+    TooLarge {
+        /// The dataset's folder.
+        data: PathBuf,
+        /// The memory or buffer limit it breaks and the scale that would fit.
+        problem: String,
     },
     /// A file of an earlier run (its report, its evaluation) could not be read.
     #[error("cannot read {}: {error}", path.display())]

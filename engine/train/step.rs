@@ -102,11 +102,11 @@ impl Trainer {
         Ok(self)
     }
 
-    /// Renders every view once, so the splatter's intersection buffers fit them all.
+    /// Counts every view's intersections once, so the splatter's buffers fit them all.
     fn size_for_views(&mut self) -> Result<(), TrainError> {
         let settings = RenderSettings::default();
         for camera in &self.cameras {
-            self.splatter.forward(&self.state.params, camera, &settings)?;
+            self.splatter.reserve_for(&self.state.params, camera, &settings)?;
         }
         Ok(())
     }

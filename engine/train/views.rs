@@ -105,13 +105,8 @@ fn composite(image: &Image, mask: Option<&[f32]>, background: [f32; 3]) -> Vec<[
         .map(|p| {
             let m = mask.map_or(1.0, |m| m[p].clamp(0.0, 1.0));
             let c = |k: usize| image.data[p * channels + k.min(channels - 1)];
-            [0, 1, 2]
-                .map(|k| c(k) * m + background[k] * (1.0 - m))
-                .into_iter()
-                .chain([m])
-                .collect::<Vec<_>>()
-                .try_into()
-                .unwrap_or([0.0; 4])
+            let [r, g, b] = [0, 1, 2].map(|k| c(k) * m + background[k] * (1.0 - m));
+            [r, g, b, m]
         })
         .collect()
 }

@@ -65,14 +65,15 @@ pub fn skipped(what: &str, why: &str) {
 }
 
 /// A JSON report without what differs between two runs of the same job: times (keys ending in
-/// `_s` or `_ms`), the output paths and the frames found complete on disk.
+/// `_s` or `_ms`), peak memory (keys starting with `peak_`), the output paths and the frames
+/// found complete on disk.
 pub fn without_run_specifics(value: serde_json::Value) -> serde_json::Value {
     use serde_json::Value;
     match value {
         Value::Object(map) => Value::Object(
             map.into_iter()
                 .filter(|(key, _)| {
-                    !(key.ends_with("_s") || key.ends_with("_ms"))
+                    !(key.ends_with("_s") || key.ends_with("_ms") || key.starts_with("peak_"))
                         && key != "outputs"
                         && key != "resumed_frames"
                 })

@@ -11,12 +11,13 @@ use crate::camera::mean_up;
 use crate::dataset::{Dataset, LoadOptions, PixelCenters};
 use crate::gpu::GpuContext;
 use crate::init::{init_mesh, InitOptions};
-use crate::io::host::peak_resident_bytes;
+use crate::io::host::{peak_resident_bytes, total_memory_bytes};
 use crate::io::write_atomically;
 use crate::mesh::TriMesh;
 use crate::sequence::orient::{SignedAxis, UpAxis};
 use crate::splat::GaussianScene;
 use crate::topology::{gaussians_from_mesh, import, InitConfig, ManifoldMesh, TopologyError};
+use crate::train::memory::{mib, refusal, CaptureMemory};
 use crate::train::output::{dc_vertex_colors, SequenceOutput};
 use crate::train::temporal::extrapolate;
 use crate::train::{load_targets, TrainError, ViewTarget};
@@ -116,6 +117,10 @@ pub struct TrainReport {
     /// The most memory the process has held so far, bytes (None where the system does not
     /// say).
     pub peak_host_bytes: Option<u64>,
+    /// The most device memory the GPU context's buffers have held at once, bytes.
+    pub peak_device_bytes: u64,
+    /// What the run was estimated to need before it started.
+    pub memory_estimate: CaptureMemory,
 }
 
 /// Where a run's time went before frame 0's first iteration, seconds from the run's start.
@@ -165,6 +170,17 @@ fn run_logged(
     job.config.check()?;
     let started = Instant::now();
     let dataset = Dataset::load_with(&job.data, &job.load)?;
+    let (host_shared, scale) = (ctx.info().shares_host_memory(), job.load.scale.unwrap_or(1.0));
+    let memory = CaptureMemory::of_dataset(&dataset, host_shared, scale);
+    let at = |s| CaptureMemory::of_dataset(&dataset, host_shared, s);
+    if let Some(problem) = refusal(at, scale, ctx.limits(), total_memory_bytes()) {
+        return Err(TrainError::TooLarge { data: job.data.clone(), problem });
+    }
+    log.line(&format!(
+        "memory (estimate): {} on the device, {} on the host",
+        mib(memory.device_bytes),
+        mib(memory.host_bytes)
+    ))?;
     let frames = job.frames.clone().unwrap_or(0..dataset.frames.len());
     if frames.is_empty() || frames.end > dataset.frames.len() {
         let (data, available) = (job.data.clone(), dataset.frames.len());
@@ -196,6 +212,8 @@ fn run_logged(
         background: job.config.background,
         startup: Startup { dataset_s: started.elapsed().as_secs_f64(), ..Default::default() },
         peak_host_bytes: None,
+        peak_device_bytes: 0,
+        memory_estimate: memory,
     };
     let source = capture_up(&dataset, &mut report.up_axis);
     report.frames = earlier_frame_reports(&job.out, &report.resumed_frames);
@@ -275,7 +293,7 @@ fn run_logged(
         log.line(&frame_lines(&frame_report))?;
         before_previous = Some(std::mem::replace(&mut previous, scene));
         report.frames.push(frame_report);
-        finish_report(&mut report, &mesh, started, &job.out)?;
+        finish_report(ctx, &mut report, &mesh, started, &job.out)?;
     }
     let (frames_done, total) = (complete_prefix(&out, dataset.frames.len()), dataset.frames.len());
     let (fps, rate) = frame_rate(job, &dataset);
@@ -294,7 +312,7 @@ fn run_logged(
     } else {
         log.line(&format!("not exported: {}", report.export))?;
     }
-    finish_report(&mut report, &mesh, started, &job.out)?;
+    finish_report(ctx, &mut report, &mesh, started, &job.out)?;
     let page = write_html_report(ctx, &job.out)?;
     log.line(&format!("report: {}", page.display()))?;
     Ok(report)
@@ -455,12 +473,21 @@ fn initial_mesh(
                 max_subject_pixels: job.config.init.max_subject_pixels,
                 ..Default::default()
             };
+            let started = Instant::now();
             let built = init_mesh(dataset, 0, &options)?;
-            let (r, s) = (&built.report, &built.report.seconds);
+            let (r, s, all) = (&built.report, &built.report.seconds, started.elapsed());
             log.line(&format!(
-                "frame-0 mesh from {} masks: {} vertices, {} faces in {:.1} s (views read and \
+                "frame-0 mesh from {} masks: {} vertices, {} faces in {:.1} s (decoding {:.1} s, \
                  silhouettes {:.1} s, surface {:.1} s, remeshing {:.1} s, colours {:.1} s)",
-                r.views, r.vertices, r.faces, s.total, s.silhouettes, s.extract, s.remesh, s.color
+                r.views,
+                r.vertices,
+                r.faces,
+                all.as_secs_f64(),
+                all.as_secs_f64() - s.total,
+                s.silhouettes,
+                s.extract,
+                s.remesh,
+                s.color
             ))?;
             (built.mesh, dataset.root.join("(mesh from masks)"))
         }
@@ -568,6 +595,7 @@ fn write_frame(
 }
 
 fn finish_report(
+    ctx: &GpuContext,
     report: &mut TrainReport,
     mesh: &ManifoldMesh,
     started: Instant,
@@ -575,6 +603,7 @@ fn finish_report(
 ) -> Result<(), TrainError> {
     report.total_wall_s = started.elapsed().as_secs_f64();
     report.peak_host_bytes = peak_resident_bytes();
+    report.peak_device_bytes = ctx.buffer_bytes().peak;
     report.vertices = mesh.positions.len();
     report.faces = mesh.live_faces().len();
     let path = out.join("report.json");

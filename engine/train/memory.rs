@@ -1,0 +1,222 @@
+//! What a capture will hold in memory, known before any work: `train` refuses a capture that
+//! cannot fit, naming the memory and the `--scale` that would fit, and `dataset info` prints it.
+//!
+//! The model counts what grows with the capture. On the device: every training view's target
+//! (16 bytes a pixel) and mask distance field (4), the per-pixel working buffers of the
+//! renders, losses and rasterizers (several copies, sized by the largest view), and a fixed
+//! part for the Gaussians, the mesh and the sort. On the host: the views' targets again, the
+//! decoded-image cache, the images being decoded, the first mesh's hull grid, and, on a device
+//! that is the CPU, the device's memory too. The per-pixel and fixed parts were measured
+//! (docs/log/2026-11-28-capture-memory.md) and rounded up, so the figure is a bound, not a
+//! guess: `tests/pipeline.rs` checks it against the buffers a run holds.
+
+use crate::dataset::{scaled_size, Dataset, DEFAULT_CACHE_BYTES};
+use crate::gpu::DeviceLimits;
+use crate::init::InitOptions;
+
+/// Device bytes per pixel of the largest view held by the working buffers (splatting, the
+/// image loss and its SSIM moments, the mesh rasterizers of training and evaluation).
+const WORKING_BYTES_PER_PIXEL: u64 = 640;
+/// Device bytes that do not grow with the capture's pixels (Gaussians, their gradients and
+/// moments, the mesh, the sort's buffers), rounded up.
+const FIXED_DEVICE_BYTES: u64 = 256 << 20;
+/// Host bytes of the program itself and of what does not grow with the capture.
+const FIXED_HOST_BYTES: u64 = 768 << 20;
+/// Bytes of a training view's pixel on the device: the target (rgba as f32) and the mask's
+/// distance field (f32).
+const VIEW_BYTES_PER_PIXEL: u64 = 16 + 4;
+/// Bytes of a decoded pixel: colour (3 f32) and mask (1 f32).
+const DECODED_BYTES_PER_PIXEL: u64 = 16;
+
+/// The memory a capture will need (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct CaptureMemory {
+    /// Device memory, bytes.
+    pub device_bytes: u64,
+    /// Host memory, bytes (the device's included when the device is the CPU).
+    pub host_bytes: u64,
+    /// The largest single buffer, bytes (a per-pixel working buffer of the largest view).
+    pub largest_buffer_bytes: u64,
+    /// Whether the device's memory is the host's (then counted in `host_bytes`).
+    pub device_is_host: bool,
+}
+
+/// The views of one frame as the run will hold them.
+pub struct CaptureViews<'a> {
+    /// Training views' sizes (width, height) after any scaling.
+    pub train: &'a [(u32, u32)],
+    /// Held-out views' sizes after any scaling.
+    pub held_out: &'a [(u32, u32)],
+    /// The largest image as stored in the files (decoded at full size before any scaling).
+    pub largest_file_pixels: u64,
+    /// Whether the device's memory is the host's (a CPU device such as lavapipe).
+    pub device_is_host: bool,
+}
+
+impl CaptureMemory {
+    /// The estimate for a run over `dataset` with its files scaled by `scale` (1: the files'
+    /// size), whatever scale it was loaded at.
+    pub fn of_dataset(dataset: &Dataset, device_is_host: bool, scale: f64) -> Self {
+        let sizes = |cameras: &[usize]| -> Vec<(u32, u32)> {
+            cameras.iter().map(|&c| scaled_size(dataset.file_size(c), scale)).collect()
+        };
+        let largest_file_pixels = (0..dataset.cameras.len())
+            .map(|c| dataset.file_size(c))
+            .map(|(w, h)| w as u64 * h as u64)
+            .max()
+            .unwrap_or(0);
+        Self::estimate(&CaptureViews {
+            train: &sizes(&dataset.train),
+            held_out: &sizes(&dataset.test),
+            largest_file_pixels,
+            device_is_host,
+        })
+    }
+
+    /// The estimate for `views`.
+    pub fn estimate(views: &CaptureViews) -> Self {
+        let area = |&(w, h): &(u32, u32)| w as u64 * h as u64;
+        let train: u64 = views.train.iter().map(area).sum();
+        let held_out: u64 = views.held_out.iter().map(area).sum();
+        let largest = views.train.iter().chain(views.held_out).map(area).max().unwrap_or(0);
+        let device_bytes =
+            FIXED_DEVICE_BYTES + VIEW_BYTES_PER_PIXEL * train + WORKING_BYTES_PER_PIXEL * largest;
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
+        let cache = (DECODED_BYTES_PER_PIXEL * (train + held_out)).min(DEFAULT_CACHE_BYTES as u64);
+        let host_bytes = FIXED_HOST_BYTES
+            + InitOptions::default().max_grid_bytes as u64
+            + 16 * (train + held_out)
+            + cache
+            + threads * DECODED_BYTES_PER_PIXEL * views.largest_file_pixels
+            + if views.device_is_host { device_bytes } else { 0 };
+        // The widest per-pixel buffers hold 32 bytes a pixel (the anti-aliasing crossings).
+        let device_is_host = views.device_is_host;
+        Self { device_bytes, host_bytes, largest_buffer_bytes: 32 * largest, device_is_host }
+    }
+
+    /// The limit it breaks (None when it fits). `host_memory`: the host's physical memory,
+    /// when known.
+    pub fn problem(&self, limits: &DeviceLimits, host_memory: Option<u64>) -> Option<String> {
+        let buffer_limit = limits.max_buffer_bytes();
+        if self.largest_buffer_bytes > buffer_limit {
+            return Some(format!(
+                "its largest view needs buffers of {}, over this device's largest buffer of {} \
+                 (maxStorageBufferRange / maxMemoryAllocationSize)",
+                mib(self.largest_buffer_bytes),
+                mib(buffer_limit)
+            ));
+        }
+        // On a device that is the CPU the device's memory is the host's (its heap size is not
+        // a limit there), and the host check below covers it.
+        let memory = limits.device_memory_bytes;
+        if !self.device_is_host && self.device_bytes > memory {
+            return Some(format!(
+                "it needs about {} of device memory, over this device's {}",
+                mib(self.device_bytes),
+                mib(memory)
+            ));
+        }
+        let host = host_memory.filter(|&total| self.host_bytes > total)?;
+        Some(format!(
+            "it needs about {} of host memory, over this machine's {}",
+            mib(self.host_bytes),
+            mib(host)
+        ))
+    }
+}
+
+/// Why a capture cannot run at `scale` (None when it can), and the largest scale in hundredths
+/// at which it would: `at(s)` is its estimate with the files scaled by `s`.
+pub fn refusal(
+    at: impl Fn(f64) -> CaptureMemory,
+    scale: f64,
+    limits: &DeviceLimits,
+    host_memory: Option<u64>,
+) -> Option<String> {
+    let problem = at(scale).problem(limits, host_memory)?;
+    let below = (scale * 100.0).ceil() as u32;
+    let fitting = (1..below)
+        .rev()
+        .map(|hundredths| hundredths as f64 / 100.0)
+        .find(|&s| at(s).problem(limits, host_memory).is_none());
+    Some(match fitting {
+        Some(s) => format!("{problem}; --scale {s} would fit"),
+        None => format!("{problem}; no --scale down to 0.01 fits"),
+    })
+}
+
+/// `bytes` as MiB, or GiB from 10 GiB on.
+pub fn mib(bytes: u64) -> String {
+    match bytes {
+        b if b >= 10 << 30 => format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64),
+        b => format!("{} MiB", b.div_ceil(1 << 20)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn limits(buffer: u64, memory: u64) -> DeviceLimits {
+        DeviceLimits {
+            max_storage_buffer_range: buffer,
+            max_memory_allocation_size: u64::MAX,
+            device_memory_bytes: memory,
+            max_workgroup_count: [65535; 3],
+            max_workgroup_invocations: 1024,
+            max_shared_memory_bytes: 32768,
+            subgroup_size: 32,
+            timestamp_period_ns: None,
+            timestamp_valid_bits: 0,
+            full_subgroups: false,
+            max_subgroup_size: 32,
+        }
+    }
+
+    /// 30 views (27 training) of 3000 × 4000 files scaled by `s`.
+    fn capture(s: f64, device_is_host: bool) -> CaptureMemory {
+        let size = scaled_size((3000, 4000), s);
+        let (train, held_out) = (vec![size; 27], vec![size; 3]);
+        let largest_file_pixels = 12_000_000;
+        CaptureMemory::estimate(&CaptureViews {
+            train: &train,
+            held_out: &held_out,
+            largest_file_pixels,
+            device_is_host,
+        })
+    }
+
+    /// The refusal's scale, parsed back out of its message.
+    fn scale_in(message: &str) -> f64 {
+        let tail = message.split("--scale ").nth(1).expect("names a scale");
+        tail.split(' ').next().unwrap().parse().unwrap()
+    }
+
+    #[test]
+    fn a_refused_capture_names_a_scale_that_fits() {
+        let refused = |s, host, limits: &DeviceLimits, memory| {
+            refusal(|s| capture(s, host), s, limits, memory)
+        };
+        // The buffer limit of lavapipe: a 3000 × 4000 view's widest buffer is 366 MiB.
+        let lavapipe = limits(128 << 20, 2 << 30);
+        let why = refused(1.0, true, &lavapipe, Some(64 << 30)).expect("refused");
+        assert!(why.contains("367 MiB") && why.contains("128 MiB"), "{why}");
+        let s = scale_in(&why);
+        assert_eq!(refused(s, true, &lavapipe, Some(64 << 30)), None, "--scale {s}");
+        assert!(refused(s + 0.01, true, &lavapipe, Some(64 << 30)).is_some());
+        // A discrete GPU with 4 GiB: the device memory is the limit; the heap of a CPU device is
+        // not, the host's memory is.
+        let small_gpu = limits(4 << 30, 4 << 30);
+        let why = refused(1.0, false, &small_gpu, None).expect("refused");
+        assert!(why.contains("device memory"), "{why}");
+        assert_eq!(refused(scale_in(&why), false, &small_gpu, None), None);
+        let why = refused(0.5, true, &small_gpu, Some(4 << 30)).expect("refused");
+        assert!(why.contains("host memory"), "{why}");
+        let s = scale_in(&why);
+        assert!(s < 0.5 && refused(s, true, &small_gpu, Some(4 << 30)).is_none(), "{s}");
+        assert_eq!(refused(0.5, true, &small_gpu, Some(64 << 30)), None);
+        // Nothing fits a host without memory for the program itself.
+        let why = refused(0.5, true, &small_gpu, Some(1 << 20)).expect("refused");
+        assert!(why.contains("no --scale"), "{why}");
+    }
+}
