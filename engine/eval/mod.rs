@@ -1,5 +1,7 @@
 //! Evaluation metrics, each with its exact definition and unit in its own file:
 //! - [`psnr`](mod@psnr): peak signal-to-noise ratio of images in [0, 1], in dB.
+//! - [`affine_psnr`]: PSNR after each view's own least-squares affine colour map (exposure and
+//!   white balance forgiven).
 //! - [`ssim`](mod@ssim): structural similarity (11×11 Gaussian window, σ = 1.5), unitless; equals
 //!   scikit-image's `structural_similarity(gaussian_weights=True, sigma=1.5,
 //!   use_sample_covariance=False, data_range=1)`.
@@ -15,6 +17,7 @@
 //! prediction folder with a ground-truth folder. Scoring a whole trained sequence against a
 //! benchmark is [`crate::score`]'s, above this module and the tracker.
 
+pub mod affine_psnr;
 pub mod assignment;
 pub mod chamfer;
 pub mod emd;
@@ -27,6 +30,7 @@ pub mod surface_chamfer;
 pub mod tracking;
 pub mod tracking_split;
 
+pub use affine_psnr::affine_corrected_psnr;
 pub use chamfer::{chamfer_distance, chamfer_meshes, ChamferReport};
 pub use emd::{emd_meshes, emd_points, EmdReport};
 pub use folder::{evaluate_folders, FolderError, FolderOptions, FolderReport};

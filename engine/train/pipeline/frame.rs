@@ -7,7 +7,7 @@ use super::config::{TemporalConfig, TrainConfig};
 use super::correspondences::{correspondences, Correspondences, SeenPose, VertexTracks};
 use super::graph_stage::{solve_graph, GraphInput, GraphReport, ImageWeights};
 use crate::camera::Camera;
-use crate::eval::psnr;
+use crate::eval::{affine_corrected_psnr, psnr};
 use crate::gpu::{GpuContext, Recorder};
 use crate::loss::flow::FlowTerm;
 use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm, SilhouetteView};
@@ -65,6 +65,10 @@ pub struct FrameReport {
     pub psnr_gs: f64,
     /// Mean SSIM of the Gaussian renders.
     pub ssim_gs: f64,
+    /// Mean PSNR of the Gaussian renders after each view's own affine colour map
+    /// ([`affine_corrected_psnr`]): what remains when exposure and white balance are forgiven.
+    #[serde(default)]
+    pub psnr_gs_affine: f64,
     /// Mean PSNR of the mesh renders, dB.
     pub psnr_mesh: f64,
     /// Mean weighted losses of the last statistics interval.
@@ -205,7 +209,7 @@ pub fn optimize_frame(
     report.colour_iterations = colour_iterations;
     (report.iterations, report.wall_s, report.gaussians, report.passes_ms) =
         (run.iterations, graph_s + run.train_s + colour_s, scene.len(), run.passes_ms);
-    (report.psnr_gs, report.ssim_gs, report.psnr_mesh) =
+    (report.psnr_gs, report.ssim_gs, report.psnr_gs_affine, report.psnr_mesh) =
         evaluate(&mut trainer, &terms.mesh_term, task.eval, &settings)?;
     let (wall, clock) = (started.elapsed().as_secs_f64(), ctx.clock().since(&clock));
     if clock.host_share(wall).is_some() {
@@ -614,6 +618,7 @@ fn empty_report(frame: usize) -> FrameReport {
         gaussians: 0,
         psnr_gs: 0.0,
         ssim_gs: 0.0,
+        psnr_gs_affine: 0.0,
         psnr_mesh: 0.0,
         loss_gs: 0.0,
         loss_mesh: 0.0,
@@ -711,19 +716,25 @@ fn covered_pixels(views: &[ViewTarget]) -> usize {
     counts.get(counts.len() / 2).copied().unwrap_or(0)
 }
 
-/// Mean PSNR and SSIM of the Gaussian renders and PSNR of the mesh renders over `views`.
+/// Mean PSNR, SSIM and colour-corrected PSNR of the Gaussian renders and PSNR of the mesh
+/// renders over `views`.
 fn evaluate(
     trainer: &mut Trainer,
     mesh_term: &MeshTerm,
     views: &[ViewTarget],
     settings: &RenderSettings,
-) -> Result<(f64, f64, f64), TrainError> {
-    let (gs, gs_ssim, _) = fit::evaluate(trainer, views, settings, false)?;
+) -> Result<(f64, f64, f64, f64), TrainError> {
+    let (gs, gs_ssim, renders) = fit::evaluate(trainer, views, settings, false)?;
+    let mut affine = 0.0;
+    for (render, v) in renders.iter().zip(views) {
+        affine += affine_corrected_psnr(&render.data, &v.rgb())?.min(100.0);
+    }
     let mut mesh = 0.0;
     for v in views {
         mesh +=
             psnr(&mesh_term.render(trainer.params(), &v.camera, settings.background)?, &v.rgb())?
                 .min(100.0);
     }
-    Ok((gs, gs_ssim, mesh / views.len().max(1) as f64))
+    let n = views.len().max(1) as f64;
+    Ok((gs, gs_ssim, affine / n, mesh / n))
 }

@@ -349,7 +349,7 @@ fn frame_lines(f: &FrameReport) -> String {
         format!("graph [{}], ", levels.join("; "))
     });
     let mut text = format!(
-        "frame {}: {graph}{} iterations ({:?}){}, {:.1} s, {} Gaussians, PSNR {:.2} dB (Gaussians) {:.2} dB (mesh)",
+        "frame {}: {graph}{} iterations ({:?}){}, {:.1} s, {} Gaussians, PSNR {:.2} dB (Gaussians; {:.2} dB colour-corrected per view) {:.2} dB (mesh)",
         f.frame,
         f.iterations,
         f.stop_reason,
@@ -360,6 +360,7 @@ fn frame_lines(f: &FrameReport) -> String {
         f.wall_s,
         f.gaussians,
         f.psnr_gs,
+        f.psnr_gs_affine,
         f.psnr_mesh
     );
     if !f.lost_views.is_empty() {
