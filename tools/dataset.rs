@@ -111,7 +111,7 @@ pub fn run(command: DatasetCommand, ctx: &GpuContext) -> Result<()> {
         );
     }
     println!(
-        "memory    about {} on the device, {} on the host at scale {scale} ({}{})",
+        "memory    up to {} on the device, {} on the host at scale {scale} ({}{}; an upper estimate)",
         mib(memory.device_bytes),
         mib(memory.host_bytes),
         ctx.info().name,

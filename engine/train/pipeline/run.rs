@@ -177,7 +177,7 @@ fn run_logged(
         return Err(TrainError::TooLarge { data: job.data.clone(), problem });
     }
     log.line(&format!(
-        "memory (estimate): {} on the device, {} on the host",
+        "memory (an upper estimate): up to {} on the device, {} on the host",
         mib(memory.device_bytes),
         mib(memory.host_bytes)
     ))?;
