@@ -405,3 +405,37 @@ fn scaled_views_keep_images_masks_and_cameras_together() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_mask_that_cuts_off_the_subject_is_named_by_view_and_frame() {
+    use tagsplat::io::image::{read_image, write_png};
+    use tagsplat::synth::{generate, SubjectSource, SynthOptions};
+    let dir = temp("cut");
+    let o = SynthOptions {
+        subject: SubjectSource::Procedural { subdivisions: 2 },
+        views: 3,
+        frames: 2,
+        width: 32,
+        height: 32,
+        seed: 6,
+        ..Default::default()
+    };
+    generate(&o, &dir).unwrap();
+    assert!(Dataset::load(&dir).unwrap().check().is_empty());
+    // The left half of camera 1's mask of frame 1 cut away, as a matting tool that lost an arm.
+    let path = own::mask_path(&dir, "cam001", 1);
+    let mut mask = read_image(&path).unwrap();
+    let width = mask.width as usize;
+    mask.data
+        .iter_mut()
+        .enumerate()
+        .filter(|(i, _)| i % width < width / 2)
+        .for_each(|(_, m)| *m = 0.0);
+    write_png(&path, &mask).unwrap();
+    let problems: Vec<String> =
+        Dataset::load(&dir).unwrap().check().iter().map(ToString::to_string).collect();
+    assert_eq!(problems.len(), 1, "{problems:?}");
+    let said = &problems[0];
+    assert!(said.contains("frame 1, camera cam001") && said.contains("leaves out"), "{said}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

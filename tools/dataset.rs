@@ -2,14 +2,11 @@
 
 use anyhow::{Context, Result};
 use std::path::PathBuf;
-use tagsplat::dataset::background::background_share;
+use tagsplat::dataset::background::{background_share, BACKGROUND_SHARE};
 use tagsplat::dataset::{Dataset, LoadOptions, PixelCenters};
 use tagsplat::gpu::GpuContext;
 use tagsplat::io::host::total_memory_bytes;
 use tagsplat::train::memory::{mib, refusal, CaptureMemory};
-
-/// Past this share of non-black background pixels the images carry a background.
-const BACKGROUND_SHARE: f64 = 0.05;
 
 #[derive(clap::Subcommand)]
 pub enum DatasetCommand {

@@ -1,9 +1,12 @@
 //! Whether a capture's images show something behind the subject (a studio's background plate)
 //! or were composited over black (a render): `dataset info` says which, so a user knows the
-//! masks, not the colours, say what is subject.
+//! masks, not the colours, say what is subject. Over black, lit pixels outside a mask are
+//! subject the mask left out: [`Dataset::check`] names the views where that is much of it.
 
 use super::{Dataset, DatasetError};
 
+/// Past this share of lit pixels outside the masks, the images carry a background.
+pub const BACKGROUND_SHARE: f64 = 0.05;
 /// Mask values at or below this are background.
 const OUTSIDE: f32 = 0.05;
 /// A background pixel with a channel above this is not black (8 of 255: past JPEG noise).
@@ -16,10 +19,30 @@ pub fn background_share(dataset: &Dataset, frame: usize) -> Result<f64, DatasetE
     let views = dataset.frames.get(frame).map_or(0, |f| f.views.len());
     for view in 0..views {
         let (image, mask) = (dataset.image(frame, view)?, dataset.mask(frame, view)?);
-        let (o, l) = count_lit(&image.data, image.channels as usize, &mask);
-        (outside, lit) = (outside + o, lit + l);
+        let counts = MaskCounts::of(&image.data, image.channels as usize, &mask);
+        (outside, lit) = (outside + counts.outside, lit + counts.lit_outside);
     }
     Ok(if outside == 0 { 0.0 } else { lit as f64 / outside as f64 })
+}
+
+/// One view's mask against its image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MaskCounts {
+    /// Pixels the mask calls subject (> 0.5).
+    pub inside: u64,
+    /// Pixels the mask calls background (≤ 0.05).
+    pub outside: u64,
+    /// Of the background pixels, those whose colour is not black.
+    pub lit_outside: u64,
+}
+
+impl MaskCounts {
+    /// The counts of an image with `channels` samples a pixel and its mask.
+    pub fn of(data: &[f32], channels: usize, mask: &[f32]) -> Self {
+        let (outside, lit_outside) = count_lit(data, channels, mask);
+        let inside = mask.iter().filter(|&&m| m > 0.5).count() as u64;
+        Self { inside, outside, lit_outside }
+    }
 }
 
 /// (background pixels, of them not black) of one image with `channels` samples a pixel.

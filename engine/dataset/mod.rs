@@ -18,6 +18,7 @@ pub mod panoptic;
 use crate::camera::Camera;
 use crate::io::image::{read_image, Image, ImageError};
 use crate::io::resample::resample_area;
+use background::{MaskCounts, BACKGROUND_SHARE};
 use cache::ImageCache;
 use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
@@ -72,6 +73,19 @@ pub enum DatasetError {
     /// The layout takes masks from the alpha channel, and this image has none.
     #[error("{}: has no alpha channel to use as the mask", .0.display())]
     NoMask(PathBuf),
+    /// Images composited over black show subject outside this view's mask: the mask cuts off
+    /// `percent` of what the image shows (lit pixels outside the mask over the mask's area).
+    #[error("frame {frame}, camera {camera}: {} leaves out {percent:.0} % of the subject its image shows", mask.display())]
+    MaskCutsSubject {
+        /// Index of the frame, in time order.
+        frame: usize,
+        /// The camera's name.
+        camera: String,
+        /// The mask file (the image's when masks come from its alpha).
+        mask: PathBuf,
+        /// Lit pixels outside the mask, percent of the mask's area.
+        percent: f64,
+    },
     /// Every view's mask of a frame is empty (no pixel above 0.5).
     #[error("frame {frame}: the mask is empty in every view")]
     EmptyMasks {
@@ -406,9 +420,12 @@ impl Dataset {
 
     /// Every problem found by reading every file: missing files, sizes that disagree with
     /// their camera, files that do not decode, masks missing, frames whose masks are empty in
-    /// every view. Decodes every image and mask through the cache (memory stays bounded).
+    /// every view, and, when the images are composited over black (under 5 % of the pixels
+    /// outside the masks lit), masks that leave out more than 10 % of the subject their image
+    /// shows. Decodes every image and mask through the cache (memory stays bounded).
     pub fn check(&self) -> Vec<DatasetError> {
         let mut problems = Vec::new();
+        let mut counts: Vec<(usize, usize, MaskCounts)> = Vec::new();
         for (t, frame) in self.frames.iter().enumerate() {
             let mut any_foreground = false;
             let mut masks_read = 0;
@@ -421,19 +438,53 @@ impl Dataset {
                     problems.push(e);
                     continue;
                 }
-                match self.mask(t, k) {
-                    Ok(m) => {
+                match (self.mask(t, k), self.image(t, k)) {
+                    (Ok(m), Ok(image)) => {
                         masks_read += 1;
                         any_foreground |= m.iter().any(|&x| x > 0.5);
+                        counts.push((
+                            t,
+                            k,
+                            MaskCounts::of(&image.data, image.channels as usize, &m),
+                        ));
                     }
-                    Err(e) => problems.push(e),
+                    (Err(e), _) | (_, Err(e)) => problems.push(e),
                 }
             }
             if masks_read == frame.views.len() && !any_foreground {
                 problems.push(DatasetError::EmptyMasks { frame: t });
             }
         }
+        problems.extend(self.masks_cutting_the_subject(&counts));
         problems
+    }
+
+    /// The views of `counts` (frame, view, counts) whose mask leaves out over 10 % of the
+    /// subject, when the images are composited over black; none over a background plate,
+    /// where a lit pixel outside the mask says nothing.
+    fn masks_cutting_the_subject(
+        &self,
+        counts: &[(usize, usize, MaskCounts)],
+    ) -> Vec<DatasetError> {
+        let (outside, lit) =
+            counts.iter().fold((0, 0), |(o, l), (_, _, c)| (o + c.outside, l + c.lit_outside));
+        if lit as f64 > BACKGROUND_SHARE * outside as f64 {
+            return Vec::new();
+        }
+        let cut = |c: &MaskCounts| 100.0 * c.lit_outside as f64 / c.inside.max(1) as f64;
+        counts
+            .iter()
+            .filter(|(_, _, c)| cut(c) > 10.0)
+            .map(|&(frame, k, ref c)| {
+                let v = self.view(frame, k);
+                let mask = match &v.mask {
+                    MaskSource::File(path) => path.clone(),
+                    MaskSource::Alpha => v.image.clone(),
+                };
+                let camera = self.camera_names[v.camera].clone();
+                DatasetError::MaskCutsSubject { frame, camera, mask, percent: cut(c) }
+            })
+            .collect()
     }
 }
 

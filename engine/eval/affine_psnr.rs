@@ -13,7 +13,7 @@ pub fn affine_corrected_psnr(pred: &[f32], gt: &[f32]) -> Result<f64, EvalError>
     if pred.len() != gt.len() {
         return Err(EvalError::SizeMismatch(pred.len(), gt.len()));
     }
-    if pred.len() % 3 != 0 {
+    if !pred.len().is_multiple_of(3) {
         return Err(EvalError::Empty("whole RGB pixels"));
     }
     let map = fit_affine(pred, gt);
@@ -54,11 +54,13 @@ fn solve4(mut m: [[f64; 4]; 4], mut b: [f64; 4]) -> [f64; 4] {
     for col in 0..4 {
         let pivot = (col..4).max_by(|&a, &c| m[a][col].abs().total_cmp(&m[c][col].abs()));
         let pivot = pivot.unwrap_or(col);
-        (m.swap(col, pivot), b.swap(col, pivot));
+        m.swap(col, pivot);
+        b.swap(col, pivot);
         for row in col + 1..4 {
             let f = m[row][col] / m[col][col];
-            for k in col..4 {
-                m[row][k] -= f * m[col][k];
+            let pivot_row = m[col];
+            for (value, p) in m[row].iter_mut().zip(pivot_row).skip(col) {
+                *value -= f * p;
             }
             b[row] -= f * b[col];
         }

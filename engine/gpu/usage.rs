@@ -10,7 +10,7 @@ pub(crate) struct BufferUsage {
     peak: AtomicU64,
 }
 
-/// A reading of [`BufferUsage`].
+/// A reading of the context's buffer totals (`GpuContext::buffer_bytes`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct BufferBytes {
     /// Bytes in live buffers now.
