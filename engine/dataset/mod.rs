@@ -434,21 +434,21 @@ impl Dataset {
                     problems.push(DatasetError::MissingImage(v.image.clone()));
                     continue;
                 }
-                if let Err(e) = self.image(t, k) {
-                    problems.push(e);
-                    continue;
-                }
-                match (self.mask(t, k), self.image(t, k)) {
-                    (Ok(m), Ok(image)) => {
+                let image = match self.image(t, k) {
+                    Ok(image) => image,
+                    Err(e) => {
+                        problems.push(e);
+                        continue;
+                    }
+                };
+                match self.mask(t, k) {
+                    Ok(m) => {
                         masks_read += 1;
                         any_foreground |= m.iter().any(|&x| x > 0.5);
-                        counts.push((
-                            t,
-                            k,
-                            MaskCounts::of(&image.data, image.channels as usize, &m),
-                        ));
+                        let mask_counts = MaskCounts::of(&image.data, image.channels as usize, &m);
+                        counts.push((t, k, mask_counts));
                     }
-                    (Err(e), _) | (_, Err(e)) => problems.push(e),
+                    Err(e) => problems.push(e),
                 }
             }
             if masks_read == frame.views.len() && !any_foreground {
