@@ -557,7 +557,8 @@ fn start_tracks(
     }
     let frame0_views = source_views(dataset, 0, 1.0, job)?;
     let source = SeenPose { positions: &frame0.positions, views: &frame0_views };
-    let mut tracks = VertexTracks::start(source, &mesh.live_faces());
+    let texture = job.config.temporal.anchor_texture;
+    let mut tracks = VertexTracks::start(source, &mesh.live_faces(), texture);
     for t in 1..first {
         replay_tracks(&mut tracks, (dataset, out), t, mesh, job)?;
     }
