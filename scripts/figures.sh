@@ -7,6 +7,8 @@
 #   scripts/figures.sh demo           the demo
 #   scripts/figures.sh sequences      every benchmark sequence in $BENCH (all frames)
 #   scripts/figures.sh NAME...        one benchmark sequence each (fox_walk, fox_run, ...)
+#   scripts/figures.sh NAME+CONFIG    the same with --config benches/configs/CONFIG.toml (an
+#                                     ablation row: fox_run_textured+anchor)
 #   scripts/figures.sh table          only rewrite the README's table
 #
 # BENCH (required for sequences) is the folder that holds the benchmark sequences (see
@@ -34,10 +36,13 @@ record() {
     mv "$file.tmp" "$file"
 }
 
+# sequence NAME or NAME+CONFIG: a benchmark sequence, with benches/configs/CONFIG.toml if named.
 sequence() {
     : "${BENCH:?set BENCH to the folder that holds the benchmark sequences}"
+    local name=${1%%+*} config=()
+    [[ $1 == *+* ]] && config=(--config "benches/configs/${1#*+}.toml")
     [[ ${RESUME:-0} == 1 ]] || rm -rf "${RUNS:?}/$1"
-    record "sequence-$1" bench sequence --data "$BENCH/$1" --out "$RUNS/$1"
+    record "sequence-$1" bench sequence --data "$BENCH/$name" --out "$RUNS/$1" "${config[@]}"
 }
 
 for what in "${@:-table}"; do

@@ -250,7 +250,18 @@ fn sequence_figure(v: &Value) -> Result<String> {
         (Some(first), Some(last)) => (first, last),
         _ => bail!("\"scores.frames\" is empty"),
     };
-    Ok(format!("[{name}](docs/benchmarks.md), frames {first}–{last}"))
+    let figure = format!("[{name}](docs/benchmarks.md), frames {first}–{last}");
+    let command = text(v, "provenance.command")?;
+    let words: Vec<&str> = command.split_whitespace().collect();
+    Ok(match words.iter().position(|w| *w == "--config").and_then(|i| words.get(i + 1)) {
+        Some(config) => {
+            let stem = Path::new(config)
+                .file_stem()
+                .map_or(config.to_string(), |s| s.to_string_lossy().into_owned());
+            format!("{figure}, with `{stem}` ([config]({config}))")
+        }
+        None => figure,
+    })
 }
 
 fn sequence_value(v: &Value) -> Result<String> {

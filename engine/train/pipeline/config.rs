@@ -104,11 +104,6 @@ pub struct TemporalConfig {
     /// to the frame-0 image, revived near the starting pose when lost), so a slide along the
     /// surface does not add up (0: off).
     pub anchor: f32,
-    /// Least texture an anchor track's window needs, as the smallest eigenvalue of its
-    /// structure tensor per window pixel (luma in [0, 1]): below it, at frame 0 or at any
-    /// step, the track is not followed, so a facet edge or a shading ramp, which a window
-    /// follows along itself, anchors nothing.
-    pub anchor_texture: f32,
     /// The pose the temporal regularizers (edge length, rigidity, rotation) compare against.
     pub regularizer_reference: ReferencePose,
     /// Thickness, × the subject's thickest parts (the 95th percentile of vertex thickness), up
@@ -286,7 +281,6 @@ impl Default for TemporalConfig {
             coverage_radius: 24,
             flow: 0.0,
             anchor: 0.0,
-            anchor_texture: 1e-4,
             regularizer_reference: ReferencePose::Previous,
             limb_thickness: 0.3,
             graph: GraphConfig::default(),
@@ -414,7 +408,6 @@ impl TrainConfig {
             ("temporal.coverage", self.temporal.coverage),
             ("temporal.flow", self.temporal.flow),
             ("temporal.anchor", self.temporal.anchor),
-            ("temporal.anchor_texture", self.temporal.anchor_texture),
             ("temporal.limb_thickness", self.temporal.limb_thickness),
             ("temporal.colour_lr_scale", self.temporal.colour_lr_scale),
             ("temporal.graph.arap", self.temporal.graph.arap),

@@ -557,8 +557,7 @@ fn start_tracks(
     }
     let frame0_views = source_views(dataset, 0, 1.0, job)?;
     let source = SeenPose { positions: &frame0.positions, views: &frame0_views };
-    let texture = job.config.temporal.anchor_texture;
-    let mut tracks = VertexTracks::start(source, &mesh.live_faces(), texture);
+    let mut tracks = VertexTracks::start(source, &mesh.live_faces());
     for t in 1..first {
         replay_tracks(&mut tracks, (dataset, out), t, mesh, job)?;
     }
