@@ -87,7 +87,7 @@ pub fn correspondences(
         let mut matched = 0;
         for (&(i, _, _), end) in shown.iter().zip(tracked) {
             let Some([u, w]) = end else { continue };
-            if on_mask(after, [u, w], 0) {
+            if on_mask(after, width, [u, w]) {
                 out.targets[i * pairs.len() + v] = FlowTarget { u, v: w, weight: 1.0, unused: 0.0 };
                 matched += 1;
             }
@@ -116,8 +116,8 @@ struct ViewTracks {
 }
 
 impl VertexTracks {
-    /// Tracks of every vertex of `frame0` that a view of it sees (not hidden by `faces`) with
-    /// its track window on the view's mask. Empty when the surface cannot be built.
+    /// Tracks of every vertex of `frame0` that a view of it sees (not hidden by `faces`).
+    /// Empty when the surface cannot be built.
     pub fn start(frame0: SeenPose, faces: &[[u32; 3]]) -> Self {
         let lk = LucasKanade { window_radius: TRACK_WINDOW_RADIUS, ..LucasKanade::default() };
         let Ok(bvh) = SurfaceBvh::build(frame0.positions, faces) else {
@@ -127,8 +127,7 @@ impl VertexTracks {
             .views
             .iter()
             .map(|v| {
-                let mut pixels = visible_pixels(&bvh, frame0.positions, &v.camera);
-                drop_outline_windows(&mut pixels, v);
+                let pixels = visible_pixels(&bvh, frame0.positions, &v.camera);
                 let first = luma(&v.target);
                 ViewTracks {
                     name: v.name.clone(),
@@ -165,7 +164,6 @@ impl VertexTracks {
                 let near = visible_pixels(bvh, guess, &view.camera);
                 view.tracks.revive(&self.lk, image(&view.first), image(&now), &near);
             }
-            drop_outline_windows(&mut view.tracks.now, target);
             view.latest = now;
         }
     }
@@ -193,10 +191,11 @@ impl VertexTracks {
         let Ok(bvh) = SurfaceBvh::build(guess, faces) else { return out };
         for (v, (tracks, view)) in pairs.iter().enumerate() {
             let shown = visible_pixels(&bvh, guess, &view.camera);
+            let width = view.camera.width as usize;
             let mut matched = 0;
             for (i, (p, shown)) in tracks.tracks.now.iter().zip(&shown).enumerate() {
                 let (Some([u, w]), Some(_)) = (p, shown) else { continue };
-                if i >= guess.len() || !on_mask(view, [*u, *w], 0) {
+                if i >= guess.len() || !on_mask(view, width, [*u, *w]) {
                     continue;
                 }
                 out.targets[i * pairs.len() + v] =
@@ -211,39 +210,20 @@ impl VertexTracks {
     }
 }
 
-/// Loses every point of `points` (index coordinates in `view`) whose track window reaches past
-/// the view's mask. Such a window holds the outline, which slides over the skin as the shape
-/// turns, and follows it instead of the skin: on fox_run_textured, following the true points
-/// of frames 0–5 with their windows kept on the mask, the tracks' RMS error after five frames
-/// falls from 4.8 to 1.4 pixels (median 0.84 to 0.34), for a quarter as many tracks.
-fn drop_outline_windows(points: &mut [Option<[f32; 2]>], view: &ViewTarget) {
-    for p in points.iter_mut() {
-        if p.is_some_and(|q| !on_mask(view, q, TRACK_WINDOW_RADIUS)) {
-            *p = None;
-        }
-    }
-}
-
 /// Half the side of the image tracks' window: 4 gives 9 × 9 pixels. Smaller than the flow's
 /// 15 × 15, so a window holds less of what moves otherwise (a limb's other side, the
 /// background): on fox_run_textured, stepping the true points frame by frame, 9 × 9 keeps
 /// more of them within a pixel of the truth after five frames (53 % against 39 %).
 const TRACK_WINDOW_RADIUS: usize = 4;
 
-/// Whether the (2 `radius` + 1)² pixels around index-coordinate pixel `p` all lie on `view`'s
-/// mask (radius 0: the pixel itself).
-fn on_mask(view: &ViewTarget, p: [f32; 2], radius: usize) -> bool {
-    let (width, height) = (view.camera.width as i64, view.camera.height as i64);
+/// Whether index-coordinate pixel `p` lies on `view`'s mask (`width` its row length).
+fn on_mask(view: &ViewTarget, width: usize, p: [f32; 2]) -> bool {
+    let height = view.target.len() / width.max(1);
     let (x, y) = (p[0].round(), p[1].round());
-    if !(x.is_finite() && y.is_finite()) {
+    if !(x >= 0.0 && y >= 0.0 && (x as usize) < width && (y as usize) < height) {
         return false;
     }
-    let (x, y, r) = (x as i64, y as i64, radius as i64);
-    if x - r < 0 || y - r < 0 || x + r >= width || y + r >= height {
-        return false;
-    }
-    let row = |y: i64| (x - r..=x + r).map(move |x| (y * width + x) as usize);
-    (y - r..=y + r).flat_map(row).all(|i| view.target.get(i).is_some_and(|p| p[3] > 0.5))
+    view.target[y as usize * width + x as usize][3] > 0.5
 }
 
 /// Each vertex's pixel in `camera` (index coordinates: pixel centres at integers) where the
@@ -373,31 +353,6 @@ mod tests {
         let source = SeenPose { positions: &positions, views: std::slice::from_ref(&before) };
         let found = correspondences(source, &slid, &faces, std::slice::from_ref(&now));
         assert_at_moved(&positions, hidden, &found, shift);
-    }
-
-    #[test]
-    fn anchor_tracks_leave_out_windows_that_reach_past_the_outline() {
-        let (positions, faces, hidden) = planes();
-        let (frame0, now) = (view(top_camera(), [0.0; 2]), view(top_camera(), [0.05, -0.03]));
-        let source = SeenPose { positions: &positions, views: std::slice::from_ref(&frame0) };
-        let mut tracks = VertexTracks::start(source, &faces);
-        tracks.advance(std::slice::from_ref(&now), &positions, &faces);
-        let found = tracks.targets(&positions, &faces, std::slice::from_ref(&now));
-        // The plane's border row and column lie on its outline (about 20 pixels a unit, so
-        // the next ring in lies 4 pixels inside, where a 9 × 9 window just fits).
-        let anchored = |keep: &dyn Fn(f32) -> bool| {
-            let pairs = positions.iter().zip(&found.targets).take(hidden.start);
-            pairs.filter(|(x, t)| keep(x[0].abs().max(x[1].abs())) && t.weight > 0.0).count()
-        };
-        assert_eq!(anchored(&|edge| edge > 0.9), 0, "a window across the outline anchors");
-        assert!(anchored(&|edge| edge < 0.7) >= 40, "the interior keeps its anchors");
-        // The flow term, whose 15 × 15 windows are not held to the mask, keeps the border.
-        let flow = correspondences(source, &positions, &faces, std::slice::from_ref(&now));
-        assert!(flow.targets[..hidden.start].iter().zip(&positions).any(|(t, x)| x[0]
-            .abs()
-            .max(x[1].abs())
-            > 0.9
-            && t.weight > 0.0));
     }
 
     #[test]
