@@ -47,9 +47,9 @@ pub fn temporal_ablations() -> Vec<Ablation> {
     ]
 }
 
-/// The anchor term's weight in its ablation row and for textured captures (off by default: it
-/// helps where the skin carries a pattern and costs fox_walk's flat-coloured skin;
-/// docs/log/2026-11-28-image-anchors.md).
+/// The anchor term's weight in its ablation row and for textured captures (off by default: on
+/// textured skin it gains only over the first frames, and it costs flat-coloured skin 6–8 %;
+/// docs/log/2026-11-28-image-anchors.md, docs/log/2026-11-28-correspondence-oracles.md).
 pub const ANCHOR_WEIGHT: f32 = 3000.0;
 
 /// The flow term's weight in its ablation row (off by default: on fox_run_textured it moved
