@@ -124,7 +124,7 @@ fn table_row(v: &Value, link: &str) -> Result<(usize, String)> {
         "bench mesh" => (3, mesh_figure(v)?, mesh_value(v)?),
         "bench track" => (4, track_figure(v)?, track_value(v)?),
         "demo" => (5, demo_figure(v)?, demo_value(v)?),
-        "bench sequence" => (6, sequence_figure(v)?, sequence_value(v)?),
+        "bench sequence" => (6, sequence_figure(v, &words)?, sequence_value(v)?),
         other => bail!("no table row for results of `tagsplat {other}`"),
     };
     let device = format!("{} on {}", provenance.device, provenance.host);
@@ -242,7 +242,8 @@ fn demo_value(v: &Value) -> Result<String> {
     ))
 }
 
-fn sequence_figure(v: &Value) -> Result<String> {
+/// The sequence's name and frames, and the config its command line (`words`) trained with.
+fn sequence_figure(v: &Value, words: &[&str]) -> Result<String> {
     let data = text(v, "data")?;
     let name = Path::new(data).file_name().map_or(data.into(), |n| n.to_string_lossy());
     let frames = field(v, "scores.frames")?.as_array().context("\"scores.frames\" is no list")?;
@@ -251,8 +252,6 @@ fn sequence_figure(v: &Value) -> Result<String> {
         _ => bail!("\"scores.frames\" is empty"),
     };
     let figure = format!("[{name}](docs/benchmarks.md), frames {first}–{last}");
-    let command = text(v, "provenance.command")?;
-    let words: Vec<&str> = command.split_whitespace().collect();
     Ok(match words.iter().position(|w| *w == "--config").and_then(|i| words.get(i + 1)) {
         Some(config) => {
             let stem = Path::new(config)
