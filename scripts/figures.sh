@@ -3,7 +3,8 @@
 # command's `--json` output: the figure with its command line, commit, date, device, driver and
 # host), then rewrites the README's table from those files (`tagsplat figures`).
 #
-#   scripts/figures.sh micro          the sort, splatting, training-iteration, mesh and BVH benches
+#   scripts/figures.sh micro          the sort, splatting, render-only, training-iteration, mesh and
+#                                     BVH benches
 #   scripts/figures.sh demo           the demo
 #   scripts/figures.sh sequences      every benchmark sequence in $BENCH (all frames)
 #   scripts/figures.sh NAME...        one benchmark sequence each (fox_walk, fox_run, ...)
@@ -50,7 +51,8 @@ for what in "${@:-table}"; do
     micro)
         record sort bench sort --n 4194304 --bits 32
         record splat bench splat
-        record train bench train
+        record render bench render --gaussians 1000000 --width 1920 --height 1080 --views 2 --sh-degree 2
+    record train bench train
         record mesh bench mesh
         record track bench track
         ;;

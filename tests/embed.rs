@@ -41,7 +41,7 @@ fn reconstruct_render_track(
     let dataset = Dataset::load(data)?;
     let (last, camera) = (dataset.frames.len() - 1, dataset.test[0]);
     let gaussians = GaussianScene::read_ply(&out.join(format!("gaussians/{last:06}.ply")))?;
-    let mut splatter = Splatter::new(ctx)?;
+    let mut splatter = Splatter::renderer(ctx)?;
     let settings = RenderSettings { sh_degree: gaussians.sh_degree, ..Default::default() };
     let buffers = GaussianBuffers::from_scene(ctx, &gaussians)?;
     splatter.forward(&buffers, &dataset.cameras[camera], &settings)?;

@@ -1,7 +1,7 @@
 //! Result files, and the README's table of figures made from them.
 //!
 //! A result file is what a measuring command prints with `--json` (`bench
-//! sort|splat|train|mesh|track`, `bench sequence`, `demo`), its [`Provenance`] first: the command line, commit, date, device,
+//! sort|splat|render|train|mesh|track`, `bench sequence`, `demo`), its [`Provenance`] first: the command line, commit, date, device,
 //! driver and host. The repository keeps them in `benches/results/`; `tagsplat figures` turns
 //! each into one row of the README's table, so a figure there is always one a file holds, and
 //! `--check` (and the test below) fails when the README says anything else.
@@ -120,11 +120,12 @@ fn table_row(v: &Value, link: &str) -> Result<(usize, String)> {
     let (order, figure, value) = match kind.as_str() {
         "bench sort" => (0, sort_figure(v)?, sort_value(v)?),
         "bench splat" => (1, splat_figure(v)?, splat_value(v)?),
-        "bench train" => (2, train_figure(v)?, train_value(v)?),
-        "bench mesh" => (3, mesh_figure(v)?, mesh_value(v)?),
-        "bench track" => (4, track_figure(v)?, track_value(v)?),
-        "demo" => (5, demo_figure(v)?, demo_value(v)?),
-        "bench sequence" => (6, sequence_figure(v, &words)?, sequence_value(v)?),
+        "bench render" => (2, render_figure(v)?, render_value(v)?),
+        "bench train" => (3, train_figure(v)?, train_value(v)?),
+        "bench mesh" => (4, mesh_figure(v)?, mesh_value(v)?),
+        "bench track" => (5, track_figure(v)?, track_value(v)?),
+        "demo" => (6, demo_figure(v)?, demo_value(v)?),
+        "bench sequence" => (7, sequence_figure(v, &words)?, sequence_value(v)?),
         other => bail!("no table row for results of `tagsplat {other}`"),
     };
     let device = format!("{} on {}", provenance.device, provenance.host);
@@ -164,6 +165,26 @@ fn splat_value(v: &Value) -> Result<String> {
         num(v, "fwd_bwd_s")? * 1e3,
         num(v, "fwd_bwd_per_s")?,
         num(v, "fwd_s")? * 1e3
+    ))
+}
+
+fn render_figure(v: &Value) -> Result<String> {
+    Ok(format!(
+        "[render only](docs/splatting.md), {} Gaussians, SH {}, {} × {}",
+        num(v, "config.gaussians")?,
+        num(v, "config.sh_degree")?,
+        num(v, "config.width")?,
+        num(v, "config.height")?
+    ))
+}
+
+fn render_value(v: &Value) -> Result<String> {
+    Ok(format!(
+        "{:.1} ms per render ({:.1} per s), GPU passes {:.1} ms, of which the sort {:.1} ms",
+        num(v, "wall_s")? * 1e3,
+        num(v, "renders_per_s")?,
+        num(v, "gpu_s")? * 1e3,
+        num(v, "passes_ms.sort")?
     ))
 }
 

@@ -31,8 +31,9 @@ mod topology;
 mod train;
 use std::cell::RefCell;
 use tagsplat::bench::{
-    bench_mesh, bench_sort, bench_splat, bench_train, MeshBenchConfig, MeshBenchReport,
-    SortBenchReport, SplatBenchConfig, SplatBenchReport, TrainBenchConfig, TrainBenchReport,
+    bench_mesh, bench_render, bench_sort, bench_splat, bench_train, MeshBenchConfig,
+    MeshBenchReport, RenderBenchReport, SortBenchReport, SplatBenchConfig, SplatBenchReport,
+    TrainBenchConfig, TrainBenchReport,
 };
 use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, ValidationLog, DEVICE_ENV};
 
@@ -124,14 +125,8 @@ enum Bench {
     /// Full training iterations (forward, loss, backward, Adam) on the splat bench's scene,
     /// against splatting forward + backward alone in the same run.
     Train {
-        #[arg(long, default_value_t = 20_000)]
-        gaussians: usize,
-        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..=1000))]
-        views: u64,
         #[command(flatten)]
-        size: FrameSize,
-        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=3))]
-        sh_degree: u32,
+        scene: BenchScene,
         /// Timed iterations (after a warm-up round over the views).
         #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u64).range(1..=100000))]
         iterations: u64,
@@ -142,14 +137,21 @@ enum Bench {
     /// Gaussian splatting forward + backward per view on a deterministic scene (default: 8 ring
     /// cameras, 256x256, 20 000 Gaussians in a unit ball, SH degree 3).
     Splat {
-        #[arg(long, default_value_t = 20_000)]
-        gaussians: usize,
-        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..=1000))]
-        views: u64,
         #[command(flatten)]
-        size: FrameSize,
-        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=3))]
-        sh_degree: u32,
+        scene: BenchScene,
+        /// Rounds over all views; the first is a warm-up.
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(2..=1000))]
+        rounds: u64,
+        /// Print one JSON object instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The splatting forward alone, by a render-only splatter (no gradient buffers), on the splat
+    /// bench's scene: wall time per render beside its GPU passes' time (`--gaussians 1000000
+    /// --width 1920 --height 1080` for a viewer's load).
+    Render {
+        #[command(flatten)]
+        scene: BenchScene,
         /// Rounds over all views; the first is a warm-up.
         #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(2..=1000))]
         rounds: u64,
@@ -259,17 +261,9 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench(Bench::Train { gaussians, views, size, sh_degree, iterations, json }) => {
+        Command::Bench(Bench::Train { scene, iterations, json }) => {
             let ctx = gpu.create()?;
-            let (width, height) = size.get();
-            let scene = SplatBenchConfig {
-                gaussians,
-                views: views as usize,
-                width,
-                height,
-                sh_degree,
-                rounds: 2,
-            };
+            let scene = scene.config(2);
             let report =
                 bench_train(&ctx, &TrainBenchConfig { scene, iterations: iterations as usize })
                     .context("bench train")?;
@@ -280,24 +274,52 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench(Bench::Splat { gaussians, views, size, sh_degree, rounds, json }) => {
+        Command::Bench(Bench::Splat { scene, rounds, json }) => {
             let ctx = gpu.create()?;
-            let (width, height) = size.get();
-            let config = SplatBenchConfig {
-                gaussians,
-                views: views as usize,
-                width,
-                height,
-                sh_degree,
-                rounds: rounds as usize,
-            };
-            let report = bench_splat(&ctx, &config).context("bench splat")?;
+            let report = bench_splat(&ctx, &scene.config(rounds)).context("bench splat")?;
             if json {
                 figures::print_result(&report, Some(ctx.info()))?;
             } else {
                 print_splat_report(&report);
             }
             Ok(())
+        }
+        Command::Bench(Bench::Render { scene, rounds, json }) => {
+            let ctx = gpu.create()?;
+            let report = bench_render(&ctx, &scene.config(rounds)).context("bench render")?;
+            if json {
+                figures::print_result(&report, Some(ctx.info()))?;
+            } else {
+                print_render_report(&report);
+            }
+            Ok(())
+        }
+    }
+}
+
+/// The scene and cameras of the splatting, rendering and training benches (`SplatBenchConfig`).
+#[derive(clap::Args)]
+struct BenchScene {
+    #[arg(long, default_value_t = 20_000)]
+    gaussians: usize,
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    views: u64,
+    #[command(flatten)]
+    size: FrameSize,
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=3))]
+    sh_degree: u32,
+}
+
+impl BenchScene {
+    fn config(&self, rounds: u64) -> SplatBenchConfig {
+        let (width, height) = self.size.get();
+        SplatBenchConfig {
+            gaussians: self.gaussians,
+            views: self.views as usize,
+            width,
+            height,
+            sh_degree: self.sh_degree,
+            rounds: rounds as usize,
         }
     }
 }
@@ -439,6 +461,36 @@ fn print_sort_report(r: &SortBenchReport) {
     println!("result verified   {}", if r.verified { "sorted" } else { "NOT SORTED" });
 }
 
+/// One line per GPU pass: its median ms per `unit` (view, iteration).
+fn print_passes(unit: &str, passes_ms: &std::collections::BTreeMap<String, f64>) {
+    println!("GPU passes (median ms per {unit}):");
+    let width = passes_ms.keys().map(|name| name.len()).max().unwrap_or(0);
+    for (name, ms) in passes_ms {
+        println!("  {name:<width$}  {ms:.2}");
+    }
+}
+
+fn print_render_report(r: &RenderBenchReport) {
+    let c = &r.config;
+    println!("device              {}", r.device);
+    println!(
+        "scene               {} Gaussians, SH degree {}, {} views of {}x{}, render only",
+        c.gaussians, c.sh_degree, c.views, c.width, c.height
+    );
+    println!(
+        "render              {:.2} ms per view (median wall time) = {:.1} renders/s",
+        r.wall_s * 1e3,
+        r.renders_per_s
+    );
+    println!(
+        "GPU passes          {:.2} ms per view = {:.1} renders/s; the rest is the host's",
+        r.gpu_s * 1e3,
+        r.gpu_renders_per_s
+    );
+    println!("intersections       {:.0} per view", r.intersections_per_view);
+    print_passes("view", &r.passes_ms);
+}
+
 fn print_splat_report(r: &SplatBenchReport) {
     let c = &r.config;
     println!("device              {}", r.device);
@@ -468,10 +520,7 @@ fn print_splat_report(r: &SplatBenchReport) {
         r.backward_over_bound,
         r.backward_ns_per_pair
     );
-    println!("GPU passes (median ms per view):");
-    for (name, ms) in &r.passes_ms {
-        println!("  {name:<20}{ms:.2}");
-    }
+    print_passes("view", &r.passes_ms);
 }
 
 fn print_mesh_report(r: &MeshBenchReport) {
@@ -484,10 +533,7 @@ fn print_mesh_report(r: &MeshBenchReport) {
     println!("forward             {:.2} ms per view (median wall time) = {:.1} M triangles/s, {:.1} M pixels/s", r.forward_ms, r.tris_per_s * 1e-6, r.pixels_per_s * 1e-6);
     println!("backward            {:.2} ms per view", r.backward_ms);
     println!("large sub-triangles {:.0} per view", r.large_per_view);
-    println!("GPU passes (median ms per view):");
-    for (name, ms) in &r.passes_ms {
-        println!("  {name:<28}{ms:.2}");
-    }
+    print_passes("view", &r.passes_ms);
     println!("copy bandwidth      {:.2} GB/s compute kernel", r.copy.compute_bytes_per_s * 1e-9);
     println!(
         "pixel passes        {:.2} ms bound at copy bandwidth; measured {:.1}x the bound",
@@ -524,8 +570,5 @@ fn print_train_report(r: &TrainBenchReport) {
         "image loss alone    {:.2} ms for one render, {:.2} ms for two against one target (same run)",
         r.loss_ms[0], r.loss_ms[1]
     );
-    println!("GPU passes (median ms per iteration):");
-    for (name, ms) in &r.passes_ms {
-        println!("  {name:<20}{ms:.2}");
-    }
+    print_passes("iteration", &r.passes_ms);
 }

@@ -56,7 +56,7 @@ pub fn render(ctx: &Arc<GpuContext>, args: &RenderArgs) -> Result<()> {
     };
     let buffers = GaussianBuffers::from_scene(ctx, &scene)
         .with_context(|| format!("{}: cannot upload", args.splats.display()))?;
-    let mut splatter = Splatter::new(ctx)?;
+    let mut splatter = Splatter::renderer(ctx)?;
     splatter.forward(&buffers, &camera, &settings)?;
     let rgba = splatter.read_rgba()?;
     let (width, height) = (camera.width, camera.height);

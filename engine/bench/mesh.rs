@@ -147,7 +147,7 @@ pub fn bench_mesh(
         }
     }
     let copy = measure_copy(ctx, (pixels as u64 * 16).max(1 << 20))?;
-    let passes_ms = median_per_pass(&passes);
+    let passes_ms = super::median_per_pass(&passes);
     let pixel_ms: f64 = PIXEL_PASSES.iter().filter_map(|name| passes_ms.get(*name)).sum();
     // A copy of B bytes moves 2 B (read and write).
     let bound_ms = PIXEL_PASS_BYTES * pixels as f64 / (2.0 * copy.compute_bytes_per_s) * 1e3;
@@ -176,17 +176,6 @@ fn pass_ms(submissions: &[PassTimes]) -> BTreeMap<String, f64> {
         *by_name.entry(pass.name.clone()).or_insert(0.0) += pass.ms;
     }
     by_name
-}
-
-fn median_per_pass(views: &[BTreeMap<String, f64>]) -> BTreeMap<String, f64> {
-    let names: Vec<String> = views.first().map(|p| p.keys().cloned().collect()).unwrap_or_default();
-    names
-        .into_iter()
-        .map(|name| {
-            let samples = views.iter().map(|p| p.get(&name).copied().unwrap_or(0.0)).collect();
-            (name, super::median(samples))
-        })
-        .collect()
 }
 
 #[cfg(test)]

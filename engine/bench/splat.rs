@@ -230,15 +230,7 @@ pub fn bench_splat(
     let fwd_s = super::median(fwd.clone());
     let bwd_s = super::median(bwd.clone());
     let fwd_bwd_s = super::median(fwd.iter().zip(&bwd).map(|(f, b)| f + b).collect());
-    let names: Vec<String> = passes
-        .first()
-        .map(|p: &BTreeMap<String, f64>| p.keys().cloned().collect())
-        .unwrap_or_default();
-    let passes_ms = names.into_iter().map(|name| {
-        let samples = passes.iter().map(|p| p.get(&name).copied().unwrap_or(0.0)).collect();
-        (name, super::median(samples))
-    });
-    let passes_ms: BTreeMap<String, f64> = passes_ms.collect();
+    let passes_ms = super::median_per_pass(&passes);
     let views = timed_views.max(1) as f64;
     let (intersections_per_view, walked_pairs_per_view) =
         (intersections as f64 / views, pairs as f64 / views);

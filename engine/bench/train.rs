@@ -104,21 +104,7 @@ pub fn bench_train(
     let wall_s: f64 = walls.iter().sum();
     let host_ms_per_iter = (wall_s - clock.device_s) * 1e3 / walls.len().max(1) as f64;
     let host_fraction = clock.host_share(wall_s);
-    let names: Vec<String> = passes
-        .first()
-        .map(|p: &BTreeMap<String, f64>| p.keys().cloned().collect())
-        .unwrap_or_default();
-    let passes_ms = names
-        .into_iter()
-        .map(|name| {
-            (
-                name.clone(),
-                super::median(
-                    passes.iter().map(|p| p.get(&name).copied().unwrap_or(0.0)).collect(),
-                ),
-            )
-        })
-        .collect();
+    let passes_ms = super::median_per_pass(&passes);
     let s_per_iter = super::median(walls);
     drop(trainer);
     // A loss run is about a tenth of an iteration: four per iteration steadies the median.

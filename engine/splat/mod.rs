@@ -65,6 +65,9 @@ pub enum SplatError {
     /// A backward or a readback was asked for before any forward pass.
     #[error("backward or readback before any forward pass")]
     NoForward,
+    /// A backward was asked of a splatter built by `Splatter::renderer`.
+    #[error("backward asked of a render-only splatter (built by Splatter::renderer)")]
+    RenderOnly,
 }
 
 /// Tiles are 16×16 pixels.

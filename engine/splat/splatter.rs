@@ -10,7 +10,7 @@
 //! the forward itself ([`Splatter::record_forward`]) learns it from [`Splatter::finish_forward`].
 
 use super::buffers::GaussianBuffers;
-use super::frame::{tile_grid, FrameParams, Splat, GRAD2D_STRIDE};
+use super::frame::{FrameParams, Splat, GRAD2D_STRIDE};
 use super::stages::{Kernels, RasterInputs, RasterOutputs};
 use super::{RenderSettings, SplatError};
 use crate::camera::Camera;
@@ -38,9 +38,12 @@ pub struct Splatter {
     resolve: FixedResolve,
     /// Per intersection slot: exactly the capacity (the emit kernel reads its length), at
     /// least [`MIN_INTERSECTIONS`].
-    keys: GpuBuffer<u64>,
+    keys: GpuBuffer<u32>,
     ids: GpuBuffer<u32>,
-    sort: RadixSort<u64>,
+    sort: RadixSort<u32>,
+    /// The visible splats' nearest depth bits and the complement of the farthest's, which
+    /// scale the keys' depth field (intersection_key.glsl).
+    depth_range: GpuBuffer<u32>,
     /// Per tile.
     tile_ranges: GpuBuffer<[u32; 2]>,
     /// Per pixel.
@@ -53,6 +56,9 @@ pub struct Splatter {
     last_intersections: usize,
     /// The most intersections per Gaussian seen, which sizes the buffers for a new scene.
     intersections_per_gaussian: f64,
+    /// Whether it holds the backward's buffers (`grad2d`, `grad2d_sums`); a renderer built by
+    /// [`Splatter::renderer`] does not, so a large scene costs only what its forward needs.
+    backward: bool,
 }
 
 /// Smallest intersection capacity (so the key buffer is never the 16-byte stand-in of an
@@ -74,9 +80,19 @@ fn ensure<T: Pod>(ctx: &Arc<GpuContext>, buffer: &mut GpuBuffer<T>, len: usize) 
 }
 
 impl Splatter {
-    /// Builds the pipelines with small initial buffers (they grow on the first forward); fails
-    /// when a pipeline or buffer cannot be created.
+    /// Builds the pipelines with small initial buffers (they grow on the first forward), for
+    /// forward and backward; fails when a pipeline or buffer cannot be created.
     pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
+        Self::build(ctx, true)
+    }
+
+    /// [`Self::new`] for rendering only: the backward's per-Gaussian buffers (60 bytes per
+    /// value of the 2D gradient rows) are never allocated, and a backward is refused.
+    pub fn renderer(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
+        Self::build(ctx, false)
+    }
+
+    fn build(ctx: &Arc<GpuContext>, backward: bool) -> GpuResult<Self> {
         Ok(Self {
             ctx: ctx.clone(),
             kernels: Kernels::new(ctx)?,
@@ -94,6 +110,7 @@ impl Splatter {
             keys: GpuBuffer::new(ctx, "splat intersection keys", MIN_INTERSECTIONS)?,
             ids: GpuBuffer::new(ctx, "splat intersection ids", MIN_INTERSECTIONS)?,
             sort: intersection_sort(ctx, MIN_INTERSECTIONS)?,
+            depth_range: GpuBuffer::new(ctx, "splat depth range", 2)?,
             tile_ranges: GpuBuffer::new(ctx, "splat tile ranges", 0)?,
             rgba: GpuBuffer::new(ctx, "splat colour and alpha", 0)?,
             depth: GpuBuffer::new(ctx, "splat depth", 0)?,
@@ -101,11 +118,19 @@ impl Splatter {
             last_frame: None,
             last_intersections: 0,
             intersections_per_gaussian: FIRST_GUESS_PER_GAUSSIAN,
+            backward,
         })
     }
 
     fn ensure_scene(&mut self, gaussians: usize) -> GpuResult<()> {
         ensure(&self.ctx, &mut self.splats, gaussians)?;
+        if self.tile_offsets.len() < gaussians + 1 {
+            ensure(&self.ctx, &mut self.tile_offsets, gaussians + 1)?;
+            self.scan = PrefixScan::new(&self.ctx, self.tile_offsets.len())?;
+        }
+        if !self.backward {
+            return Ok(());
+        }
         ensure(&self.ctx, &mut self.grad2d, gaussians * GRAD2D_STRIDE)?;
         if self.grad2d_sums.len() < self.grad2d.len() {
             self.grad2d_sums = FixedSums::new(
@@ -114,10 +139,6 @@ impl Splatter {
                 self.grad2d.len(),
                 FixedPrecision::Gradient,
             )?;
-        }
-        if self.tile_offsets.len() < gaussians + 1 {
-            ensure(&self.ctx, &mut self.tile_offsets, gaussians + 1)?;
-            self.scan = PrefixScan::new(&self.ctx, self.tile_offsets.len())?;
         }
         Ok(())
     }
@@ -213,7 +234,9 @@ impl Splatter {
     ) -> Result<(), SplatError> {
         rec.begin_pass("project");
         rec.fill_buffer(&self.tile_offsets, 0);
-        self.kernels.project(rec, frame, scene, &self.splats, &self.tile_offsets)?;
+        rec.fill_buffer(&self.depth_range, u32::MAX);
+        let counts = (&self.tile_offsets, &self.depth_range);
+        self.kernels.project(rec, frame, scene, &self.splats, counts)?;
         rec.end_pass();
         rec.begin_pass("bin");
         self.scan.record(rec, &self.tile_offsets, scene.len() + 1)?;
@@ -229,23 +252,15 @@ impl Splatter {
         scene: &'a GaussianBuffers,
         frame: &FrameParams,
     ) -> Result<(), SplatError> {
-        let (tiles_x, tiles_y) = tile_grid(frame.width(), frame.height());
-        let tile_bits = u32::BITS - (tiles_x * tiles_y).saturating_sub(1).leading_zeros();
         self.record_count(rec, scene, frame)?;
         rec.begin_pass("bin");
         // Unfilled slots keep all-ones keys: they sort last and name no tile.
         rec.fill_buffer(&self.keys, u32::MAX);
-        self.kernels.emit_intersections(
-            rec,
-            frame,
-            &self.splats,
-            &self.tile_offsets,
-            &self.keys,
-            &self.ids,
-        )?;
+        let inputs = (&self.splats, &self.tile_offsets, &self.depth_range);
+        self.kernels.emit_intersections(rec, frame, inputs, &self.keys, &self.ids)?;
         rec.end_pass();
         rec.begin_pass("sort");
-        self.sort.record(rec, &self.keys, &self.ids, self.keys.len(), 32 + tile_bits)?;
+        self.sort.record(rec, &self.keys, &self.ids, self.keys.len(), 32)?;
         rec.end_pass();
         rec.begin_pass("bin");
         rec.fill_buffer(&self.tile_ranges, 0);
@@ -318,6 +333,9 @@ impl Splatter {
         grads: &'a GaussianBuffers,
         densify_stats: &'a GpuBuffer<[f32; 2]>,
     ) -> Result<(), SplatError> {
+        if !self.backward {
+            return Err(SplatError::RenderOnly);
+        }
         let (grad_rgba, grad_depth) = image_grads;
         let n = scene.len();
         let shapes = [
@@ -392,6 +410,19 @@ impl Splatter {
         Ok(states.iter().map(|&[_, walked]| walked as u64).sum())
     }
 
+    /// The last forward's intersections as (tile, Gaussian) in the order the rasterizer walks
+    /// them: by tile, then front to back (ties in the keys' depth field by Gaussian index).
+    pub fn read_intersections(&self) -> Result<Vec<[u32; 2]>, SplatError> {
+        let frame = self.frame()?;
+        let n = self.last_intersections.min(self.keys.len());
+        let (tiles_x, tiles_y) = frame.tiles();
+        // Mirrors intersection_key.glsl: the tile field holds 0..=tile_count.
+        let depth_bits = (tiles_x * tiles_y).leading_zeros();
+        let keys = self.keys.read_prefix(n)?;
+        let ids = self.ids.read_prefix(n)?;
+        Ok(keys.iter().zip(ids).map(|(&key, id)| [key >> depth_bits, id]).collect())
+    }
+
     /// The last forward's number of (tile, Gaussian) intersections.
     pub fn intersections(&self) -> Result<usize, SplatError> {
         self.frame()?;
@@ -409,7 +440,7 @@ impl From<GpuError> for SplatError {
 /// CPU variant's bucket path (one invocation per top-digit bucket) leaves lanes idle beside the
 /// busy tiles: on lavapipe it sorted 120 000 intersections in 8.4 ms against 6.6–7.7 by LSD,
 /// 728 000 in 44 ms against 38.
-fn intersection_sort(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<RadixSort<u64>> {
-    let tuning = RadixSort::<u64>::tuning_for(ctx, capacity).with_max_bucket_len(0);
+fn intersection_sort(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<RadixSort<u32>> {
+    let tuning = RadixSort::<u32>::tuning_for(ctx, capacity).with_max_bucket_len(0);
     RadixSort::with_tuning(ctx, capacity, tuning)
 }

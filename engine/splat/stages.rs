@@ -77,19 +77,24 @@ impl Kernels {
         })
     }
 
-    /// Splats and per-Gaussian tile counts.
+    /// Splats, per-Gaussian tile counts, and the visible splats' depth range narrowed into
+    /// `depth_range` (filled with all ones first; see intersection_key.glsl).
     pub(crate) fn project<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
         frame: &FrameParams,
         scene: &'a GaussianBuffers,
         splats: &'a GpuBuffer<Splat>,
-        tile_counts: &'a GpuBuffer<u32>,
+        (tile_counts, depth_range): (&'a GpuBuffer<u32>, &'a GpuBuffer<u32>),
     ) -> GpuResult<()> {
         let bindings: Vec<_> = scene
             .bindings(SCENE)
             .into_iter()
-            .chain([("splats", splats.binding()), ("tile_counts", tile_counts.binding())])
+            .chain([
+                ("splats", splats.binding()),
+                ("tile_counts", tile_counts.binding()),
+                ("depth_range", depth_range.binding()),
+            ])
             .collect();
         rec.dispatch_1d(&self.project, &bindings, frame, groups(frame.gaussians()))
     }
@@ -115,14 +120,18 @@ impl Kernels {
         rec.dispatch_1d(&self.project_backward, &bindings, frame, groups(frame.gaussians()))
     }
 
-    /// (key, Gaussian) pairs from the scanned tile counts.
+    /// (key, Gaussian) pairs from the scanned tile counts and the depth range of
+    /// [`Self::project`].
     pub(crate) fn emit_intersections<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
         frame: &FrameParams,
-        splats: &'a GpuBuffer<Splat>,
-        offsets: &'a GpuBuffer<u32>,
-        keys: &'a GpuBuffer<u64>,
+        (splats, offsets, depth_range): (
+            &'a GpuBuffer<Splat>,
+            &'a GpuBuffer<u32>,
+            &'a GpuBuffer<u32>,
+        ),
+        keys: &'a GpuBuffer<u32>,
         ids: &'a GpuBuffer<u32>,
     ) -> GpuResult<()> {
         let bindings = [
@@ -130,6 +139,7 @@ impl Kernels {
             ("tile_offsets", offsets.binding()),
             ("keys", keys.binding()),
             ("gaussian_ids", ids.binding()),
+            ("depth_range", depth_range.binding()),
         ];
         rec.dispatch_1d(&self.emit_intersections, &bindings, frame, groups(frame.gaussians()))
     }
@@ -140,7 +150,7 @@ impl Kernels {
         &'a self,
         rec: &mut Recorder<'a>,
         frame: &FrameParams,
-        keys: &'a GpuBuffer<u64>,
+        keys: &'a GpuBuffer<u32>,
         ranges: &'a GpuBuffer<[u32; 2]>,
     ) -> GpuResult<()> {
         let (tiles_x, tiles_y) = frame.tiles();

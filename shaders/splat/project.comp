@@ -1,6 +1,9 @@
 #version 460
 // Projection, forward: one invocation per Gaussian. Writes its Splat (culled ones get an empty
-// tile rectangle) and how many tiles it touches, for the scan that places its intersections.
+// tile rectangle) and how many tiles it touches, for the scan that places its intersections,
+// and narrows the depth range of the splats that touch a tile (the intersection keys' scale).
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_basic : require
 #include "gaussian.glsl"
 #include "footprint.glsl"
 #include "../common/grid.glsl"
@@ -9,6 +12,8 @@ layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 5) writeonly buffer Splats { Splat splats[]; };
 layout(std430, binding = 6) writeonly buffer TileCounts { uint tile_counts[]; };
+// The smallest depth bits and the complement of the largest; the host fills both with all ones.
+layout(std430, binding = 7) buffer DepthRange { uint depth_range[2]; };
 
 void main() {
     uint i = flat_workgroup_id() * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
@@ -30,4 +35,12 @@ void main() {
     }
     splats[i] = s;
     tile_counts[i] = touched;
+    // One atomic per subgroup: a million on one address would serialise on a GPU.
+    uint bits = touched > 0u ? floatBitsToUint(s.depth) : 0xFFFFFFFFu;
+    uint nearest = subgroupMin(bits);
+    uint farthest = subgroupMin(touched > 0u ? ~bits : 0xFFFFFFFFu);
+    if (subgroupElect() && nearest != 0xFFFFFFFFu) {
+        atomicMin(depth_range[0], nearest);
+        atomicMin(depth_range[1], farthest);
+    }
 }

@@ -280,7 +280,7 @@ impl SplatRenderer {
             sh_degree: 0,
             mask_mode: false,
         };
-        Ok(Self { splatter: Splatter::new(ctx)?, settings })
+        Ok(Self { splatter: Splatter::renderer(ctx)?, settings })
     }
 
     /// RGB in [0, 1].
