@@ -11,8 +11,9 @@ use std::time::{SystemTime, UNIX_EPOCH};
 pub struct Provenance {
     /// The command line, the program named `tagsplat` whatever path started it.
     pub command: String,
-    /// `git describe --always --dirty` of the source checkout the program was built from, read
-    /// when it runs ("unknown" outside a checkout or without git).
+    /// `git describe --always` of the source checkout the program was built from, `-dirty`
+    /// when a source file differs from it, read when it runs ("unknown" outside a checkout or
+    /// without git).
     pub commit: String,
     /// When the run ended, UTC, ISO 8601 to the second.
     pub date: String,
@@ -44,15 +45,23 @@ impl Provenance {
     }
 }
 
-/// `git describe --always --dirty` in the crate's source folder (None when git or the
-/// checkout is missing, as for a crate built from a registry).
+/// `git describe --always` in the crate's source folder, with `-dirty` when a file other than
+/// the measurements' own outputs (`benches/results/`, the README's table) differs from the
+/// commit, so a script recording several results in a row names the commit it measured. None
+/// when git or the checkout is missing, as for a crate built from a registry.
 fn source_commit() -> Option<String> {
-    let out = std::process::Command::new("git")
-        .args(["-C", env!("CARGO_MANIFEST_DIR"), "describe", "--always", "--dirty", "--abbrev=7"])
-        .output()
-        .ok()?;
-    let text = String::from_utf8(out.stdout).ok()?;
-    (out.status.success() && !text.trim().is_empty()).then(|| text.trim().to_owned())
+    let git = |args: &[&str]| {
+        let out = std::process::Command::new("git")
+            .args(["-C", env!("CARGO_MANIFEST_DIR")])
+            .args(args)
+            .output()
+            .ok()?;
+        out.status.success().then(|| String::from_utf8(out.stdout).ok()).flatten()
+    };
+    let commit = git(&["describe", "--always", "--abbrev=7"])?.trim().to_owned();
+    let changes = git(&["status", "--porcelain", "--", ".", ":!benches/results", ":!README.md"])?;
+    let dirty = if changes.trim().is_empty() { "" } else { "-dirty" };
+    (!commit.is_empty()).then(|| format!("{commit}{dirty}"))
 }
 
 /// The first `model name` of /proc/cpuinfo (None elsewhere or when unreadable).
