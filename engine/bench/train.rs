@@ -84,8 +84,7 @@ pub fn bench_train(
     let mut views = Vec::new();
     for (i, camera) in ring_cameras(c.views, c.width, c.height).into_iter().enumerate() {
         splatter.forward(&other, &camera, &settings)?;
-        let target = splatter.read_rgba()?;
-        views.push(ViewTarget { name: format!("ring{i}"), camera, target, weight: None });
+        views.push(ViewTarget { name: format!("ring{i}"), camera, target: splatter.read_rgba()? });
     }
     drop(splatter);
     let mut trainer = Trainer::new(ctx, &scene, &views)?;

@@ -47,8 +47,6 @@ pub struct Trainer {
     pair_loss: Option<ImageLoss>,
     cameras: Vec<Camera>,
     targets: Vec<GpuBuffer<[f32; 4]>>,
-    /// The views' image-loss weights ([`ViewTarget::weight`]).
-    weights: Vec<Option<GpuBuffer<f32>>>,
     grad_rgba: GpuBuffer<[f32; 4]>,
     /// Zero: no depth loss.
     grad_depth: GpuBuffer<f32>,
@@ -80,13 +78,6 @@ impl Trainer {
             targets: views
                 .iter()
                 .map(|v| GpuBuffer::from_slice(ctx, &format!("target {}", v.name), &v.target))
-                .collect::<Result<_, _>>()?,
-            weights: views
-                .iter()
-                .map(|v| {
-                    let name = format!("loss weight {}", v.name);
-                    v.weight.as_ref().map(|w| GpuBuffer::from_slice(ctx, &name, w)).transpose()
-                })
                 .collect::<Result<_, _>>()?,
             grad_rgba: GpuBuffer::new(ctx, "loss gradient", max_pixels)?,
             grad_depth: GpuBuffer::new(ctx, "depth gradient (unused)", max_pixels)?,
@@ -191,7 +182,7 @@ impl Trainer {
             width: camera.width,
             height: camera.height,
             image: &self.targets[view],
-            weight: self.weights[view].as_ref(),
+            weight: None,
         };
         let render = ScoredRender {
             image: splatter.rgba(),

@@ -211,11 +211,6 @@ pub struct PipelineWeights {
     /// (default 0.25; 0: the paper's absolute values). Below δ the penalty is quadratic, so a
     /// stretch the images leave open spreads evenly along the skin instead of anywhere.
     pub huber: f32,
-    /// Pixels either side of each training mask's outline that the image loss ignores (colour
-    /// and alpha, both renders; default 0: none). For a capture whose masks put the outline a
-    /// pixel in or out (`ViewTarget::with_outline_band`); the silhouette and coverage terms
-    /// still use the whole mask.
-    pub outline_band: f32,
 }
 
 /// The initial mesh when none is given (built from the masks).
@@ -322,7 +317,6 @@ impl Default for PipelineWeights {
             rotation: 2.0,
             lambda_w: 1.0,
             huber: 0.25,
-            outline_band: 0.0,
         }
     }
 }
@@ -409,7 +403,6 @@ impl TrainConfig {
             ("loss.rotation", l.rotation),
             ("loss.lambda_w", l.lambda_w),
             ("loss.huber", l.huber),
-            ("loss.outline_band", l.outline_band),
             ("temporal.tolerance", self.temporal.tolerance),
             ("temporal.silhouette", self.temporal.silhouette),
             ("temporal.coverage", self.temporal.coverage),

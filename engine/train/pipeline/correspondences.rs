@@ -276,7 +276,7 @@ mod tests {
                 }
             })
             .collect();
-        ViewTarget { name: "top".into(), camera, target, weight: None }
+        ViewTarget { name: "top".into(), camera, target }
     }
 
     /// An 11 × 11 plane over a hidden 3 × 3 one, its vertices, faces and the hidden range.

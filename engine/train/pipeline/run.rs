@@ -519,9 +519,7 @@ fn views(
     t: usize,
     config: &TrainConfig,
 ) -> Result<(Vec<ViewTarget>, Option<Vec<ViewTarget>>), TrainError> {
-    let band = config.loss.outline_band;
     let train = load_targets(dataset, t, &dataset.train, config.background, true)?;
-    let train = train.into_iter().map(|v| v.with_outline_band(band)).collect();
     let eval = if dataset.test.is_empty() {
         None
     } else {
