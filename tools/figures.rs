@@ -119,8 +119,10 @@ fn table_row(v: &Value, link: &str) -> Result<(usize, String)> {
     };
     let (order, figure, value) = match kind.as_str() {
         "bench sort" => (0, sort_figure(v)?, sort_value(v)?),
-        "bench splat" => (1, splat_figure(v)?, splat_value(v)?),
-        "bench render" => (2, render_figure(v)?, render_value(v)?),
+        "bench splat" => (1, splat_scene(v, "[splatting](docs/splatting.md)")?, splat_value(v)?),
+        "bench render" => {
+            (2, splat_scene(v, "[render only](docs/splatting.md)")?, render_value(v)?)
+        }
         "bench train" => (3, train_figure(v)?, train_value(v)?),
         "bench mesh" => (4, mesh_figure(v)?, mesh_value(v)?),
         "bench track" => (5, track_figure(v)?, track_value(v)?),
@@ -149,9 +151,10 @@ fn sort_value(v: &Value) -> Result<String> {
     ))
 }
 
-fn splat_figure(v: &Value) -> Result<String> {
+/// The splat bench's scene as a figure's words: `what`, Gaussians, SH degree, frame size.
+fn splat_scene(v: &Value, what: &str) -> Result<String> {
     Ok(format!(
-        "[splatting](docs/splatting.md), {} Gaussians, SH {}, {} × {}",
+        "{what}, {} Gaussians, SH {}, {} × {}",
         num(v, "config.gaussians")?,
         num(v, "config.sh_degree")?,
         num(v, "config.width")?,
@@ -165,16 +168,6 @@ fn splat_value(v: &Value) -> Result<String> {
         num(v, "fwd_bwd_s")? * 1e3,
         num(v, "fwd_bwd_per_s")?,
         num(v, "fwd_s")? * 1e3
-    ))
-}
-
-fn render_figure(v: &Value) -> Result<String> {
-    Ok(format!(
-        "[render only](docs/splatting.md), {} Gaussians, SH {}, {} × {}",
-        num(v, "config.gaussians")?,
-        num(v, "config.sh_degree")?,
-        num(v, "config.width")?,
-        num(v, "config.height")?
     ))
 }
 

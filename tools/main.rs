@@ -233,12 +233,7 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
                 rounds: rounds as usize,
             };
             let report = bench_mesh(&ctx, &config).context("bench mesh")?;
-            if json {
-                figures::print_result(&report, Some(ctx.info()))?;
-            } else {
-                print_mesh_report(&report);
-            }
-            Ok(())
+            show(&report, &ctx, json, print_mesh_report)
         }
         Command::Dataset(command) => dataset::run(command, &*gpu.create()?),
         Command::Synth(args) => synth::run(args),
@@ -251,11 +246,7 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             let ctx = gpu.create()?;
             let report = bench_sort(&ctx, n, bits, repetitions as usize, lsd_only)
                 .with_context(|| format!("bench sort --n {n} --bits {bits}"))?;
-            if json {
-                figures::print_result(&report, Some(ctx.info()))?;
-            } else {
-                print_sort_report(&report);
-            }
+            show(&report, &ctx, json, print_sort_report)?;
             if !report.verified {
                 bail!("bench sort --n {n} --bits {bits}: the GPU result is not sorted");
             }
@@ -267,32 +258,17 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             let report =
                 bench_train(&ctx, &TrainBenchConfig { scene, iterations: iterations as usize })
                     .context("bench train")?;
-            if json {
-                figures::print_result(&report, Some(ctx.info()))?;
-            } else {
-                print_train_report(&report);
-            }
-            Ok(())
+            show(&report, &ctx, json, print_train_report)
         }
         Command::Bench(Bench::Splat { scene, rounds, json }) => {
             let ctx = gpu.create()?;
             let report = bench_splat(&ctx, &scene.config(rounds)).context("bench splat")?;
-            if json {
-                figures::print_result(&report, Some(ctx.info()))?;
-            } else {
-                print_splat_report(&report);
-            }
-            Ok(())
+            show(&report, &ctx, json, print_splat_report)
         }
         Command::Bench(Bench::Render { scene, rounds, json }) => {
             let ctx = gpu.create()?;
             let report = bench_render(&ctx, &scene.config(rounds)).context("bench render")?;
-            if json {
-                figures::print_result(&report, Some(ctx.info()))?;
-            } else {
-                print_render_report(&report);
-            }
-            Ok(())
+            show(&report, &ctx, json, print_render_report)
         }
     }
 }
@@ -459,6 +435,21 @@ fn print_sort_report(r: &SortBenchReport) {
         r.cpu_sort_keys_per_s * 1e-6
     );
     println!("result verified   {}", if r.verified { "sorted" } else { "NOT SORTED" });
+}
+
+/// A bench's report as one JSON object with its provenance (`--json`), else as a table.
+fn show<T: serde::Serialize>(
+    report: &T,
+    ctx: &GpuContext,
+    json: bool,
+    table: fn(&T),
+) -> Result<()> {
+    if json {
+        figures::print_result(report, Some(ctx.info()))?;
+    } else {
+        table(report);
+    }
+    Ok(())
 }
 
 /// One line per GPU pass: its median ms per `unit` (view, iteration).
