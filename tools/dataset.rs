@@ -118,7 +118,7 @@ pub fn run(command: DatasetCommand, ctx: &GpuContext) -> Result<()> {
         println!("          refused there: {why}");
     }
     let said = if background > BACKGROUND_SHARE {
-        "a background behind the subject: the masks say what is subject"
+        "a background behind the subject: the masks say what is subject; train refines them along the outline against each camera's plate"
     } else {
         "none: composited over black"
     };

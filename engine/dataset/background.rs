@@ -18,7 +18,7 @@ pub fn background_share(dataset: &Dataset, frame: usize) -> Result<f64, DatasetE
     let (mut outside, mut lit) = (0u64, 0u64);
     let views = dataset.frames.get(frame).map_or(0, |f| f.views.len());
     for view in 0..views {
-        let (image, mask) = (dataset.image(frame, view)?, dataset.mask(frame, view)?);
+        let (image, mask) = (dataset.image(frame, view)?, dataset.given_mask(frame, view)?);
         let counts = MaskCounts::of(&image.data, image.channels as usize, &mask);
         (outside, lit) = (outside + counts.outside, lit + counts.lit_outside);
     }

@@ -5,11 +5,13 @@
 //! (16 bytes a pixel) and mask distance field (4), the per-pixel working buffers of the
 //! renders, losses and rasterizers (several copies, sized by the largest view), and a fixed
 //! part for the Gaussians, the mesh and the sort. On the host: the views' targets again, the
-//! decoded-image cache, the images being decoded, the first mesh's hull grid, and, on a device
-//! that is the CPU, the device's memory too. The per-pixel and fixed parts were measured
+//! decoded-image cache, the images being decoded, the first mesh's hull grid, the background
+//! plates of a capture whose masks are refined, and, on a device that is the CPU, the device's
+//! memory too. The per-pixel and fixed parts were measured
 //! (docs/log/2026-11-28-capture-memory.md) and rounded up, so the figure is a bound, not a
 //! guess: `tests/pipeline.rs` checks it against the buffers a run holds.
 
+use crate::dataset::matte::PLATE_FRAMES;
 use crate::dataset::{scaled_size, Dataset, DEFAULT_CACHE_BYTES};
 use crate::gpu::DeviceLimits;
 use crate::init::InitOptions;
@@ -53,6 +55,13 @@ pub struct CaptureViews<'a> {
     pub device_is_host: bool,
 }
 
+/// What refining the masks from the images holds, counted whether or not a run refines them:
+/// each training camera's plate (3 bytes a pixel) and the decoded frames one plate is built
+/// from (`dataset::matte`).
+fn plate_bytes(train_pixels: u64, largest_view_pixels: u64) -> u64 {
+    3 * train_pixels + PLATE_FRAMES as u64 * DECODED_BYTES_PER_PIXEL * largest_view_pixels
+}
+
 impl CaptureMemory {
     /// The estimate for a run over `dataset` with its files scaled by `scale` (1: the files'
     /// size), whatever scale it was loaded at.
@@ -86,6 +95,7 @@ impl CaptureMemory {
         let host_bytes = FIXED_HOST_BYTES
             + InitOptions::default().max_grid_bytes as u64
             + 16 * (train + held_out)
+            + plate_bytes(train, largest)
             + cache
             + threads * DECODED_BYTES_PER_PIXEL * views.largest_file_pixels
             + if views.device_is_host { device_bytes } else { 0 };

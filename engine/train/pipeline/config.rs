@@ -34,6 +34,10 @@ pub struct TrainConfig {
     /// tracking RMSE from 0.090 to 0.059 and raised the last frame's PSNR from 23 to 30 dB;
     /// ×25 gained nothing more).
     pub position_lr_scale: f32,
+    /// Whether the training views' masks are refined along their outline from the images
+    /// against each camera's background plate (`dataset::matte`): `auto` (the default) where
+    /// the images carry a background, `always`, or `never`.
+    pub refine_masks: MaskRefinement,
     /// The initial mesh built from the masks when none is given.
     pub init: InitMeshConfig,
     /// How often losses are read back.
@@ -158,6 +162,19 @@ impl GraphConfig {
     }
 }
 
+/// When the masks are refined from the images ([`TrainConfig::refine_masks`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MaskRefinement {
+    /// Where the images carry a background (`dataset::background`): over black, the plate
+    /// says nothing the masks do not.
+    Auto,
+    /// Always.
+    Always,
+    /// Never: the masks as given.
+    Never,
+}
+
 /// The pose a later frame's graph or temporal regularizers compare against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -246,6 +263,7 @@ impl Default for TrainConfig {
             loss: PipelineWeights::default(),
             learning_rates: LearningRateConfig::default(),
             position_lr_scale: 10.0,
+            refine_masks: MaskRefinement::Auto,
             init: InitMeshConfig::default(),
             report: PipelineReportConfig::default(),
         }

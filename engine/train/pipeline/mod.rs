@@ -13,7 +13,7 @@ mod run;
 mod run_log;
 
 pub use crate::train::plateau::StopReason;
-pub use config::{ReferencePose, TrainConfig};
+pub use config::{MaskRefinement, ReferencePose, TrainConfig};
 pub use frame::{optimize_frame, FrameReport, FrameTask};
 pub use graph_stage::{GraphReport, LevelReport};
 pub use html_report::write_html_report;

@@ -2,12 +2,13 @@
 //! frame, then every later frame from its predecessor; each frame written as it finishes, so
 //! running the same job again resumes after the last complete frame.
 
-use super::config::TrainConfig;
+use super::config::{MaskRefinement, TrainConfig};
 use super::correspondences::{SeenPose, VertexTracks};
 use super::frame::{optimize_frame, FrameReport, FrameTask, MatchSources};
 use super::html_report::write_html_report;
 use super::run_log::RunLog;
 use crate::camera::mean_up;
+use crate::dataset::background::{background_share, BACKGROUND_SHARE};
 use crate::dataset::{Dataset, LoadOptions, PixelCenters};
 use crate::gpu::GpuContext;
 use crate::init::{init_mesh, InitOptions};
@@ -161,6 +162,29 @@ pub fn run_train(
     }
 }
 
+/// Refines the training masks from the images when `when` says so (`auto`: the images of
+/// `frame` carry a background) and logs it.
+fn refine_masks(
+    dataset: &mut Dataset,
+    when: MaskRefinement,
+    frame: usize,
+    log: &RunLog,
+) -> Result<(), TrainError> {
+    let refine = match when {
+        MaskRefinement::Auto => background_share(dataset, frame)? > BACKGROUND_SHARE,
+        MaskRefinement::Always => true,
+        MaskRefinement::Never => false,
+    };
+    if refine {
+        let refined = dataset.refine_masks()?;
+        let cameras = dataset.train.len();
+        log.line(&format!(
+            "masks refined along their outline against a background plate: {refined} of {cameras} training cameras"
+        ))?;
+    }
+    Ok(())
+}
+
 fn run_logged(
     ctx: &Arc<GpuContext>,
     job: &TrainJob,
@@ -169,7 +193,7 @@ fn run_logged(
 ) -> Result<TrainReport, TrainError> {
     job.config.check()?;
     let started = Instant::now();
-    let dataset = Dataset::load_with(&job.data, &job.load)?;
+    let mut dataset = Dataset::load_with(&job.data, &job.load)?;
     let (host_shared, scale) = (ctx.info().shares_host_memory(), job.load.scale.unwrap_or(1.0));
     let memory = CaptureMemory::of_dataset(&dataset, host_shared, scale);
     let at = |s| CaptureMemory::of_dataset(&dataset, host_shared, s);
@@ -186,6 +210,7 @@ fn run_logged(
         let (data, available) = (job.data.clone(), dataset.frames.len());
         return Err(TrainError::FrameRange { frames, data, available });
     }
+    refine_masks(&mut dataset, job.config.refine_masks, frames.start, log)?;
     let out = SequenceOutput::create(&job.out)?;
     // A range that starts later continues frames already on disk.
     if let Some(missing) = [0, frames.start.saturating_sub(1)]

@@ -1,0 +1,270 @@
+//! Masks refined along their outline from the images, against each camera's background plate.
+//!
+//! A studio's masks are thresholded from a segmentation, and their outline can sit a pixel in
+//! or out. When it does so in every camera at once the surface shrinks or grows with it: on
+//! fox_walk_capture the masks were the whole gap to the clean benchmark
+//! (docs/log/2026-11-28-capture-flaws-oracles.md). A static camera sees the same background
+//! in every frame, and that says where the subject ends:
+//! 1. [`Plate::from_frames`]: a pixel's background colour is the median, over the frames, of
+//!    its colour where it lies more than [`PLATE_MARGIN`] pixels outside the frame's mask;
+//!    a pixel never seen so takes the nearest seen pixel's colour;
+//! 2. [`refine`]: a pixel within [`BAND`] pixels of the outline is read as a blend of the
+//!    plate and the subject's colour just inside the mask; its share of the subject is its
+//!    new mask value, wherever the two colours differ enough to tell them apart.
+//!
+//! The refined mask is soft along the outline (a coverage, as a render's alpha is); pixels
+//! away from the outline keep their values.
+
+use crate::io::image::Image;
+use std::collections::VecDeque;
+
+/// A pixel counts as background in a frame when it lies more than this many pixels (steps
+/// to a 4-neighbour) outside the frame's mask: clear of an outline a pixel or two off.
+pub const PLATE_MARGIN: u32 = 2;
+/// The most frames a plate takes its median over (evenly spread over the capture).
+pub const PLATE_FRAMES: usize = 15;
+/// The fewest frames a plate is taken from: a camera seen in fewer (a moving camera's
+/// sequence) never shows the background behind the subject's outline.
+pub const MIN_PLATE_FRAMES: usize = 3;
+/// Pixels within this many steps of the outline, either side, are decided again.
+pub const BAND: u32 = 1;
+/// The subject's colour near a pixel: the mean of the mask's pixels more than `BAND + 1` steps
+/// inside within this radius (7 × 7), which reaches them from every pixel of the band.
+const WINDOW: i64 = 2 * BAND as i64 + 1;
+/// The least distance (RGB, values in [0, 1]) between the plate's and the subject's colour for
+/// a pixel's blend to say anything: below it, noise and JPEG decide.
+const MIN_CONTRAST: f32 = 0.1;
+
+/// One camera's background as seen behind the subject, 8 bits a channel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plate {
+    width: u32,
+    height: u32,
+    colour: Vec<[u8; 3]>,
+}
+
+impl Plate {
+    /// The plate of one camera from its `views` (image and mask of a frame each, all of one
+    /// size, masks one value per pixel with > 0.5 subject). None when no pixel is seen clear
+    /// of the masks (or there is no view). Deterministic: a median and a fill in pixel order.
+    pub fn from_frames(views: &[(&Image, &[f32])]) -> Option<Plate> {
+        let (first, _) = views.first()?;
+        let (width, height) = (first.width, first.height);
+        let (w, h) = (width as usize, height as usize);
+        let outside: Vec<Vec<bool>> = views
+            .iter()
+            .take(PLATE_FRAMES)
+            .map(|(_, mask)| {
+                dilate(&subject(mask), w, h, PLATE_MARGIN).iter().map(|&n| !n).collect()
+            })
+            .collect();
+        let mut colour = vec![[0u8; 3]; w * h];
+        let mut seen = vec![false; w * h];
+        let mut values = [[0u8; PLATE_FRAMES]; 3];
+        for (p, (colour, seen)) in colour.iter_mut().zip(&mut seen).enumerate() {
+            let mut n = 0;
+            for ((image, _), _) in views.iter().zip(&outside).filter(|(_, clear)| clear[p]) {
+                for (channel, value) in values.iter_mut().zip(rgb(image, p)) {
+                    channel[n] = to_u8(value);
+                }
+                n += 1;
+            }
+            *seen = n > 0;
+            for (out, channel) in colour.iter_mut().zip(&mut values).filter(|_| n > 0) {
+                // The lower median: one value of the set, the same whatever the order.
+                *out = *channel[..n].select_nth_unstable((n - 1) / 2).1;
+            }
+        }
+        fill_from_nearest(&mut colour, &seen, w, h)?;
+        Some(Plate { width, height, colour })
+    }
+
+    /// The plate's colour at pixel `p` (row-major), in [0, 1].
+    fn at(&self, p: usize) -> [f32; 3] {
+        self.colour[p].map(|v| v as f32 / 255.0)
+    }
+}
+
+/// `mask` (one value per pixel of `image`, > 0.5 subject) with the pixels within [`BAND`] of
+/// its outline replaced by their share of subject colour against `plate`, in [0, 1]. A pixel
+/// keeps its value where no subject pixel lies in its window or the two colours are closer
+/// than [`MIN_CONTRAST`]. The mask comes back unchanged when its size or the plate's differs
+/// from the image's.
+pub fn refine(image: &Image, mask: &[f32], plate: &Plate) -> Vec<f32> {
+    let (w, h) = (image.width as usize, image.height as usize);
+    let mut out = mask.to_vec();
+    if mask.len() != w * h || (plate.width, plate.height) != (image.width, image.height) {
+        return out;
+    }
+    let fg = subject(mask);
+    let near = dilate(&fg, w, h, BAND);
+    let inner: Vec<bool> = dilate(&complement(&fg), w, h, BAND + 1).iter().map(|&n| !n).collect();
+    for p in (0..w * h).filter(|&p| near[p] && !inner[p]) {
+        let Some(subject) = mean_around(image, &inner, p, w, h) else { continue };
+        let (pixel, back) = (rgb(image, p), plate.at(p));
+        let d: [f32; 3] = std::array::from_fn(|c| subject[c] - back[c]);
+        let contrast = d.iter().map(|v| v * v).sum::<f32>();
+        if contrast > MIN_CONTRAST * MIN_CONTRAST {
+            let along: f32 = (0..3).map(|c| (pixel[c] - back[c]) * d[c]).sum();
+            out[p] = (along / contrast).clamp(0.0, 1.0);
+        }
+    }
+    out
+}
+
+/// The mean colour of the `inner` pixels within [`WINDOW`] of pixel `p`; None if there is none.
+fn mean_around(image: &Image, inner: &[bool], p: usize, w: usize, h: usize) -> Option<[f32; 3]> {
+    let (x, y) = ((p % w) as i64, (p / w) as i64);
+    let (mut sum, mut n) = ([0.0f32; 3], 0u32);
+    for v in (y - WINDOW).max(0)..=(y + WINDOW).min(h as i64 - 1) {
+        for u in (x - WINDOW).max(0)..=(x + WINDOW).min(w as i64 - 1) {
+            let q = v as usize * w + u as usize;
+            if inner[q] {
+                let colour = rgb(image, q);
+                for (s, c) in sum.iter_mut().zip(colour) {
+                    *s += c;
+                }
+                n += 1;
+            }
+        }
+    }
+    (n > 0).then(|| sum.map(|s| s / n as f32))
+}
+
+/// Pixel `p`'s colour (a grey image's one value three times).
+fn rgb(image: &Image, p: usize) -> [f32; 3] {
+    let channels = image.channels.max(1) as usize;
+    std::array::from_fn(|c| image.data[p * channels + c.min(channels - 1)])
+}
+
+fn subject(mask: &[f32]) -> Vec<bool> {
+    mask.iter().map(|&m| m > 0.5).collect()
+}
+
+fn complement(set: &[bool]) -> Vec<bool> {
+    set.iter().map(|&s| !s).collect()
+}
+
+fn to_u8(value: f32) -> u8 {
+    (value.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// The pixels within `steps` 4-neighbour steps of a pixel of `set` (`w × h`, row-major).
+fn dilate(set: &[bool], w: usize, h: usize, steps: u32) -> Vec<bool> {
+    let mut grown = set.to_vec();
+    for _ in 0..steps {
+        let before = grown.clone();
+        for p in 0..w * h {
+            let (x, y) = (p % w, p / w);
+            grown[p] = before[p]
+                || (x > 0 && before[p - 1])
+                || (x + 1 < w && before[p + 1])
+                || (y > 0 && before[p - w])
+                || (y + 1 < h && before[p + w]);
+        }
+    }
+    grown
+}
+
+/// Gives every pixel not `seen` the colour of the nearest seen one (4-neighbour steps, ties to
+/// the one reached first from the seen pixels in index order). None when none is seen.
+fn fill_from_nearest(colour: &mut [[u8; 3]], seen: &[bool], w: usize, h: usize) -> Option<()> {
+    let mut queue: VecDeque<usize> = (0..w * h).filter(|&p| seen[p]).collect();
+    if queue.is_empty() {
+        return None;
+    }
+    let mut reached = seen.to_vec();
+    while let Some(p) = queue.pop_front() {
+        let (x, y) = (p % w, p / w);
+        let neighbours = [
+            (x > 0).then(|| p - 1),
+            (x + 1 < w).then(|| p + 1),
+            (y > 0).then(|| p - w),
+            (y + 1 < h).then(|| p + w),
+        ];
+        for q in neighbours.into_iter().flatten() {
+            if !reached[q] {
+                reached[q] = true;
+                colour[q] = colour[p];
+                queue.push_back(q);
+            }
+        }
+    }
+    Some(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `w × w` RGB image: `back` everywhere, `front` on the pixels whose centre lies left of
+    /// `edge` (x + 0.5 < edge), and the pixel the edge crosses blended by its share.
+    fn edge_image(w: u32, edge: f32, back: [f32; 3], front: [f32; 3]) -> (Image, Vec<f32>) {
+        let cover = |x: u32| (edge - x as f32).clamp(0.0, 1.0);
+        let mut data = Vec::new();
+        let mut coverage = Vec::new();
+        for _ in 0..w {
+            for x in 0..w {
+                let a = cover(x);
+                data.extend((0..3).map(|c| front[c] * a + back[c] * (1.0 - a)));
+                coverage.push(a);
+            }
+        }
+        (Image { width: w, height: w, channels: 3, data }, coverage)
+    }
+
+    #[test]
+    fn a_mask_a_pixel_off_comes_back_to_the_images_outline() {
+        let (back, front) = ([0.2, 0.5, 0.3], [0.9, 0.6, 0.1]);
+        // The plate is seen in frames whose subject stops well left of the pixels it covers.
+        let frames: Vec<(Image, Vec<f32>)> =
+            [4.0, 6.0, 12.6].iter().map(|&e| edge_image(24, e, back, front)).collect();
+        let views: Vec<(&Image, &[f32])> = frames.iter().map(|(i, m)| (i, m.as_slice())).collect();
+        let plate = Plate::from_frames(&views).unwrap();
+        for p in [30, 24 * 24 - 1] {
+            assert_eq!(plate.at(p).map(|v| (v * 255.0).round()), back.map(|v| (v * 255.0).round()));
+        }
+        // Frame 2's outline covers 0.6 of column 12; its thresholded mask eroded and dilated by one.
+        let (image, truth) = &frames[2];
+        for wrong_edge in [12.0, 14.0] {
+            let mask: Vec<f32> =
+                (0..24 * 24).map(|p| ((p % 24) as f32 + 0.5 < wrong_edge) as u8 as f32).collect();
+            let refined = refine(image, &mask, &plate);
+            let error = |m: &[f32]| m.iter().zip(truth).map(|(a, b)| (a - b).abs()).sum::<f32>();
+            assert!(
+                error(&refined) < 0.05 * error(&mask),
+                "{} of {}",
+                error(&refined),
+                error(&mask)
+            );
+        }
+    }
+
+    #[test]
+    fn pixels_the_colours_cannot_tell_apart_keep_the_mask() {
+        let (back, front) = ([0.4, 0.4, 0.4], [0.43, 0.42, 0.41]);
+        let frames: Vec<(Image, Vec<f32>)> =
+            [4.0, 12.0].iter().map(|&e| edge_image(16, e, back, front)).collect();
+        let views: Vec<(&Image, &[f32])> = frames.iter().map(|(i, m)| (i, m.as_slice())).collect();
+        let plate = Plate::from_frames(&views).unwrap();
+        let mask: Vec<f32> = (0..16 * 16).map(|p| ((p % 16) < 13) as u8 as f32).collect();
+        assert_eq!(refine(&frames[1].0, &mask, &plate), mask);
+    }
+
+    #[test]
+    fn no_plate_without_a_pixel_clear_of_the_masks() {
+        let (image, _) = edge_image(8, 8.0, [0.0; 3], [1.0; 3]);
+        let all = vec![1.0; 64];
+        assert_eq!(Plate::from_frames(&[(&image, all.as_slice())]), None);
+        assert_eq!(Plate::from_frames(&[]), None);
+    }
+
+    #[test]
+    fn unseen_pixels_take_the_nearest_seen_colour() {
+        let mut colour =
+            vec![[0, 0, 0], [10, 10, 10], [0, 0, 0], [0, 0, 0], [0, 0, 0], [90, 90, 90]];
+        let seen = [false, true, false, false, false, true];
+        fill_from_nearest(&mut colour, &seen, 3, 2).unwrap();
+        assert_eq!(colour.iter().map(|c| c[0]).collect::<Vec<_>>(), [10, 10, 10, 10, 10, 90]);
+    }
+}
