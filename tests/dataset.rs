@@ -502,7 +502,10 @@ fn masks_a_ring_off_are_refined_against_the_background_plate() {
         }
     }
     let mut d = Dataset::load(&dir).unwrap();
-    assert_eq!(d.refine_masks().unwrap(), views - 1, "every training camera has a plate");
+    let mut reported = Vec::new();
+    let refined = d.refine_masks(&mut |done, cameras| reported.push((done, cameras))).unwrap();
+    assert_eq!(refined, views - 1, "every training camera has a plate");
+    assert_eq!(reported, (0..views).map(|i| (i, views - 1)).collect::<Vec<_>>());
     let error =
         |m: &[f32], truth: &[f32]| m.iter().zip(truth).map(|(a, b)| (a - b).abs()).sum::<f32>();
     let (mut given, mut refined) = (0.0, 0.0);

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use tagsplat::bench::{bench_sequence, SequenceBenchReport};
 use tagsplat::gpu::GpuContext;
 use tagsplat::score::SequenceEvalOptions;
-use tagsplat::train::pipeline::{write_html_report, TrainConfig, TrainJob, TrainProgress};
+use tagsplat::train::pipeline::{write_html_report, Stage, TrainConfig, TrainJob, TrainProgress};
 
 #[derive(clap::Args)]
 pub struct BenchSequenceArgs {
@@ -44,7 +44,7 @@ pub fn run(context: impl FnOnce() -> Result<Arc<GpuContext>>, a: BenchSequenceAr
     // One line per frame on stderr, so stdout stays one JSON object with --json.
     let mut current = None;
     let mut progress = |p: TrainProgress| {
-        if current.replace(p.frame) != Some(p.frame) {
+        if p.stage == Stage::Frame && current.replace(p.frame) != Some(p.frame) {
             eprintln!(
                 "training frame {} of {} ({} iterations)",
                 p.frame, p.frames_end, p.iterations

@@ -10,7 +10,9 @@ use std::sync::Arc;
 use std::time::Instant;
 use tagsplat::dataset::LoadOptions;
 use tagsplat::gpu::GpuContext;
-use tagsplat::train::pipeline::{run_train, TrainConfig, TrainJob, TrainProgress, TrainReport};
+use tagsplat::train::pipeline::{
+    run_train, Stage, TrainConfig, TrainJob, TrainProgress, TrainReport,
+};
 
 #[derive(clap::Args)]
 pub struct TrainArgs {
@@ -103,19 +105,24 @@ pub fn run_with_progress(ctx: &Arc<GpuContext>, job: &TrainJob) -> Result<TrainR
     };
     let overall =
         bars.add(ProgressBar::new(0).with_style(style("frames {bar:30} {pos}/{len}  {elapsed}")));
-    let frame_bar = bars.add(
-        ProgressBar::new(0).with_style(style("frame {msg:>4} {bar:30} {pos}/{len} it  {per_sec}")),
-    );
+    let frame_bar = bars
+        .add(ProgressBar::new(0).with_style(style("{msg:>10} {bar:30} {pos}/{len}  {per_sec}")));
     let (plain, started, mut current) = (!std::io::stderr().is_terminal(), Instant::now(), None);
     let mut progress = |p: TrainProgress| {
-        if plain && current != Some(p.frame) {
-            current = Some(p.frame);
-            let (frame, end, s) = (p.frame, p.frames_end, started.elapsed().as_secs_f64());
+        let (frame, end, s) = (p.frame, p.frames_end, started.elapsed().as_secs_f64());
+        if plain && p.stage == Stage::Plates && p.iteration == 0 {
+            eprintln!("background plates of {} cameras started at {s:.1} s", p.iterations);
+        }
+        if plain && p.stage == Stage::Frame && current != Some(frame) {
+            current = Some(frame);
             eprintln!("frame {frame} (of {end}) started at {s:.1} s");
         }
         overall.set_length(p.frames_end as u64);
         overall.set_position(p.frame as u64);
-        frame_bar.set_message(p.frame.to_string());
+        frame_bar.set_message(match p.stage {
+            Stage::Plates => "plates".to_string(),
+            Stage::Frame => format!("frame {frame}"),
+        });
         frame_bar.set_length(p.iterations as u64);
         frame_bar.set_position(p.iteration as u64);
     };

@@ -406,12 +406,17 @@ impl Dataset {
     /// evenly over the capture. A camera seen in fewer than [`MIN_PLATE_FRAMES`] frames (a
     /// moving camera), or whose masks leave no pixel clear, keeps its masks. Held-out cameras
     /// keep theirs, so held-out scores grade against the capture as delivered. Holds one
-    /// camera's frames decoded at a time. Returns the number of cameras refined.
-    pub fn refine_masks(&mut self) -> Result<usize, DatasetError> {
+    /// camera's frames decoded at a time; calls `done(cameras done, cameras)` after each.
+    /// Returns the number of cameras refined.
+    pub fn refine_masks(
+        &mut self,
+        done: &mut dyn FnMut(usize, usize),
+    ) -> Result<usize, DatasetError> {
         let count = self.frames.len().min(PLATE_FRAMES);
         let picked: Vec<usize> = (0..count).map(|i| i * self.frames.len() / count).collect();
         let mut plates = vec![None; self.cameras.len()];
-        for &camera in &self.train {
+        for (i, &camera) in self.train.iter().enumerate() {
+            done(i, self.train.len());
             let views: Vec<(usize, usize)> = picked
                 .iter()
                 .filter_map(|&t| {
@@ -429,6 +434,7 @@ impl Dataset {
                 decoded.iter().map(|(i, m)| (i.as_ref(), m.as_slice())).collect();
             plates[camera] = Plate::from_frames(&pairs);
         }
+        done(self.train.len(), self.train.len());
         self.plates = plates;
         Ok(self.plates.iter().flatten().count())
     }

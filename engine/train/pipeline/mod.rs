@@ -17,4 +17,4 @@ pub use config::{MaskRefinement, ReferencePose, TrainConfig};
 pub use frame::{optimize_frame, FrameReport, FrameTask};
 pub use graph_stage::{GraphReport, LevelReport};
 pub use html_report::write_html_report;
-pub use run::{run_train, TrainJob, TrainProgress, TrainReport};
+pub use run::{run_train, Stage, TrainJob, TrainProgress, TrainReport};

@@ -70,14 +70,27 @@ impl TrainJob {
 /// Where the run is, for a progress display.
 #[derive(Clone, Copy, Debug)]
 pub struct TrainProgress {
-    /// The frame being optimised.
+    /// What `iteration` and `iterations` count.
+    pub stage: Stage,
+    /// The frame being optimised (the run's first frame while the plates are built).
     pub frame: usize,
     /// One past the last frame of the run.
     pub frames_end: usize,
-    /// The frame's last finished iteration, 1-based (the graph stage reports none).
+    /// The frame's last finished iteration, 1-based (the graph stage reports none), or the
+    /// cameras whose plate is built.
     pub iteration: u32,
-    /// The frame's iteration cap (a later frame may stop before it).
+    /// The frame's iteration cap (a later frame may stop before it), or the training cameras.
     pub iterations: u32,
+}
+
+/// The stage a [`TrainProgress`] counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// The training cameras' background plates, before frame 0, where the masks are refined
+    /// from the images (each camera's frames are decoded: minutes on a large capture).
+    Plates,
+    /// A frame's optimisation.
+    Frame,
 }
 
 /// What a run reports (`OUT/report.json`, rewritten after every frame).
@@ -163,12 +176,13 @@ pub fn run_train(
 }
 
 /// Refines the training masks from the images when `when` says so (`auto`: the images of
-/// `frame` carry a background) and logs it.
+/// `frame` carry a background) and logs it; `done(cameras done, cameras)` after each plate.
 fn refine_masks(
     dataset: &mut Dataset,
     when: MaskRefinement,
     frame: usize,
     log: &RunLog,
+    done: &mut dyn FnMut(usize, usize),
 ) -> Result<(), TrainError> {
     let refine = match when {
         MaskRefinement::Auto => background_share(dataset, frame)? > BACKGROUND_SHARE,
@@ -176,7 +190,7 @@ fn refine_masks(
         MaskRefinement::Never => false,
     };
     if refine {
-        let refined = dataset.refine_masks()?;
+        let refined = dataset.refine_masks(done)?;
         let cameras = dataset.train.len();
         log.line(&format!(
             "masks refined along their outline against a background plate: {refined} of {cameras} training cameras"
@@ -210,7 +224,12 @@ fn run_logged(
         let (data, available) = (job.data.clone(), dataset.frames.len());
         return Err(TrainError::FrameRange { frames, data, available });
     }
-    refine_masks(&mut dataset, job.config.refine_masks, frames.start, log)?;
+    let mut plates = |done: usize, cameras: usize| {
+        let (iteration, iterations) = (done as u32, cameras as u32);
+        let (stage, frame, frames_end) = (Stage::Plates, frames.start, frames.end);
+        progress(TrainProgress { stage, frame, frames_end, iteration, iterations })
+    };
+    refine_masks(&mut dataset, job.config.refine_masks, frames.start, log, &mut plates)?;
     let out = SequenceOutput::create(&job.out)?;
     // A range that starts later continues frames already on disk.
     if let Some(missing) = [0, frames.start.saturating_sub(1)]
@@ -306,6 +325,7 @@ fn run_logged(
             let (scene, report) =
                 optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
                     progress(TrainProgress {
+                        stage: Stage::Frame,
                         frame: t,
                         frames_end: frames.end,
                         iteration,
@@ -463,7 +483,14 @@ fn canonical_start(
     let (scene, frame_report) =
         optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
             first_iteration.get_or_insert_with(|| started.elapsed().as_secs_f64());
-            progress(TrainProgress { frame: 0, frames_end: frames.end, iteration, iterations })
+            let stage = Stage::Frame;
+            progress(TrainProgress {
+                stage,
+                frame: 0,
+                frames_end: frames.end,
+                iteration,
+                iterations,
+            })
         })?;
     if let Some(s) = report.startup.first_iteration_s {
         log.line(&format!("frame 0: first iteration done {s:.1} s after the start"))?;
