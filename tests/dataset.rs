@@ -522,7 +522,7 @@ fn masks_a_ring_off_are_refined_against_the_background_plate() {
         }
     }
     // Not all of it: an eroded mask leaves the outline's partly covered pixels two rings out,
-    // past the band of one ring that is decided again (dataset::matte::BAND).
+    // past the one ring outside the mask that is decided again (dataset::matte::BAND).
     assert!(refined < 0.75 * given, "refined {refined} against given {given}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -8,9 +8,10 @@
 //! 1. [`Plate::from_frames`]: a pixel's background colour is the median, over the frames, of
 //!    its colour where it lies more than [`PLATE_MARGIN`] pixels outside the frame's mask;
 //!    a pixel never seen so takes the nearest seen pixel's colour;
-//! 2. [`refine`]: a pixel within [`BAND`] pixels of the outline is read as a blend of the
-//!    plate and the subject's colour just inside the mask; its share of the subject is its
-//!    new mask value, wherever the two colours differ enough to tell them apart.
+//! 2. [`refine`]: a pixel within [`BAND`] steps of the outline, either side, is read as a
+//!    blend of the plate and the subject's colour further inside the mask; its share of the
+//!    subject is its new mask value, wherever the two colours differ enough to tell them
+//!    apart.
 //!
 //! The refined mask is soft along the outline (a coverage, as a render's alpha is); pixels
 //! away from the outline keep their values.
@@ -26,7 +27,10 @@ pub const PLATE_FRAMES: usize = 15;
 /// The fewest frames a plate is taken from: a camera seen in fewer (a moving camera's
 /// sequence) never shows the background behind the subject's outline.
 pub const MIN_PLATE_FRAMES: usize = 3;
-/// Pixels within this many steps of the outline, either side, are decided again.
+/// The pixels within this many steps of a mask's outline, either side, are decided again: the
+/// ring just inside and the ring just outside. A band as deep on both sides keeps the noise
+/// of the pixels it decides from pulling the outline in or out (two rings inside and one out
+/// leaned inward: docs/log/2026-11-29-mask-refinement.md).
 pub const BAND: u32 = 1;
 /// The subject's colour near a pixel: the mean of the mask's pixels more than `BAND + 1` steps
 /// inside within this radius (7 × 7), which reaches them from every pixel of the band.
@@ -85,8 +89,8 @@ impl Plate {
     }
 }
 
-/// `mask` (one value per pixel of `image`, > 0.5 subject) with the pixels within [`BAND`] of
-/// its outline replaced by their share of subject colour against `plate`, in [0, 1]. A pixel
+/// `mask` (one value per pixel of `image`, > 0.5 subject) with the pixels near its outline
+/// ([`BAND`]) replaced by their share of subject colour against `plate`, in [0, 1]. A pixel
 /// keeps its value where no subject pixel lies in its window or the two colours are closer
 /// than [`MIN_CONTRAST`]. The mask comes back unchanged when its size or the plate's differs
 /// from the image's.
@@ -96,10 +100,10 @@ pub fn refine(image: &Image, mask: &[f32], plate: &Plate) -> Vec<f32> {
     if mask.len() != w * h || (plate.width, plate.height) != (image.width, image.height) {
         return out;
     }
-    let fg = subject(mask);
-    let near = dilate(&fg, w, h, BAND);
-    let inner: Vec<bool> = dilate(&complement(&fg), w, h, BAND + 1).iter().map(|&n| !n).collect();
-    for p in (0..w * h).filter(|&p| near[p] && !inner[p]) {
+    let (fg, bg) = (subject(mask), complement(&subject(mask)));
+    let (near_fg, near_bg) = (dilate(&fg, w, h, BAND), dilate(&bg, w, h, BAND));
+    let inner: Vec<bool> = dilate(&bg, w, h, BAND + 1).iter().map(|&n| !n).collect();
+    for p in (0..w * h).filter(|&p| near_fg[p] && near_bg[p]) {
         let Some(subject) = mean_around(image, &inner, p, w, h) else { continue };
         let (pixel, back) = (rgb(image, p), plate.at(p));
         let d: [f32; 3] = std::array::from_fn(|c| subject[c] - back[c]);
@@ -218,15 +222,16 @@ mod tests {
         let (back, front) = ([0.2, 0.5, 0.3], [0.9, 0.6, 0.1]);
         // The plate is seen in frames whose subject stops well left of the pixels it covers.
         let frames: Vec<(Image, Vec<f32>)> =
-            [4.0, 6.0, 12.6].iter().map(|&e| edge_image(24, e, back, front)).collect();
+            [4.0, 6.0, 12.4, 12.6].iter().map(|&e| edge_image(24, e, back, front)).collect();
         let views: Vec<(&Image, &[f32])> = frames.iter().map(|(i, m)| (i, m.as_slice())).collect();
         let plate = Plate::from_frames(&views).unwrap();
         for p in [30, 24 * 24 - 1] {
             assert_eq!(plate.at(p).map(|v| (v * 255.0).round()), back.map(|v| (v * 255.0).round()));
         }
-        // Frame 2's outline covers 0.6 of column 12; its thresholded mask eroded and dilated by one.
-        let (image, truth) = &frames[2];
-        for wrong_edge in [12.0, 14.0] {
+        // Column 12 is covered 0.6 in frame 3, whose thresholded mask (columns 0-12) is eroded
+        // by one, and 0.4 in frame 2, whose thresholded mask (columns 0-11) is dilated by one.
+        for (frame, wrong_edge) in [(3, 12.0), (2, 13.0)] {
+            let (image, truth) = &frames[frame];
             let mask: Vec<f32> =
                 (0..24 * 24).map(|p| ((p % 24) as f32 + 0.5 < wrong_edge) as u8 as f32).collect();
             let refined = refine(image, &mask, &plate);
