@@ -8,10 +8,10 @@
 //! 1. [`Plate::from_frames`]: a pixel's background colour is the median, over the frames, of
 //!    its colour where it lies more than [`PLATE_MARGIN`] pixels outside the frame's mask;
 //!    a pixel never seen so takes the nearest seen pixel's colour;
-//! 2. [`refine`]: a pixel within [`BAND`] steps of the outline, either side, is read as a
-//!    blend of the plate and the subject's colour further inside the mask; its share of the
-//!    subject is its new mask value, wherever the two colours differ enough to tell them
-//!    apart.
+//! 2. [`refine`]: a pixel near the outline (up to [`BAND`] steps outside the mask, `BAND + 1`
+//!    inside) is read as a blend of the plate and the subject's colour just inside the mask;
+//!    its share of the subject is its new mask value, wherever the two colours differ enough
+//!    to tell them apart.
 //!
 //! The refined mask is soft along the outline (a coverage, as a render's alpha is); pixels
 //! away from the outline keep their values.
@@ -27,10 +27,10 @@ pub const PLATE_FRAMES: usize = 15;
 /// The fewest frames a plate is taken from: a camera seen in fewer (a moving camera's
 /// sequence) never shows the background behind the subject's outline.
 pub const MIN_PLATE_FRAMES: usize = 3;
-/// The pixels within this many steps of a mask's outline, either side, are decided again: the
-/// ring just inside and the ring just outside. A band as deep on both sides keeps the noise
-/// of the pixels it decides from pulling the outline in or out (two rings inside and one out
-/// leaned inward: docs/log/2026-11-29-mask-refinement.md).
+/// The pixels up to this many steps outside a mask and one more inside it are decided again:
+/// the mask's outline ring and the ring past it on either side. One ring each side fits the
+/// surface closer but tracks worse on fox_walk_capture: a dilated mask's partly covered
+/// pixels then lie past the band (docs/log/2026-11-29-mask-refinement.md).
 pub const BAND: u32 = 1;
 /// The subject's colour near a pixel: the mean of the mask's pixels more than `BAND + 1` steps
 /// inside within this radius (7 × 7), which reaches them from every pixel of the band.
@@ -100,10 +100,10 @@ pub fn refine(image: &Image, mask: &[f32], plate: &Plate) -> Vec<f32> {
     if mask.len() != w * h || (plate.width, plate.height) != (image.width, image.height) {
         return out;
     }
-    let (fg, bg) = (subject(mask), complement(&subject(mask)));
-    let (near_fg, near_bg) = (dilate(&fg, w, h, BAND), dilate(&bg, w, h, BAND));
-    let inner: Vec<bool> = dilate(&bg, w, h, BAND + 1).iter().map(|&n| !n).collect();
-    for p in (0..w * h).filter(|&p| near_fg[p] && near_bg[p]) {
+    let fg = subject(mask);
+    let near = dilate(&fg, w, h, BAND);
+    let inner: Vec<bool> = dilate(&complement(&fg), w, h, BAND + 1).iter().map(|&n| !n).collect();
+    for p in (0..w * h).filter(|&p| near[p] && !inner[p]) {
         let Some(subject) = mean_around(image, &inner, p, w, h) else { continue };
         let (pixel, back) = (rgb(image, p), plate.at(p));
         let d: [f32; 3] = std::array::from_fn(|c| subject[c] - back[c]);
