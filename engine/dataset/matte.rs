@@ -92,7 +92,7 @@ impl Plate {
 /// `mask` (one value per pixel of `image`, > 0.5 subject) with the pixels near its outline
 /// ([`BAND`]) replaced by their share of subject colour against `plate`, in [0, 1]. A pixel
 /// keeps its value where no subject pixel lies in its window or the two colours are closer
-/// than [`MIN_CONTRAST`]. The mask comes back unchanged when its size or the plate's differs
+/// than `MIN_CONTRAST` (0.1). The mask comes back unchanged when its size or the plate's differs
 /// from the image's.
 pub fn refine(image: &Image, mask: &[f32], plate: &Plate) -> Vec<f32> {
     let (w, h) = (image.width as usize, image.height as usize);
