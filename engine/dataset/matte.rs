@@ -16,7 +16,7 @@
 //! The refined mask is soft along the outline (a coverage, as a render's alpha is); pixels
 //! away from the outline keep their values.
 
-use crate::io::image::Image;
+use crate::io::image::{four_neighbours, Image};
 use std::collections::VecDeque;
 
 /// A pixel counts as background in a frame when it lies more than this many pixels (steps
@@ -158,13 +158,8 @@ fn dilate(set: &[bool], w: usize, h: usize, steps: u32) -> Vec<bool> {
     let mut grown = set.to_vec();
     for _ in 0..steps {
         let before = grown.clone();
-        for p in 0..w * h {
-            let (x, y) = (p % w, p / w);
-            grown[p] = before[p]
-                || (x > 0 && before[p - 1])
-                || (x + 1 < w && before[p + 1])
-                || (y > 0 && before[p - w])
-                || (y + 1 < h && before[p + w]);
+        for (p, grown) in grown.iter_mut().enumerate() {
+            *grown = before[p] || four_neighbours(p, w, h).any(|q| before[q]);
         }
     }
     grown
@@ -179,14 +174,7 @@ fn fill_from_nearest(colour: &mut [[u8; 3]], seen: &[bool], w: usize, h: usize) 
     }
     let mut reached = seen.to_vec();
     while let Some(p) = queue.pop_front() {
-        let (x, y) = (p % w, p / w);
-        let neighbours = [
-            (x > 0).then(|| p - 1),
-            (x + 1 < w).then(|| p + 1),
-            (y > 0).then(|| p - w),
-            (y + 1 < h).then(|| p + w),
-        ];
-        for q in neighbours.into_iter().flatten() {
+        for q in four_neighbours(p, w, h) {
             if !reached[q] {
                 reached[q] = true;
                 colour[q] = colour[p];

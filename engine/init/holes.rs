@@ -2,6 +2,8 @@
 //! border) and smaller than a fraction of the silhouette's area. Real masks have such specks;
 //! each one would carve a tunnel through the hull, so they are filled before carving.
 
+use crate::io::image::four_neighbours;
+
 /// Sets every enclosed background region (4-connected, mask ≤ 0.5) of at most
 /// `max_fraction` × (foreground pixel count) pixels to 1. Returns the number of pixels filled.
 pub fn fill_small_holes(mask: &mut [f32], width: usize, height: usize, max_fraction: f64) -> usize {
@@ -24,13 +26,7 @@ pub fn fill_small_holes(mask: &mut [f32], width: usize, height: usize, max_fract
             region.push(p);
             let (x, y) = (p % width, p / width);
             touches_border |= x == 0 || y == 0 || x + 1 == width || y + 1 == height;
-            let neighbours = [
-                (x > 0).then(|| p - 1),
-                (x + 1 < width).then(|| p + 1),
-                (y > 0).then(|| p - width),
-                (y + 1 < height).then(|| p + width),
-            ];
-            for q in neighbours.into_iter().flatten() {
+            for q in four_neighbours(p, width, height) {
                 if !seen[q] && mask[q] <= 0.5 {
                     seen[q] = true;
                     stack.push(q);

@@ -53,6 +53,20 @@ impl Image {
     }
 }
 
+/// The 4-neighbours of pixel `p` (row-major) inside a `width × height` image: left, right,
+/// up, down, those that exist.
+pub fn four_neighbours(p: usize, width: usize, height: usize) -> impl Iterator<Item = usize> {
+    let (x, y) = (p % width, p / width);
+    [
+        (x > 0).then(|| p - 1),
+        (x + 1 < width).then(|| p + 1),
+        (y > 0).then(|| p - width),
+        (y + 1 < height).then(|| p + width),
+    ]
+    .into_iter()
+    .flatten()
+}
+
 /// Reads a PNG (8 or 16 bit, grey / grey+alpha / RGB / RGBA) or an EXR.
 pub fn read_image(path: &Path) -> Result<Image, ImageError> {
     let reader =
