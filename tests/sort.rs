@@ -5,7 +5,9 @@ mod common;
 
 use tagsplat::bench::bench_sort;
 use tagsplat::gpu::{GpuBuffer, Recorder};
-use tagsplat::sort::{exclusive_scan_cpu, PrefixScan, RadixKey, RadixSort, RadixTuning};
+use tagsplat::sort::{
+    exclusive_scan_cpu, PrefixScan, RadixKey, RadixSort, RadixTuning, RadixVariant,
+};
 
 fn gpu_scan(gpu: &common::TestGpu, data: &[u32]) -> Vec<u32> {
     let buffer = GpuBuffer::from_slice(gpu.ctx(), "scan data", data).unwrap();
@@ -38,10 +40,15 @@ fn scan_wraps_like_u32() {
 }
 
 /// Every kernel variant and path on every device: the CPU one (which takes the bucket path
-/// where the keys allow), the CPU one held to its LSD passes, and the GPU one.
+/// where the keys allow), the CPU one held to its LSD passes, the GPU one and Onesweep.
 fn tunings(gpu: &common::TestGpu) -> Vec<RadixTuning> {
     let lanes = RadixTuning::lanes(gpu.ctx());
-    vec![lanes, lanes.with_max_bucket_len(0), RadixTuning::subgroups(gpu.ctx())]
+    vec![
+        lanes,
+        lanes.with_max_bucket_len(0),
+        RadixTuning::subgroups(gpu.ctx()),
+        RadixTuning::onesweep(gpu.ctx()),
+    ]
 }
 
 /// Sorts on the GPU with every variant and checks against the CPU: keys equal `sort_unstable`
@@ -69,6 +76,18 @@ fn check_sort_with<K: RadixKey + std::fmt::Debug>(
     what: &str,
     tuning: RadixTuning,
 ) -> bool {
+    check_sorter(gpu, keys, bits, what, tuning).took_bucket_path().unwrap()
+}
+
+/// Sorts with `tuning` and checks the result (see [`check_sort`]); returns the sorter, for
+/// what it records of the sort.
+fn check_sorter<K: RadixKey + std::fmt::Debug>(
+    gpu: &common::TestGpu,
+    keys: &[K],
+    bits: u32,
+    what: &str,
+    tuning: RadixTuning,
+) -> RadixSort<K> {
     let n = keys.len();
     let values: Vec<u32> = (0..n as u32).collect();
     let key_buffer = GpuBuffer::from_slice(gpu.ctx(), "keys", keys).unwrap();
@@ -86,7 +105,7 @@ fn check_sort_with<K: RadixKey + std::fmt::Debug>(
         // Bits above `bits` travel with their key.
         assert_eq!(sorted_keys[i], keys[index as usize], "{what}: key bits lost at {i}");
     }
-    sorter.took_bucket_path().unwrap()
+    sorter
 }
 
 fn random_keys<K: RadixKey>(n: usize, seed: u64, make: impl Fn(u64) -> K) -> Vec<K> {
@@ -231,9 +250,10 @@ fn sort_rejects_bad_arguments() {
 #[test]
 fn bench_sort_reports_the_bound_of_the_path_that_ran() {
     let gpu = common::gpu();
-    let lanes = RadixTuning::for_device(gpu.ctx()) == RadixTuning::lanes(gpu.ctx());
+    let chosen = RadixSort::<u32>::tuning_for(gpu.ctx(), 200_000).variant();
+    let lanes = chosen == RadixVariant::Lanes;
     for lsd_only in [false, true] {
-        let report = bench_sort(gpu.ctx(), 200_000, 32, 2, lsd_only).unwrap();
+        let report = bench_sort(gpu.ctx(), 200_000, 32, 2, lsd_only, None).unwrap();
         assert!(report.verified);
         assert_eq!(report.bucket_path, lanes && !lsd_only, "lsd_only {lsd_only}");
         let copies = if report.bucket_path { 2 } else { 4 };
@@ -243,4 +263,41 @@ fn bench_sort_reports_the_bound_of_the_path_that_ran() {
         let rate = report.lsd_bound_fraction / report.lsd_bound_ms;
         assert!((report.path_bound_fraction - rate * report.path_bound_ms).abs() <= 1e-9);
     }
+}
+
+/// `--variant` forces the kernels whatever the device: Onesweep makes one copy per pass.
+#[test]
+fn bench_sort_runs_the_variant_asked_for() {
+    let gpu = common::gpu();
+    let report =
+        bench_sort(gpu.ctx(), 100_000, 24, 1, false, Some(RadixVariant::Onesweep)).unwrap();
+    assert!(report.verified);
+    assert_eq!(report.variant, "Onesweep");
+    assert_eq!((report.bucket_path, report.passes, report.path_copies), (false, 3, 3));
+}
+
+/// The look-back's fallback: with no wait at all, every tile counts every tile before it from
+/// its keys, one fallback per tile and earlier tile in every pass, whatever the timing. With
+/// one read of an empty status word, the mix of published prefixes and fallbacks the timing
+/// gives must sort the same.
+#[test]
+fn onesweep_look_back_and_its_fallback() {
+    let gpu = common::gpu();
+    let onesweep = RadixTuning::onesweep(gpu.ctx());
+    let tiles = |n: usize| n.div_ceil(onesweep.tile_len());
+    for (n, seed, polls) in [(100_003, 21, 0), (1_000_003, 22, 1)] {
+        let tuning = onesweep.with_lookback_polls(polls);
+        let uniform = random_keys(n, seed, |x| x as u32);
+        let clustered = random_keys(n, seed, |x| (x % 3) as u32 * 0x0100_0001);
+        for keys in [uniform, clustered] {
+            let what = format!("onesweep, {} tiles, {polls} polls", tiles(n));
+            let sorter = check_sorter(&gpu, &keys, 32, &what, tuning);
+            let (passes, t) = (RadixSort::<u32>::passes(32) as usize, tiles(n));
+            if polls == 0 {
+                assert_eq!(sorter.lookback_fallbacks().unwrap() as usize, passes * t * (t - 1) / 2);
+            }
+        }
+    }
+    let keys = random_keys(150_001, 23, |x| x >> 7);
+    check_sorter(&gpu, &keys, 57, "onesweep u64, no wait", onesweep.with_lookback_polls(0));
 }

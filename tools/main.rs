@@ -36,6 +36,7 @@ use tagsplat::bench::{
     TrainBenchConfig, TrainBenchReport,
 };
 use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, ValidationLog, DEVICE_ENV};
+use tagsplat::sort::RadixVariant;
 
 #[derive(Parser)]
 #[command(
@@ -118,6 +119,10 @@ enum Bench {
         /// on the top digit, then each bucket sorted in cache) where the keys allow it.
         #[arg(long)]
         lsd_only: bool,
+        /// Kernel variant: lanes, subgroups or onesweep. Default: the device's, or the
+        /// TAGSPLAT_SORT environment variable's.
+        #[arg(long)]
+        variant: Option<RadixVariant>,
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
@@ -242,9 +247,9 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
         Command::Demo(args) => demo::demo(&gpu.create()?, &args),
         Command::Ablate(args) => demo::ablate(&gpu.create()?, &args),
         Command::Eval(args) => eval::run(|| gpu.create(), args),
-        Command::Bench(Bench::Sort { n, bits, repetitions, lsd_only, json }) => {
+        Command::Bench(Bench::Sort { n, bits, repetitions, lsd_only, variant, json }) => {
             let ctx = gpu.create()?;
-            let report = bench_sort(&ctx, n, bits, repetitions as usize, lsd_only)
+            let report = bench_sort(&ctx, n, bits, repetitions as usize, lsd_only, variant)
                 .with_context(|| format!("bench sort --n {n} --bits {bits}"))?;
             show(&report, &ctx, json, print_sort_report)?;
             if !report.verified {
@@ -399,6 +404,12 @@ fn print_sort_report(r: &SortBenchReport) {
             "LSD passes"
         }
     );
+    if r.variant == "Onesweep" {
+        println!(
+            "look-back         {} tiles counted by a waiting tile (last sort)",
+            r.lookback_fallbacks
+        );
+    }
     println!(
         "GPU sort          {:.3} ms  = {:.1} M pairs/s  (fastest of {}; median {:.3} ms)",
         r.sort_ms,

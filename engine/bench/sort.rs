@@ -11,7 +11,7 @@
 use super::copy::{CopyBandwidth, CopyProbe};
 use crate::gpu::{GpuBuffer, GpuContext, GpuError, GpuResult, PassTime, PassTimes, Recorder};
 use crate::rng::SplitMix64;
-use crate::sort::{RadixKey, RadixSort};
+use crate::sort::{RadixKey, RadixSort, RadixTuning, RadixVariant};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -62,8 +62,10 @@ pub struct SortBenchReport {
     pub cpu_sort_ms: f64,
     /// Keys per second of that CPU sort.
     pub cpu_sort_keys_per_s: f64,
-    /// The kernel variant: "Lanes" (CPU devices) or "Subgroups".
+    /// The kernel variant: "Lanes" (CPU devices), "Subgroups" or "Onesweep".
     pub variant: String,
+    /// Tiles the Onesweep variant's look-back counted itself in the last sort (0 otherwise).
+    pub lookback_fallbacks: u32,
     /// The sort took the CPU variant's bucket path, not the LSD passes.
     pub bucket_path: bool,
     /// The GPU result was checked to be the stable sort of the input pairs.
@@ -73,13 +75,15 @@ pub struct SortBenchReport {
 /// Sorts `n` random keys with `bits` significant bits (u64 keys above 32 bits) `repetitions`
 /// times. Speeds use the fastest repetition, of the sort as of the copy bound: both are what
 /// the device can do when the (shared, noisy) machine lets it.
-/// `lsd_only` holds the CPU variant to its LSD passes (`RadixTuning::with_max_bucket_len`).
+/// `lsd_only` holds the CPU variant to its LSD passes (`RadixTuning::with_max_bucket_len`);
+/// `variant` forces a kernel variant, else the sorter picks its own (`RadixSort::tuning_for`).
 pub fn bench_sort(
     ctx: &Arc<GpuContext>,
     n: usize,
     bits: u32,
     repetitions: usize,
     lsd_only: bool,
+    variant: Option<RadixVariant>,
 ) -> GpuResult<SortBenchReport> {
     if ctx.limits().timestamp_period_ns.is_none() {
         return Err(GpuError::MissingFeatures {
@@ -87,10 +91,16 @@ pub fn bench_sort(
             missing: vec!["timestamp queries on the compute queue"],
         });
     }
+    let chosen = match variant {
+        Some(variant) => RadixTuning::of_variant(ctx, variant),
+        None if bits <= 32 => RadixSort::<u32>::tuning_for(ctx, n),
+        None => RadixSort::<u64>::tuning_for(ctx, n),
+    };
+    let tuning = if lsd_only { chosen.with_max_bucket_len(0) } else { chosen };
     if bits <= 32 {
-        run::<u32>(ctx, n, bits, repetitions, lsd_only, |x| x as u32)
+        run::<u32>(ctx, n, bits, repetitions, tuning, |x| x as u32)
     } else {
-        run::<u64>(ctx, n, bits, repetitions, lsd_only, |x| x)
+        run::<u64>(ctx, n, bits, repetitions, tuning, |x| x)
     }
 }
 
@@ -99,7 +109,7 @@ fn run<K: RadixKey>(
     n: usize,
     bits: u32,
     repetitions: usize,
-    lsd_only: bool,
+    tuning: RadixTuning,
     make: fn(u64) -> K,
 ) -> GpuResult<SortBenchReport> {
     if repetitions > MAX_REPETITIONS {
@@ -112,12 +122,7 @@ fn run<K: RadixKey>(
     }
     let repetitions = repetitions.max(1);
     // Create the GPU side first: an impossible `n` fails here, before host memory is spent.
-    let tuning = RadixSort::<K>::tuning_for(ctx, n);
-    let sorter = RadixSort::<K>::with_tuning(
-        ctx,
-        n,
-        if lsd_only { tuning.with_max_bucket_len(0) } else { tuning },
-    )?;
+    let sorter = RadixSort::<K>::with_tuning(ctx, n, tuning)?;
     let mut input = GpuBuffer::<K>::new(ctx, "bench keys (input)", n)?;
     let mut input_values = GpuBuffer::<u32>::new(ctx, "bench values (input)", n)?;
     let keys = GpuBuffer::<K>::new(ctx, "bench keys", n)?;
@@ -186,6 +191,7 @@ fn run<K: RadixKey>(
         cpu_sort_ms,
         cpu_sort_keys_per_s: per_s(cpu_sort_ms),
         variant: format!("{:?}", sorter.tuning().variant()),
+        lookback_fallbacks: sorter.lookback_fallbacks()?,
         bucket_path,
         verified,
     })

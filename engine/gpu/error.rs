@@ -93,6 +93,16 @@ pub enum GpuError {
         /// The driver's result.
         result: vk::Result,
     },
+    /// An environment variable that tunes the engine holds a value it does not accept.
+    #[error("environment variable {variable}=\"{value}\" is not valid; expected {expected}")]
+    InvalidSetting {
+        /// The variable.
+        variable: &'static str,
+        /// Its value.
+        value: String,
+        /// The values it accepts.
+        expected: &'static str,
+    },
     /// Any other failed Vulkan call.
     #[error("Vulkan call {call} failed: {result}")]
     Vulkan {

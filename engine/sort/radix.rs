@@ -4,6 +4,10 @@
 //! Passes ping-pong between the caller's buffers and scratch buffers owned by the sorter; on
 //! CPU devices the scratch holds key-value records (see shaders/sort/radix_lanes_common.glsl).
 //!
+//! The Onesweep variant (GPUs with wide subgroups) instead counts the digits of every pass in
+//! one read of the keys, then runs one kernel per pass that finds each tile's offsets by a
+//! look-back over earlier tiles (shaders/sort/radix_onesweep.comp).
+//!
 //! CPU devices sort more than 8 bits by the bucket path when they can: one pass on the top
 //! digit, then each of its 256 buckets sorted alone by the low bits while it stays in cache
 //! (shaders/sort/radix_bucket_lanes.comp). A kernel on the device checks that every bucket
@@ -22,6 +26,8 @@ use std::sync::Arc;
 
 const RADIX_BITS: u32 = 8;
 const RADIX: usize = 1 << RADIX_BITS;
+/// Passes of a u64 key (`MAX_PASSES` in shaders/sort/radix_onesweep_common.glsl).
+const MAX_PASSES: usize = 8;
 
 /// A key type the GPU radix sort handles: u32 or u64 (stored as two little-endian words).
 pub trait RadixKey: Pod + Ord + Send + Sync {
@@ -78,6 +84,9 @@ push_layout!(
         SORT_RADIX_SCATTER_LANES,
         SORT_RADIX_PLAN_LANES,
         SORT_RADIX_BUCKET_LANES,
+        SORT_RADIX_ONESWEEP_HISTOGRAM,
+        SORT_RADIX_ONESWEEP_SCAN,
+        SORT_RADIX_ONESWEEP,
     ],
     [len, word, shift, digit_bits, tile_count, bits, max_bucket_len, gate]
 );
@@ -140,14 +149,33 @@ fn bucket_len_for_loop_budget(local_passes: u32) -> u32 {
 enum Passes<K: RadixKey> {
     Subgroups(SubgroupPasses<K>),
     Lanes(LanesPasses),
+    Onesweep(OnesweepPasses<K>),
 }
 
-/// Keys and values ping-pong between the caller's buffers and a scratch copy.
+/// A copy of keys and values that passes ping-pong with the caller's (GPU variants).
+struct Scratch<K: RadixKey> {
+    keys: GpuBuffer<K>,
+    values: GpuBuffer<u32>,
+}
+
+/// Per pass: histogram, scan of the tile counts, scatter.
 struct SubgroupPasses<K: RadixKey> {
     histogram: ComputePipeline,
     scatter: ComputePipeline,
-    scratch_keys: GpuBuffer<K>,
-    scratch_values: GpuBuffer<u32>,
+    scratch: Scratch<K>,
+}
+
+/// One histogram of every pass and its scan, then one kernel per pass. `digit_starts` holds
+/// the counts, then the first position, of every (pass, digit); `progress` each pass's next
+/// tile and the count of look-back fallbacks. The tiles' status words are the sorter's
+/// `tile_counts`.
+struct OnesweepPasses<K: RadixKey> {
+    histogram: ComputePipeline,
+    scan: ComputePipeline,
+    pass: ComputePipeline,
+    scratch: Scratch<K>,
+    digit_starts: GpuBuffer<u32>,
+    progress: GpuBuffer<u32>,
 }
 
 /// The first pass turns the caller's pairs into records, the last turns them back, the passes
@@ -170,6 +198,8 @@ pub struct RadixSort<K: RadixKey> {
     passes: Passes<K>,
     scan: PrefixScan,
     capacity: usize,
+    /// Per (tile, digit): the tile's count, then its output start; for Onesweep the
+    /// look-back's status words, two passes' worth (radix_onesweep_common.glsl).
     tile_counts: GpuBuffer<u32>,
 }
 
@@ -186,9 +216,15 @@ impl<K: RadixKey> RadixSort<K> {
         Self::with_tuning(ctx, capacity, Self::tuning_for(ctx, capacity))
     }
 
-    /// The tuning [`Self::new`] picks for `capacity` pairs on this device.
+    /// The tuning [`Self::new`] picks for `capacity` pairs on this device: the variant that
+    /// `TAGSPLAT_SORT` names, else [`RadixTuning::for_device`]'s; the CPU variant gives way to
+    /// [`RadixTuning::subgroups`] where its records would exceed a buffer's range. A bad
+    /// `TAGSPLAT_SORT` is ignored here and refused by [`Self::with_tuning`].
     pub fn tuning_for(ctx: &GpuContext, capacity: usize) -> RadixTuning {
-        let tuning = RadixTuning::for_device(ctx);
+        let tuning = match RadixVariant::from_env() {
+            Ok(Some(variant)) => RadixTuning::of_variant(ctx, variant),
+            _ => RadixTuning::for_device(ctx),
+        };
         let record_bytes = (capacity as u64).saturating_mul(Self::RECORD_WORDS as u64 * 4);
         if tuning.variant() == RadixVariant::Lanes
             && record_bytes > ctx.limits().max_storage_buffer_range
@@ -199,11 +235,13 @@ impl<K: RadixKey> RadixSort<K> {
     }
 
     /// A sorter with an explicit tuning, e.g. [`RadixTuning::subgroups`] on a CPU device.
+    /// Fails on a `TAGSPLAT_SORT` that names no variant, so that every sorter reports it.
     pub fn with_tuning(
         ctx: &Arc<GpuContext>,
         capacity: usize,
         tuning: RadixTuning,
     ) -> GpuResult<Self> {
+        RadixVariant::from_env()?;
         let limits = ctx.limits();
         let shared_bytes = tuning.shared_bytes(limits.subgroup_size);
         if shared_bytes > limits.max_shared_memory_bytes {
@@ -215,35 +253,42 @@ impl<K: RadixKey> RadixSort<K> {
             });
         }
         let tiles = capacity.div_ceil(tuning.tile_len());
+        let tile_digit_words = if tuning.variant() == RadixVariant::Onesweep { 2 } else { 1 };
         let passes = match tuning.variant() {
             RadixVariant::Subgroups => Self::subgroup_passes(ctx, capacity, tuning)?,
             RadixVariant::Lanes => Self::lanes_passes(ctx, capacity, tuning)?,
+            RadixVariant::Onesweep => Self::onesweep_passes(ctx, capacity, tuning)?,
         };
         Ok(Self {
             tuning,
             passes,
             scan: PrefixScan::new(ctx, tiles * RADIX)?,
             capacity,
-            tile_counts: GpuBuffer::new(ctx, "radix tile counts", tiles * RADIX)?,
+            tile_counts: GpuBuffer::new(
+                ctx,
+                "radix tile counts",
+                tiles * RADIX * tile_digit_words,
+            )?,
         })
     }
 
-    /// A sort kernel; `records` (does the pass read records, write records) are specialization
-    /// constants 4 and 5, which only the CPU variant reads.
+    /// A sort kernel; `variant_constants` are specialization constants 4 and 5, whose meaning
+    /// is the variant's: whether the pass reads records and writes records (CPU variant), the
+    /// look-back's polls (Onesweep).
     fn pipeline(
         ctx: &Arc<GpuContext>,
         tuning: RadixTuning,
         name: &'static str,
         shader: &'static Shader,
-        records: [u32; 2],
+        variant_constants: [u32; 2],
     ) -> GpuResult<ComputePipeline> {
         let specialization = [
             tuning.workgroup_size(),
             ctx.limits().subgroup_size,
             tuning.keys_per_thread(),
             K::WORDS,
-            records[0],
-            records[1],
+            variant_constants[0],
+            variant_constants[1],
         ];
         ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &specialization })
     }
@@ -254,8 +299,7 @@ impl<K: RadixKey> RadixSort<K> {
         tuning: RadixTuning,
     ) -> GpuResult<Passes<K>> {
         // Scratch first: an impossible capacity fails here, before any pipeline is built.
-        let scratch_keys = GpuBuffer::new(ctx, "radix scratch keys", capacity)?;
-        let scratch_values = GpuBuffer::new(ctx, "radix scratch values", capacity)?;
+        let scratch = Scratch::new(ctx, capacity)?;
         Ok(Passes::Subgroups(SubgroupPasses {
             histogram: Self::pipeline(
                 ctx,
@@ -271,8 +315,28 @@ impl<K: RadixKey> RadixSort<K> {
                 &shaders::SORT_RADIX_SCATTER,
                 [0, 0],
             )?,
-            scratch_keys,
-            scratch_values,
+            scratch,
+        }))
+    }
+
+    fn onesweep_passes(
+        ctx: &Arc<GpuContext>,
+        capacity: usize,
+        tuning: RadixTuning,
+    ) -> GpuResult<Passes<K>> {
+        let scratch = Scratch::new(ctx, capacity)?;
+        let polls = [tuning.lookback_polls(), 0];
+        let pipeline = |name, shader| Self::pipeline(ctx, tuning, name, shader, polls);
+        Ok(Passes::Onesweep(OnesweepPasses {
+            histogram: pipeline(
+                "radix_onesweep_histogram",
+                &shaders::SORT_RADIX_ONESWEEP_HISTOGRAM,
+            )?,
+            scan: pipeline("radix_onesweep_scan", &shaders::SORT_RADIX_ONESWEEP_SCAN)?,
+            pass: pipeline("radix_onesweep", &shaders::SORT_RADIX_ONESWEEP)?,
+            scratch,
+            digit_starts: GpuBuffer::new(ctx, "radix digit starts", MAX_PASSES * RADIX)?,
+            progress: GpuBuffer::new(ctx, "radix onesweep progress", MAX_PASSES + 1)?,
         }))
     }
 
@@ -399,6 +463,9 @@ impl<K: RadixKey> RadixSort<K> {
                 self.record_subgroups(recorder, subgroups, keys, values, &base)?
             }
             Passes::Lanes(lanes) => self.record_lanes(recorder, lanes, keys, values, &base)?,
+            Passes::Onesweep(onesweep) => {
+                self.record_onesweep(recorder, onesweep, keys, values, &base)?
+            }
         }
         recorder.end_pass();
         Ok(())
@@ -412,37 +479,65 @@ impl<K: RadixKey> RadixSort<K> {
         values: &'a GpuBuffer<u32>,
         base: &RadixParams,
     ) -> GpuResult<()> {
-        let SubgroupPasses { histogram, scatter, scratch_keys, scratch_values } = kernels;
-        let buffers = [
-            (keys.binding(), values.binding()),
-            (scratch_keys.binding(), scratch_values.binding()),
-        ];
-        let passes = Self::passes(base.bits);
-        for pass in 0..passes {
-            let (input, output) =
-                (buffers[(pass % 2) as usize], buffers[((pass + 1) % 2) as usize]);
+        let SubgroupPasses { histogram, scatter, scratch } = kernels;
+        scratch.ping_pong(recorder, keys, values, base, |recorder, pass, input, output| {
             let counts = self.tile_counts.binding();
-            let histogram_io = [("key_words", input.0), ("tile_counts", counts)];
+            let histogram_io = [("key_words", input[0]), ("tile_counts", counts)];
             let scatter_io = [
-                ("keys_in", input.0),
-                ("values_in", input.1),
+                ("keys_in", input[0]),
+                ("values_in", input[1]),
                 ("tile_offsets", counts),
-                ("keys_out", output.0),
-                ("values_out", output.1),
+                ("keys_out", output[0]),
+                ("values_out", output[1]),
             ];
             self.record_pass(
                 recorder,
                 [(histogram, &histogram_io), (scatter, &scatter_io)],
                 &base.lsd_pass(pass),
-            )?;
-        }
-        if passes % 2 == 1 {
-            // An odd pass count leaves the result in scratch: bring it home.
-            let len = base.len as usize;
-            recorder.copy_buffer(scratch_keys, keys, len);
-            recorder.copy_buffer(scratch_values, values, len);
-        }
-        Ok(())
+            )
+        })
+    }
+
+    /// The histogram of every pass and its scan, then one kernel per pass.
+    fn record_onesweep<'a>(
+        &'a self,
+        recorder: &mut Recorder<'a>,
+        kernels: &'a OnesweepPasses<K>,
+        keys: &'a GpuBuffer<K>,
+        values: &'a GpuBuffer<u32>,
+        base: &RadixParams,
+    ) -> GpuResult<()> {
+        let OnesweepPasses { histogram, scan, pass, scratch, digit_starts, progress } = kernels;
+        recorder.fill_buffer(digit_starts, 0);
+        recorder.fill_buffer(progress, 0);
+        recorder.begin_pass("radix histogram");
+        let (starts, status, progress) =
+            (digit_starts.binding(), self.tile_counts.binding(), progress.binding());
+        let histogram_io =
+            [("key_words", keys.binding()), ("digit_counts", starts), ("status", status)];
+        recorder.dispatch_1d(histogram, &histogram_io, base, base.tile_count as u64)?;
+        recorder.dispatch_1d(
+            scan,
+            &[("digit_counts", starts)],
+            base,
+            Self::passes(base.bits) as u64,
+        )?;
+        recorder.end_pass();
+        scratch.ping_pong(recorder, keys, values, base, |recorder, pass_index, input, output| {
+            let io = [
+                ("keys_in", input[0]),
+                ("values_in", input[1]),
+                ("digit_starts", starts),
+                ("keys_out", output[0]),
+                ("values_out", output[1]),
+                ("status", status),
+                ("progress", progress),
+            ];
+            recorder.begin_pass("radix onesweep");
+            recorder.dispatch_1d(pass, &io, &base.lsd_pass(pass_index), base.tile_count as u64)?;
+            recorder.end_pass();
+            Ok(())
+        })
     }
 
     /// The bucket path where the tuning allows it, then the LSD passes, gated to run only if
@@ -612,7 +707,16 @@ impl<K: RadixKey> RadixSort<K> {
     pub fn took_bucket_path(&self) -> GpuResult<bool> {
         match &self.passes {
             Passes::Lanes(lanes) => Ok(lanes.plan_flag.read()?[0] == 1),
-            Passes::Subgroups(_) => Ok(false),
+            Passes::Subgroups(_) | Passes::Onesweep(_) => Ok(false),
+        }
+    }
+
+    /// How many times the last sort's look-back counted a tile itself because its status
+    /// stayed empty (a readback; 0 outside the Onesweep variant). For benchmarks and tests.
+    pub fn lookback_fallbacks(&self) -> GpuResult<u32> {
+        match &self.passes {
+            Passes::Onesweep(onesweep) => Ok(onesweep.progress.read()?[MAX_PASSES]),
+            Passes::Subgroups(_) | Passes::Lanes(_) => Ok(0),
         }
     }
 
@@ -627,6 +731,46 @@ impl<K: RadixKey> RadixSort<K> {
         let mut recorder = Recorder::new(keys.context())?;
         self.record(&mut recorder, keys, values, len, bits)?;
         recorder.submit_and_wait()
+    }
+}
+
+impl<K: RadixKey> Scratch<K> {
+    fn new(ctx: &Arc<GpuContext>, capacity: usize) -> GpuResult<Self> {
+        Ok(Self {
+            keys: GpuBuffer::new(ctx, "radix scratch keys", capacity)?,
+            values: GpuBuffer::new(ctx, "radix scratch values", capacity)?,
+        })
+    }
+
+    /// Records the LSD passes of `base.bits` with `record_pass(recorder, pass, input,
+    /// output)`, each a (keys, values) pair, alternating between the caller's buffers and
+    /// this scratch; an odd pass count then copies the result home.
+    fn ping_pong<'a>(
+        &'a self,
+        recorder: &mut Recorder<'a>,
+        keys: &'a GpuBuffer<K>,
+        values: &'a GpuBuffer<u32>,
+        base: &RadixParams,
+        mut record_pass: impl FnMut(
+            &mut Recorder<'a>,
+            u32,
+            [BufferBinding<'a>; 2],
+            [BufferBinding<'a>; 2],
+        ) -> GpuResult<()>,
+    ) -> GpuResult<()> {
+        let buffers =
+            [[keys.binding(), values.binding()], [self.keys.binding(), self.values.binding()]];
+        let passes = RadixSort::<K>::passes(base.bits);
+        for pass in 0..passes {
+            let parity = (pass % 2) as usize;
+            record_pass(recorder, pass, buffers[parity], buffers[1 - parity])?;
+        }
+        if passes % 2 == 1 {
+            let len = base.len as usize;
+            recorder.copy_buffer(&self.keys, keys, len);
+            recorder.copy_buffer(&self.values, values, len);
+        }
+        Ok(())
     }
 }
 
