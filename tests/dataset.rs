@@ -521,8 +521,9 @@ fn masks_a_ring_off_are_refined_against_the_background_plate() {
             refined += error(&r, truth);
         }
     }
-    // Not all of it: an eroded mask leaves the outline's partly covered pixels two rings out,
-    // past the one ring outside the mask that is decided again (dataset::matte::BAND).
-    assert!(refined < 0.75 * given, "refined {refined} against given {given}");
+    // The outline found a ring further out than the eroded masks': 0.19 of the given masks'
+    // difference; refining only the rings beside the given outline (before 29 November) left
+    // 0.65 of it.
+    assert!(refined < 0.3 * given, "refined {refined} against given {given}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -15,7 +15,7 @@ use tagsplat::synth::manifold::closed_manifold_problem;
 use tagsplat::synth::{generate, SubjectSource, SynthOptions};
 use tagsplat::track::queries::read_points;
 use tagsplat::track::{track, Queries};
-use tagsplat::train::pipeline::{run_train, TrainConfig, TrainJob, TrainReport};
+use tagsplat::train::pipeline::{run_train, Stage, TrainConfig, TrainJob, TrainReport};
 use tagsplat::train::TrainError;
 
 fn temp(name: &str) -> PathBuf {
@@ -89,10 +89,19 @@ fn a_sequence_is_reconstructed_then_resumed_with_one_face_list() {
         first.frames[0]
     );
 
+    let mut decoded = Vec::new();
+    let mut progress = |p: tagsplat::TrainProgress| {
+        if p.stage == Stage::Views {
+            decoded.push((p.frame, p.iteration, p.iterations));
+        }
+    };
     let second =
-        run_train(g.ctx(), &job(&dir.join("data"), &out, quick_config(), None), &mut |_| {})
+        run_train(g.ctx(), &job(&dir.join("data"), &out, quick_config(), None), &mut progress)
             .unwrap();
     assert_eq!(second.resumed_frames, vec![0, 1]);
+    // Only frame 2 is decoded, and its views (held-out ones too) count up one at a time.
+    let views = tagsplat::Dataset::load(&dir.join("data")).unwrap().cameras.len() as u32;
+    assert_eq!(decoded, (1..=views).map(|n| (2, n, views)).collect::<Vec<_>>());
     // The report keeps the frames the first run finished, with that run's figures.
     assert_eq!(second.frames.iter().map(|f| f.frame).collect::<Vec<_>>(), vec![0, 1, 2]);
     assert_eq!(second.frames[0].psnr_mesh, first.frames[0].psnr_mesh);

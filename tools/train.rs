@@ -121,6 +121,7 @@ pub fn run_with_progress(ctx: &Arc<GpuContext>, job: &TrainJob) -> Result<TrainR
         overall.set_position(p.frame as u64);
         frame_bar.set_message(match p.stage {
             Stage::Plates => "plates".to_string(),
+            Stage::Views => format!("views {frame}"),
             Stage::Frame => format!("frame {frame}"),
         });
         frame_bar.set_length(p.iterations as u64);

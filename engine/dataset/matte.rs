@@ -8,13 +8,15 @@
 //! 1. [`Plate::from_frames`]: a pixel's background colour is the median, over the frames, of
 //!    its colour where it lies more than [`PLATE_MARGIN`] pixels outside the frame's mask;
 //!    a pixel never seen so takes the nearest seen pixel's colour;
-//! 2. [`refine`]: a pixel near the outline (up to [`BAND`] steps outside the mask, `BAND + 1`
-//!    inside) is read as a blend of the plate and the subject's colour just inside the mask;
-//!    its share of the subject is its new mask value, wherever the two colours differ enough
-//!    to tell them apart.
+//! 2. [`refine`]: each pixel near the outline is read as a blend of the plate and the
+//!    subject's colour further inside; its share of the subject says on which side of the true
+//!    outline it lies. The ring just outside the mask mostly subject means the outline sits a
+//!    ring further out; the ring just inside mostly plate, a ring further in. The two rings
+//!    either side of the outline so placed take their share as their new mask value, wherever
+//!    the two colours differ enough to tell them apart.
 //!
 //! The refined mask is soft along the outline (a coverage, as a render's alpha is); pixels
-//! away from the outline keep their values.
+//! away from it keep their values.
 
 use crate::io::image::{four_neighbours, Image};
 use std::collections::VecDeque;
@@ -27,17 +29,14 @@ pub const PLATE_FRAMES: usize = 15;
 /// The fewest frames a plate is taken from: a camera seen in fewer (a moving camera's
 /// sequence) never shows the background behind the subject's outline.
 pub const MIN_PLATE_FRAMES: usize = 3;
-/// The pixels up to this many steps outside a mask and one more inside it are decided again:
-/// the mask's outline ring and the ring past it on either side. One ring each side fits the
-/// surface closer but tracks worse on fox_walk_capture: a dilated mask's partly covered
-/// pixels then lie past the band (docs/log/2026-11-29-mask-refinement.md).
-pub const BAND: u32 = 1;
-/// The subject's colour near a pixel: the mean of the mask's pixels more than `BAND + 1` steps
-/// inside within this radius (7 × 7), which reaches them from every pixel of the band.
-const WINDOW: i64 = 2 * BAND as i64 + 1;
+/// The subject's colour near a pixel: the mean of the pixels at least two rings inside the
+/// outline within this radius (7 × 7), which reaches them from both rings decided again.
+const WINDOW: i64 = 3;
 /// The least distance (RGB, values in [0, 1]) between the plate's and the subject's colour for
 /// a pixel's blend to say anything: below it, noise and JPEG decide.
 const MIN_CONTRAST: f32 = 0.1;
+/// How far [`depths`] counts: enough for the rings [`refine`] reads.
+const MAX_STEPS: u32 = 5;
 
 /// One camera's background as seen behind the subject, 8 bits a channel.
 #[derive(Clone, Debug, PartialEq)]
@@ -59,7 +58,8 @@ impl Plate {
             .iter()
             .take(PLATE_FRAMES)
             .map(|(_, mask)| {
-                dilate(&subject(mask), w, h, PLATE_MARGIN).iter().map(|&n| !n).collect()
+                let steps = steps_from(&subject(mask), w, h, PLATE_MARGIN + 1);
+                steps.iter().map(|&s| s > PLATE_MARGIN).collect()
             })
             .collect();
         let mut colour = vec![[0u8; 3]; w * h];
@@ -89,50 +89,87 @@ impl Plate {
     }
 }
 
-/// `mask` (one value per pixel of `image`, > 0.5 subject) with the pixels near its outline
-/// ([`BAND`]) replaced by their share of subject colour against `plate`, in [0, 1]. A pixel
-/// keeps its value where no subject pixel lies in its window or the two colours are closer
-/// than `MIN_CONTRAST` (0.1). The mask comes back unchanged when its size or the plate's differs
-/// from the image's.
+/// `mask` (one value per pixel of `image`, > 0.5 subject) with the two rings either side of
+/// its outline, moved a ring out or in where the images say so ([`outline_offset`]), replaced
+/// by their share of subject colour against `plate`, in [0, 1]. A pixel keeps its value where
+/// no subject pixel lies in its window or the two colours are closer than `MIN_CONTRAST`
+/// (0.1). The mask comes back unchanged when its size or the plate's differs from the image's.
 pub fn refine(image: &Image, mask: &[f32], plate: &Plate) -> Vec<f32> {
     let (w, h) = (image.width as usize, image.height as usize);
     let mut out = mask.to_vec();
     if mask.len() != w * h || (plate.width, plate.height) != (image.width, image.height) {
         return out;
     }
-    let fg = subject(mask);
-    let near = dilate(&fg, w, h, BAND);
-    let inner: Vec<bool> = dilate(&complement(&fg), w, h, BAND + 1).iter().map(|&n| !n).collect();
-    for p in (0..w * h).filter(|&p| near[p] && !inner[p]) {
-        let Some(subject) = mean_around(image, &inner, p, w, h) else { continue };
-        let (pixel, back) = (rgb(image, p), plate.at(p));
-        let d: [f32; 3] = std::array::from_fn(|c| subject[c] - back[c]);
-        let contrast = d.iter().map(|v| v * v).sum::<f32>();
-        if contrast > MIN_CONTRAST * MIN_CONTRAST {
-            let along: f32 = (0..3).map(|c| (pixel[c] - back[c]) * d[c]).sum();
-            out[p] = (along / contrast).clamp(0.0, 1.0);
+    let blend = Blend { image, plate, depth: depths(&subject(mask), w, h) };
+    let offset = blend.outline_offset();
+    for p in (0..w * h).filter(|&p| (offset..=offset + 1).contains(&blend.depth[p])) {
+        if let Some(share) = blend.share(p, offset - 2) {
+            out[p] = share;
         }
     }
     out
 }
 
-/// The mean colour of the `inner` pixels within [`WINDOW`] of pixel `p`; None if there is none.
-fn mean_around(image: &Image, inner: &[bool], p: usize, w: usize, h: usize) -> Option<[f32; 3]> {
-    let (x, y) = ((p % w) as i64, (p / w) as i64);
-    let (mut sum, mut n) = ([0.0f32; 3], 0u32);
-    for v in (y - WINDOW).max(0)..=(y + WINDOW).min(h as i64 - 1) {
-        for u in (x - WINDOW).max(0)..=(x + WINDOW).min(w as i64 - 1) {
-            let q = v as usize * w + u as usize;
-            if inner[q] {
-                let colour = rgb(image, q);
-                for (s, c) in sum.iter_mut().zip(colour) {
-                    *s += c;
-                }
-                n += 1;
-            }
+/// One image read as a blend of its camera's plate and the subject's colour.
+struct Blend<'a> {
+    image: &'a Image,
+    plate: &'a Plate,
+    /// Per pixel, from [`depths`] of the given mask.
+    depth: Vec<i32>,
+}
+
+impl Blend<'_> {
+    /// How many rings out (1) or in (-1) of the mask the true outline lies: the ring just
+    /// outside the mask mostly subject means out, the ring just inside mostly plate in; 0
+    /// otherwise, and where neither ring can be read. One offset for the whole image, as a
+    /// threshold set a little off moves the whole outline.
+    fn outline_offset(&self) -> i32 {
+        let mean_share = |depth: i32| {
+            let shares: Vec<f32> = (0..self.depth.len())
+                .filter(|&p| self.depth[p] == depth)
+                .filter_map(|p| self.share(p, -2))
+                .collect();
+            (!shares.is_empty()).then(|| shares.iter().sum::<f32>() / shares.len() as f32)
+        };
+        if mean_share(1).is_some_and(|s| s > 0.5) {
+            1
+        } else if mean_share(0).is_some_and(|s| s < 0.5) {
+            -1
+        } else {
+            0
         }
     }
-    (n > 0).then(|| sum.map(|s| s / n as f32))
+
+    /// Pixel `p`'s share of subject colour: its colour projected on the segment from the
+    /// plate's to the mean colour of the pixels of depth `inner` or less within [`WINDOW`].
+    /// None without such a pixel, or where the two colours are closer than `MIN_CONTRAST`.
+    fn share(&self, p: usize, inner: i32) -> Option<f32> {
+        let subject = self.mean_around(p, inner)?;
+        let (pixel, back) = (rgb(self.image, p), self.plate.at(p));
+        let d: [f32; 3] = std::array::from_fn(|c| subject[c] - back[c]);
+        let contrast = d.iter().map(|v| v * v).sum::<f32>();
+        let along: f32 = (0..3).map(|c| (pixel[c] - back[c]) * d[c]).sum();
+        (contrast > MIN_CONTRAST * MIN_CONTRAST).then(|| (along / contrast).clamp(0.0, 1.0))
+    }
+
+    /// The mean colour of the pixels of depth `inner` or less within [`WINDOW`] of pixel `p`.
+    fn mean_around(&self, p: usize, inner: i32) -> Option<[f32; 3]> {
+        let (w, h) = (self.image.width as i64, self.image.height as i64);
+        let (x, y) = (p as i64 % w, p as i64 / w);
+        let (mut sum, mut n) = ([0.0f32; 3], 0u32);
+        for v in (y - WINDOW).max(0)..=(y + WINDOW).min(h - 1) {
+            for u in (x - WINDOW).max(0)..=(x + WINDOW).min(w - 1) {
+                let q = (v * w + u) as usize;
+                if self.depth[q] <= inner {
+                    for (s, c) in sum.iter_mut().zip(rgb(self.image, q)) {
+                        *s += c;
+                    }
+                    n += 1;
+                }
+            }
+        }
+        (n > 0).then(|| sum.map(|s| s / n as f32))
+    }
 }
 
 /// Pixel `p`'s colour (a grey image's one value three times).
@@ -153,16 +190,30 @@ fn to_u8(value: f32) -> u8 {
     (value.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
-/// The pixels within `steps` 4-neighbour steps of a pixel of `set` (`w × h`, row-major).
-fn dilate(set: &[bool], w: usize, h: usize, steps: u32) -> Vec<bool> {
-    let mut grown = set.to_vec();
-    for _ in 0..steps {
-        let before = grown.clone();
-        for (p, grown) in grown.iter_mut().enumerate() {
-            *grown = before[p] || four_neighbours(p, w, h).any(|q| before[q]);
+/// Per pixel, 4-neighbour steps to the nearest pixel of `set` (`w × h`, row-major): 0 on the
+/// set, at most `cap` (further pixels, and every pixel when the set is empty, read `cap`).
+fn steps_from(set: &[bool], w: usize, h: usize, cap: u32) -> Vec<u32> {
+    let mut steps: Vec<u32> = set.iter().map(|&s| if s { 0 } else { cap }).collect();
+    let mut queue: VecDeque<usize> = (0..w * h).filter(|&p| set[p]).collect();
+    while let Some(p) = queue.pop_front() {
+        let next = steps[p] + 1;
+        for q in four_neighbours(p, w, h) {
+            if next < steps[q] {
+                steps[q] = next;
+                queue.push_back(q);
+            }
         }
     }
-    grown
+    steps
+}
+
+/// Per pixel, which ring of the outline of `subject` it lies on: 1, 2, … outside (steps to
+/// the subject), 0, -1, … inside (one less than the steps to a pixel outside); the outline
+/// lies between 0 and 1. Counted to [`MAX_STEPS`].
+fn depths(subject: &[bool], w: usize, h: usize) -> Vec<i32> {
+    let outside = steps_from(subject, w, h, MAX_STEPS);
+    let inside = steps_from(&complement(subject), w, h, MAX_STEPS);
+    (0..w * h).map(|p| if subject[p] { 1 - inside[p] as i32 } else { outside[p] as i32 }).collect()
 }
 
 /// Gives every pixel not `seen` the colour of the nearest seen one (4-neighbour steps, ties to
@@ -218,7 +269,8 @@ mod tests {
         }
         // Column 12 is covered 0.6 in frame 3, whose thresholded mask (columns 0-12) is eroded
         // by one, and 0.4 in frame 2, whose thresholded mask (columns 0-11) is dilated by one.
-        for (frame, wrong_edge) in [(3, 12.0), (2, 13.0)] {
+        // Frame 2's mask thresholded as it should be (columns 0-11) stays where it is.
+        for (frame, wrong_edge) in [(3, 12.0), (2, 13.0), (2, 12.0)] {
             let (image, truth) = &frames[frame];
             let mask: Vec<f32> =
                 (0..24 * 24).map(|p| ((p % 24) as f32 + 0.5 < wrong_edge) as u8 as f32).collect();

@@ -10,18 +10,40 @@ pub fn parallel_map<T: Sync, R: Send, E: Send>(
     items: &[T],
     f: impl Fn(&T) -> Result<R, E> + Sync,
 ) -> Result<Vec<R>, E> {
+    parallel_map_counted(items, f, &mut |_| {})
+}
+
+/// [`parallel_map`], calling `done(items finished so far)` on the calling thread as items
+/// finish (a progress display's count; the results do not depend on it).
+pub fn parallel_map_counted<T: Sync, R: Send, E: Send>(
+    items: &[T],
+    f: impl Fn(&T) -> Result<R, E> + Sync,
+    done: &mut dyn FnMut(usize),
+) -> Result<Vec<R>, E> {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(items.len());
     if threads <= 1 {
-        return items.iter().map(f).collect();
+        let mut finished = 0;
+        return items
+            .iter()
+            .map(|item| {
+                let result = f(item);
+                finished += 1;
+                done(finished);
+                result
+            })
+            .collect();
     }
     // Items are handed out one at a time: decode times differ by file, so fixed chunks would
     // leave threads idle.
     let next = AtomicUsize::new(0);
     let failed_at = AtomicUsize::new(usize::MAX);
-    let mut done: Vec<(usize, Result<R, E>)> = std::thread::scope(|scope| {
+    let (finished, finishing) = std::sync::mpsc::channel();
+    let mut results: Vec<(usize, Result<R, E>)> = std::thread::scope(|scope| {
         let workers: Vec<_> = (0..threads)
             .map(|_| {
-                scope.spawn(|| {
+                let finished = finished.clone();
+                let (next, failed_at, f) = (&next, &failed_at, &f);
+                scope.spawn(move || {
                     let mut mine = Vec::new();
                     loop {
                         let i = next.fetch_add(1, Ordering::Relaxed);
@@ -33,17 +55,24 @@ pub fn parallel_map<T: Sync, R: Send, E: Send>(
                             failed_at.fetch_min(i, Ordering::Relaxed);
                         }
                         mine.push((i, result));
+                        // The receiver lives until every worker has ended.
+                        let _ = finished.send(());
                     }
                 })
             })
             .collect();
+        // Each worker holds its own sender: the count ends when the last worker does.
+        drop(finished);
+        for (count, ()) in finishing.iter().enumerate() {
+            done(count + 1);
+        }
         workers
             .into_iter()
             .flat_map(|w| w.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
             .collect()
     });
-    done.sort_unstable_by_key(|(i, _)| *i);
-    done.into_iter().map(|(_, r)| r).collect()
+    results.sort_unstable_by_key(|(i, _)| *i);
+    results.into_iter().map(|(_, r)| r).collect()
 }
 
 /// The host's physical memory, bytes (`MemTotal` of `/proc/meminfo`); None where the system
@@ -77,6 +106,16 @@ mod tests {
         let failing = parallel_map(&items, |&x| if x % 100 == 37 { Err(x) } else { Ok(x) });
         assert_eq!(failing, Err(37));
         assert_eq!(parallel_map(&[] as &[u32], |&x| Ok::<_, ()>(x)), Ok(vec![]));
+    }
+
+    #[test]
+    fn the_count_reaches_every_item_once() {
+        let items: Vec<u32> = (0..100).collect();
+        let mut counts = Vec::new();
+        let doubled =
+            parallel_map_counted(&items, |&x| Ok::<_, ()>(2 * x), &mut |n| counts.push(n));
+        assert_eq!(doubled.unwrap(), items.iter().map(|x| 2 * x).collect::<Vec<_>>());
+        assert_eq!(counts, (1..=100).collect::<Vec<_>>());
     }
 
     #[test]

@@ -4,7 +4,7 @@
 use super::TrainError;
 use crate::camera::Camera;
 use crate::dataset::Dataset;
-use crate::io::host::parallel_map;
+use crate::io::host::parallel_map_counted;
 use crate::io::image::Image;
 
 /// One view of one frame as a training target (see the module docs).
@@ -75,6 +75,17 @@ pub fn load_targets(
     background: [f32; 3],
     use_masks: bool,
 ) -> Result<Vec<ViewTarget>, TrainError> {
+    load_targets_counted(dataset, frame, cameras, (background, use_masks), &mut |_| {})
+}
+
+/// [`load_targets`], calling `decoded(views done)` as each view is decoded.
+pub fn load_targets_counted(
+    dataset: &Dataset,
+    frame: usize,
+    cameras: &[usize],
+    (background, use_masks): ([f32; 3], bool),
+    decoded: &mut dyn FnMut(usize),
+) -> Result<Vec<ViewTarget>, TrainError> {
     let views = &dataset
         .frames
         .get(frame)
@@ -87,15 +98,19 @@ pub fn load_targets(
     let chosen: Vec<(usize, &crate::dataset::View)> =
         views.iter().enumerate().filter(|(_, v)| cameras.contains(&v.camera)).collect();
     // Decoding dominates loading a capture; the views decode side by side.
-    parallel_map(&chosen, |&(index, view)| {
-        let image = dataset.image(frame, index)?;
-        let mask = if use_masks { Some(dataset.mask(frame, index)?) } else { None };
-        Ok(ViewTarget {
-            name: dataset.camera_names[view.camera].clone(),
-            camera: dataset.cameras[view.camera],
-            target: composite(&image, mask.as_deref(), background),
-        })
-    })
+    parallel_map_counted(
+        &chosen,
+        |&(index, view)| {
+            let image = dataset.image(frame, index)?;
+            let mask = if use_masks { Some(dataset.mask(frame, index)?) } else { None };
+            Ok(ViewTarget {
+                name: dataset.camera_names[view.camera].clone(),
+                camera: dataset.cameras[view.camera],
+                target: composite(&image, mask.as_deref(), background),
+            })
+        },
+        decoded,
+    )
 }
 
 fn composite(image: &Image, mask: Option<&[f32]>, background: [f32; 3]) -> Vec<[f32; 4]> {

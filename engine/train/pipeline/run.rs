@@ -21,7 +21,7 @@ use crate::topology::{gaussians_from_mesh, import, InitConfig, ManifoldMesh, Top
 use crate::train::memory::{mib, refusal, CaptureMemory};
 use crate::train::output::{dc_vertex_colors, SequenceOutput};
 use crate::train::temporal::extrapolate;
-use crate::train::{load_targets, TrainError, ViewTarget};
+use crate::train::{load_targets, load_targets_counted, TrainError, ViewTarget};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -89,6 +89,8 @@ pub enum Stage {
     /// The training cameras' background plates, before frame 0, where the masks are refined
     /// from the images (each camera's frames are decoded: minutes on a large capture).
     Plates,
+    /// A frame's views being decoded (`iteration` of `iterations` views, held-out ones too).
+    Views,
     /// A frame's optimisation.
     Frame,
 }
@@ -295,7 +297,7 @@ fn run_logged(
             let out = job.out.clone();
             return Err(TrainError::MissingFrame { frame: t, needs: t - 1, out });
         }
-        let (train, eval) = views(&dataset, t, &job.config)?;
+        let (train, eval) = views(&dataset, t, &job.config, (frames.end, progress))?;
         // Without held-out cameras every training view is scored, those that lost the subject too.
         let eval = eval.unwrap_or_else(|| train.clone());
         let (train, lost_views) = with_subject(train);
@@ -459,7 +461,8 @@ fn canonical_start(
     let init = InitConfig { sh_degree: job.config.sh_degree, ..Default::default() };
     let start = gaussians_from_mesh(&mesh, &colors, &init);
     let stage = Instant::now();
-    let (train, eval) = views(dataset, 0, &job.config)?;
+    let frames_end = job.frames.as_ref().map_or(dataset.frames.len(), |f| f.end);
+    let (train, eval) = views(dataset, 0, &job.config, (frames_end, progress))?;
     report.startup.views_s = stage.elapsed().as_secs_f64();
     log.line(&format!(
         "frame 0: {} training and {} evaluation views decoded in {:.1} s",
@@ -565,17 +568,28 @@ fn with_subject(views: Vec<ViewTarget>) -> (Vec<ViewTarget>, Vec<String>) {
 }
 
 /// Training and evaluation targets of frame `t`: evaluation on the held-out cameras, None
-/// when there are none (the training views serve, without a second copy).
+/// when there are none (the training views serve, without a second copy). Progress counts
+/// the views decoded (`Stage::Views`; `frames_end` as the run's).
 fn views(
     dataset: &Dataset,
     t: usize,
     config: &TrainConfig,
+    (frames_end, progress): (usize, &mut dyn FnMut(TrainProgress)),
 ) -> Result<(Vec<ViewTarget>, Option<Vec<ViewTarget>>), TrainError> {
-    let train = load_targets(dataset, t, &dataset.train, config.background, true)?;
+    let all = (dataset.train.len() + dataset.test.len()) as u32;
+    // The held-out views count on from the training views.
+    let offset = std::cell::Cell::new(0);
+    let mut decoded = |done: usize| {
+        let (stage, iteration, iterations) = (Stage::Views, (offset.get() + done) as u32, all);
+        progress(TrainProgress { stage, frame: t, frames_end, iteration, iterations })
+    };
+    let with_masks = (config.background, true);
+    let train = load_targets_counted(dataset, t, &dataset.train, with_masks, &mut decoded)?;
+    offset.set(train.len());
     let eval = if dataset.test.is_empty() {
         None
     } else {
-        Some(load_targets(dataset, t, &dataset.test, config.background, true)?)
+        Some(load_targets_counted(dataset, t, &dataset.test, with_masks, &mut decoded)?)
     };
     Ok((train, eval))
 }
