@@ -5,7 +5,9 @@ use glam::{DMat4, DVec3, DVec4};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use tagsplat::dataset::{own, Dataset, DatasetError, Format, LoadOptions, PixelCenters};
+use tagsplat::dataset::{
+    own, Dataset, DatasetError, Format, LoadOptions, MaskRefinement, PixelCenters,
+};
 use tagsplat::io::image::{write_png, Image};
 
 fn temp(name: &str) -> PathBuf {
@@ -486,7 +488,10 @@ fn masks_a_ring_off_are_refined_against_the_background_plate() {
         ..Default::default()
     };
     generate(&o, &dir).unwrap();
-    let names = Dataset::load(&dir).unwrap().camera_names;
+    let mut over_black = Dataset::load(&dir).unwrap();
+    let kept = over_black.refine_masks_when(MaskRefinement::Auto, 0, &mut |_, _| {}).unwrap();
+    assert_eq!(kept, None, "over black the masks stay as given");
+    let names = over_black.camera_names;
     let mut coverage = Vec::new();
     for t in 0..frames {
         for (k, name) in names.iter().enumerate() {
@@ -503,8 +508,9 @@ fn masks_a_ring_off_are_refined_against_the_background_plate() {
     }
     let mut d = Dataset::load(&dir).unwrap();
     let mut reported = Vec::new();
-    let refined = d.refine_masks(&mut |done, cameras| reported.push((done, cameras))).unwrap();
-    assert_eq!(refined, views - 1, "every training camera has a plate");
+    let mut done = |done, cameras| reported.push((done, cameras));
+    let refined = d.refine_masks_when(MaskRefinement::Auto, 0, &mut done).unwrap();
+    assert_eq!(refined, Some(views - 1), "over a background every training camera has a plate");
     assert_eq!(reported, (0..views).map(|i| (i, views - 1)).collect::<Vec<_>>());
     let error =
         |m: &[f32], truth: &[f32]| m.iter().zip(truth).map(|(a, b)| (a - b).abs()).sum::<f32>();

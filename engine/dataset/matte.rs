@@ -90,7 +90,7 @@ impl Plate {
 }
 
 /// `mask` (one value per pixel of `image`, > 0.5 subject) with the two rings either side of
-/// its outline, moved a ring out or in where the images say so ([`outline_offset`]), replaced
+/// its outline, moved a ring out or in where the images say so (`Blend::outline_offset`), replaced
 /// by their share of subject colour against `plate`, in [0, 1]. A pixel keeps its value where
 /// no subject pixel lies in its window or the two colours are closer than `MIN_CONTRAST`
 /// (0.1). The mask comes back unchanged when its size or the plate's differs from the image's.

@@ -207,6 +207,19 @@ pub struct Frame {
     pub views: Vec<View>,
 }
 
+/// When a dataset's masks are refined from its images ([`Dataset::refine_masks_when`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MaskRefinement {
+    /// Where the images carry a background ([`background::background_share`]): over black,
+    /// the plate says nothing the masks do not.
+    Auto,
+    /// Always.
+    Always,
+    /// Never: the masks as given.
+    Never,
+}
+
 /// A loaded multi-view dataset: cameras in the engine's convention, frames in time order, and
 /// the file of every view. Images are decoded on demand through a bounded cache.
 #[derive(Debug)]
@@ -399,6 +412,23 @@ impl Dataset {
                 .alpha()
                 .ok_or_else(|| DatasetError::NoMask(v.image.clone())),
         }
+    }
+
+    /// Refines the training masks ([`Self::refine_masks`]) when `when` says so: `Auto` where
+    /// frame `frame`'s images carry a background. Returns the cameras refined, None when the
+    /// masks stay as given.
+    pub fn refine_masks_when(
+        &mut self,
+        when: MaskRefinement,
+        frame: usize,
+        done: &mut dyn FnMut(usize, usize),
+    ) -> Result<Option<usize>, DatasetError> {
+        let refine = match when {
+            MaskRefinement::Auto => background::background_share(self, frame)? > BACKGROUND_SHARE,
+            MaskRefinement::Always => true,
+            MaskRefinement::Never => false,
+        };
+        refine.then(|| self.refine_masks(done)).transpose()
     }
 
     /// Refines the training cameras' masks along their outline from the images, against each

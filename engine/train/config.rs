@@ -2,6 +2,7 @@
 //! (`tagsplat fit --print-config` prints them). Unknown keys and out-of-range values are errors
 //! naming the key.
 
+use crate::dataset::MaskRefinement;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -19,6 +20,9 @@ pub struct FitConfig {
     pub background: [f32; 3],
     /// Seeds view order, initial points and splits.
     pub seed: u64,
+    /// Whether the training views' masks are refined along their outline from the images
+    /// against each camera's background plate, as `train` does (`dataset::matte`).
+    pub refine_masks: MaskRefinement,
     /// Image loss weights.
     pub loss: LossWeights,
     /// Adam learning rates.
@@ -115,6 +119,7 @@ impl Default for FitConfig {
             sh_increase_every: 1000,
             background: [0.0; 3],
             seed: 0,
+            refine_masks: MaskRefinement::Auto,
             loss: LossWeights::default(),
             learning_rates: LearningRateConfig::default(),
             densify: DensifyConfig::default(),

@@ -38,7 +38,8 @@ pub fn run_fit_job(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<FitOutcome, TrainError> {
     job.config.check()?;
-    let dataset = Dataset::load_with(&job.data, &job.load)?;
+    let mut dataset = Dataset::load_with(&job.data, &job.load)?;
+    dataset.refine_masks_when(job.config.refine_masks, job.frame, &mut |_, _| {})?;
     let use_masks = job.config.loss.mask > 0.0 || job.init.is_none();
     let train =
         load_targets(&dataset, job.frame, &dataset.train, job.config.background, use_masks)?;

@@ -1,6 +1,7 @@
 //! The reconstruction pipeline's configuration: one TOML file, every key optional with a
 //! documented default (`tagsplat train --print-config`), errors naming the file and key.
 
+pub use crate::dataset::MaskRefinement;
 use crate::train::config::{
     check_appearance, check_ranges, load_toml, value_error, ConfigError, LearningRateConfig,
     LossWeights,
@@ -160,19 +161,6 @@ impl GraphConfig {
             self.nodes
         }
     }
-}
-
-/// When the masks are refined from the images ([`TrainConfig::refine_masks`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum MaskRefinement {
-    /// Where the images carry a background (`dataset::background`): over black, the plate
-    /// says nothing the masks do not.
-    Auto,
-    /// Always.
-    Always,
-    /// Never: the masks as given.
-    Never,
 }
 
 /// The pose a later frame's graph or temporal regularizers compare against.

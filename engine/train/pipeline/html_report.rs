@@ -152,7 +152,7 @@ fn frame_table(frames: &[FrameReport], eval: Option<&Eval>) -> String {
     let mut html = String::from(
         "<table><tr><th>frame</th><th>graph iterations</th><th>iterations</th><th>stop</th>\
          <th>seconds</th><th>Gaussians</th><th>PSNR Gaussians dB</th><th>SSIM Gaussians</th><th>PSNR colour-corrected dB</th>\
-         <th>PSNR mesh dB</th>",
+         <th>the same through the masks dB</th><th>PSNR mesh dB</th>",
     );
     if eval.is_some() {
         html += "<th>tracking RMSE % of size</th><th>of which along the surface</th>\
@@ -165,9 +165,9 @@ fn frame_table(frames: &[FrameReport], eval: Option<&Eval>) -> String {
             write!(
             html,
             "<tr><td>{}</td><td>{graph}</td><td>{}</td><td class=\"text\">{:?}</td><td>{:.1}</td>\
-             <td>{}</td><td>{:.2}</td><td>{:.4}</td><td>{:.2}</td><td>{:.2}</td>",
+             <td>{}</td><td>{:.2}</td><td>{:.4}</td><td>{:.2}</td><td>{:.2}</td><td>{:.2}</td>",
             f.frame, f.iterations, f.stop_reason, f.wall_s, f.gaussians, f.psnr_gs, f.ssim_gs,
-            f.psnr_gs_affine, f.psnr_mesh
+            f.psnr_gs_affine, f.psnr_gs_affine_masked, f.psnr_mesh
         );
         if eval.is_some() {
             let s = scores.get(&f.frame);
@@ -211,6 +211,7 @@ fn frame_panels(frames: &[FrameReport]) -> [Panel; 2] {
             series: vec![
                 series("Gaussians", |f| f.psnr_gs),
                 series("Gaussians, colour-corrected per view", |f| f.psnr_gs_affine),
+                series("the same, through the views' masks", |f| f.psnr_gs_affine_masked),
                 series("mesh", |f| f.psnr_mesh),
             ],
             equal_scale: false,

@@ -8,7 +8,6 @@ use super::frame::{optimize_frame, FrameReport, FrameTask, MatchSources};
 use super::html_report::write_html_report;
 use super::run_log::RunLog;
 use crate::camera::mean_up;
-use crate::dataset::background::{background_share, BACKGROUND_SHARE};
 use crate::dataset::{Dataset, LoadOptions, PixelCenters};
 use crate::gpu::GpuContext;
 use crate::init::{init_mesh, InitOptions};
@@ -186,13 +185,7 @@ fn refine_masks(
     log: &RunLog,
     done: &mut dyn FnMut(usize, usize),
 ) -> Result<(), TrainError> {
-    let refine = match when {
-        MaskRefinement::Auto => background_share(dataset, frame)? > BACKGROUND_SHARE,
-        MaskRefinement::Always => true,
-        MaskRefinement::Never => false,
-    };
-    if refine {
-        let refined = dataset.refine_masks(done)?;
+    if let Some(refined) = dataset.refine_masks_when(when, frame, done)? {
         let cameras = dataset.train.len();
         log.line(&format!(
             "masks refined along their outline against a background plate: {refined} of {cameras} training cameras"
@@ -396,7 +389,7 @@ fn frame_lines(f: &FrameReport) -> String {
         format!("graph [{}], ", levels.join("; "))
     });
     let mut text = format!(
-        "frame {}: {graph}{} iterations ({:?}){}, {:.1} s, {} Gaussians, PSNR {:.2} dB (Gaussians; {:.2} dB colour-corrected per view) {:.2} dB (mesh)",
+        "frame {}: {graph}{} iterations ({:?}){}, {:.1} s, {} Gaussians, PSNR {:.2} dB (Gaussians; {:.2} dB colour-corrected per view, {:.2} dB also through the views' masks) {:.2} dB (mesh)",
         f.frame,
         f.iterations,
         f.stop_reason,
@@ -408,6 +401,7 @@ fn frame_lines(f: &FrameReport) -> String {
         f.gaussians,
         f.psnr_gs,
         f.psnr_gs_affine,
+        f.psnr_gs_affine_masked,
         f.psnr_mesh
     );
     if !f.lost_views.is_empty() {
