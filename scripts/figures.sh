@@ -52,7 +52,7 @@ for what in "${@:-table}"; do
         record sort bench sort --n 4194304 --bits 32
         record splat bench splat
         record render bench render --gaussians 1000000 --width 1920 --height 1080 --views 2 --sh-degree 2
-    record train bench train
+        record train bench train
         record mesh bench mesh
         record track bench track
         ;;

@@ -35,8 +35,9 @@ pub struct CopyBandwidth {
     pub transfer_bytes_per_s: f64,
 }
 
-/// Two buffers of `bytes` (rounded down to 16) and the copy kernel, so copies can be recorded
-/// between other work of one submission and both see the same machine state.
+/// Two buffers of `bytes` (rounded down to 16, and to the device's largest storage buffer: a
+/// bandwidth needs no larger copy) and the copy kernel, so copies can be recorded between
+/// other work of one submission and both see the same machine state.
 pub struct CopyProbe {
     pipeline: ComputePipeline,
     src: GpuBuffer<[u32; 4]>,
@@ -47,7 +48,7 @@ impl CopyProbe {
     /// Creates the kernel and the two buffers and fills the source; fails when the pipeline or
     /// a buffer cannot be created or the fill cannot be submitted.
     pub fn new(ctx: &Arc<GpuContext>, bytes: u64) -> GpuResult<Self> {
-        let len = (bytes / 16) as usize;
+        let len = (bytes.min(ctx.limits().max_storage_buffer_range) / 16) as usize;
         let desc = PipelineDesc {
             name: "copy",
             shader: &shaders::BENCH_COPY,
