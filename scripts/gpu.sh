@@ -102,6 +102,7 @@ run() {
         bench render-1m render --gaussians "$big" "${wide[@]}" --views 2 --sh-degree 2
         bench render-6m render --gaussians "$many" "${wide[@]}" --views 2 --sh-degree 2
         bench train train
+        bench train-1-in-flight train --in-flight 1
         bench train-1080p train "${wide[@]}"
         bench mesh mesh
         rm -rf /tmp/gpu-fox_walk

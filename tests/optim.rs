@@ -4,7 +4,7 @@ mod common;
 
 use common::{gpu, rng};
 use std::sync::Arc;
-use tagsplat::gpu::{GpuContext, Recorder};
+use tagsplat::gpu::{Batch, GpuContext, Recorder, Replay};
 use tagsplat::optim::{Adam, AdamParams, LearningRates, NEW_ROW};
 use tagsplat::splat::{sh_coefficients, GaussianBuffers, GaussianScene};
 
@@ -209,4 +209,85 @@ fn mismatched_shapes_and_empty_sets() {
     assert!(adam.is_empty());
     adam.remap(&[NEW_ROW, 5]).unwrap();
     assert_eq!(moments_f64(&adam)[4], vec![[0.0; 2]; 6]);
+}
+
+/// The parameters of step `step`: the rates scaled per step, so a step that read another
+/// step's slot would show.
+fn params_of_step(step: u32, params: &GaussianBuffers) -> AdamParams {
+    let s = 1.0 + step as f32 * 0.25;
+    let rates = LearningRates { positions: RATES.positions * s, sh_dc: RATES.sh_dc / s, ..RATES };
+    AdamParams::new(&rates, step, params.len(), params.sh_degree())
+}
+
+#[test]
+fn replayed_steps_in_flight_match_fresh_recordings() {
+    let g = gpu();
+    let ctx = g.ctx();
+    let (n, degree, steps) = (301, 1, 7u32);
+    let scene = random_scene(n, degree, 5);
+    let grads = GaussianBuffers::from_scene(ctx, &random_scene(n, degree, 6)).unwrap();
+
+    // Fresh: one recording per step, each waited for.
+    let fresh = GaussianBuffers::from_scene(ctx, &scene).unwrap();
+    let adam = Adam::new(ctx, &fresh).unwrap();
+    for step in 1..=steps {
+        let mut rec = Recorder::new(ctx).unwrap();
+        adam.record_step(&mut rec, &fresh, &grads, &params_of_step(step, &fresh)).unwrap();
+        rec.submit_and_wait().unwrap();
+    }
+
+    // Replayed: one recording per ring slot, two steps on the queue at a time, each step's
+    // parameters written into its slot before its submit.
+    let replayed = GaussianBuffers::from_scene(ctx, &scene).unwrap();
+    let mut adam = Adam::new(ctx, &replayed).unwrap();
+    adam.reserve_slots(2).unwrap();
+    let replays: Vec<Replay> = (0..2)
+        .map(|slot| {
+            let mut rec = Recorder::reusable(ctx).unwrap();
+            adam.record_step_from(&mut rec, &replayed, &grads, slot).unwrap();
+            rec.finish().unwrap()
+        })
+        .collect();
+    let mut batches: Vec<Batch> = (0..2).map(|_| Batch::new(ctx).unwrap()).collect();
+    for step in 1..=steps {
+        let slot = step as usize % 2;
+        batches[slot].wait(&[&replays[slot]]).unwrap();
+        adam.set_step(slot, &params_of_step(step, &replayed));
+        batches[slot].submit(&[&replays[slot]]).unwrap();
+        assert!(replays[slot].is_pending());
+    }
+    for (batch, replay) in batches.iter_mut().zip(&replays) {
+        batch.wait(&[replay]).unwrap();
+    }
+    let (a, b) = (fresh.to_scene().unwrap(), replayed.to_scene().unwrap());
+    assert_eq!(flat(&a), flat(&b), "replayed steps differ from fresh ones");
+    assert_ne!(flat(&a), flat(&scene), "the steps moved nothing");
+}
+
+#[test]
+fn a_batch_refuses_pending_and_stale_replays() {
+    let g = gpu();
+    let ctx = g.ctx();
+    let params = GaussianBuffers::from_scene(ctx, &random_scene(10, 0, 7)).unwrap();
+    let grads = GaussianBuffers::from_scene(ctx, &random_scene(10, 0, 8)).unwrap();
+    let adam = Adam::new(ctx, &params).unwrap();
+    adam.set_step(0, &params_of_step(1, &params));
+    let mut rec = Recorder::reusable(ctx).unwrap();
+    adam.record_step_from(&mut rec, &params, &grads, 0).unwrap();
+    let replay = rec.finish().unwrap();
+    let (mut first, mut second) = (Batch::new(ctx).unwrap(), Batch::new(ctx).unwrap());
+    first.submit(&[&replay]).unwrap();
+    let pending = second.submit(&[&replay]).unwrap_err().to_string();
+    assert!(pending.contains("still on the queue"), "{pending}");
+    let again = first.submit(&[&replay]).unwrap_err().to_string();
+    assert!(again.contains("the batch is still on the queue"), "{again}");
+    first.wait(&[&replay]).unwrap();
+    // A buffer destroyed since the recording (any: the replay cannot tell which it names).
+    drop(GaussianBuffers::from_scene(ctx, &random_scene(3, 0, 9)).unwrap());
+    assert!(!replay.is_current());
+    let stale = first.submit(&[&replay]).unwrap_err().to_string();
+    assert!(stale.contains("destroyed since it was recorded"), "{stale}");
+    // A slot past the ring is refused at recording.
+    let mut rec = Recorder::reusable(ctx).unwrap();
+    assert!(adam.record_step_from(&mut rec, &params, &grads, 1).is_err());
 }

@@ -135,6 +135,10 @@ enum Bench {
         /// Timed iterations (after a warm-up round over the views).
         #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u64).range(1..=100000))]
         iterations: u64,
+        /// Training steps on the queue at once (default: what train uses: TAGSPLAT_IN_FLIGHT,
+        /// else 1 on a CPU device and 3 elsewhere).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=8))]
+        in_flight: Option<u64>,
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
@@ -257,12 +261,15 @@ fn run_command(command: Command, gpu: &Contexts) -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench(Bench::Train { scene, iterations, json }) => {
+        Command::Bench(Bench::Train { scene, iterations, in_flight, json }) => {
             let ctx = gpu.create()?;
-            let scene = scene.config(2);
-            let report =
-                bench_train(&ctx, &TrainBenchConfig { scene, iterations: iterations as usize })
-                    .context("bench train")?;
+            let defaults = TrainBenchConfig::for_device(&ctx);
+            let config = TrainBenchConfig {
+                scene: scene.config(2),
+                iterations: iterations as usize,
+                in_flight: in_flight.map_or(defaults.in_flight, |n| n as usize),
+            };
+            let report = bench_train(&ctx, &config).context("bench train")?;
             show(&report, &ctx, json, print_train_report)
         }
         Command::Bench(Bench::Splat { scene, rounds, json }) => {
@@ -551,9 +558,10 @@ fn print_train_report(r: &TrainBenchReport) {
         c.gaussians, c.sh_degree, c.views, c.width, c.height
     );
     println!(
-        "iteration           {:.1} ms (median of {}) = {:.2} it/s",
+        "iteration           {:.1} ms (mean of {}, {} in flight) = {:.2} it/s",
         r.s_per_iter * 1e3,
         r.config.iterations,
+        r.config.in_flight,
         r.iters_per_s
     );
     println!(

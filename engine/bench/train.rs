@@ -7,6 +7,7 @@ use crate::gpu::{ClockReading, GpuBuffer, GpuContext, Recorder};
 use crate::loss::{ImageLoss, LossTarget, LossTerms, ScoredRender};
 use crate::optim::{AdamParams, LearningRates};
 use crate::splat::{GaussianBuffers, RenderSettings, Splatter};
+use crate::train::in_flight::{StepRing, StepTerms};
 use crate::train::{TrainError, Trainer, ViewTarget};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -19,11 +20,18 @@ pub struct TrainBenchConfig {
     pub scene: SplatBenchConfig,
     /// Timed iterations, after one warm-up round over the views.
     pub iterations: usize,
+    /// Training steps on the queue at once (`GpuContext::steps_in_flight`).
+    pub in_flight: usize,
 }
 
-impl Default for TrainBenchConfig {
-    fn default() -> Self {
-        Self { scene: SplatBenchConfig::default(), iterations: 24 }
+impl TrainBenchConfig {
+    /// The defaults with the steps in flight `train` uses on `ctx`.
+    pub fn for_device(ctx: &GpuContext) -> Self {
+        Self {
+            scene: SplatBenchConfig::default(),
+            iterations: 24,
+            in_flight: ctx.steps_in_flight(),
+        }
     }
 }
 
@@ -34,7 +42,8 @@ pub struct TrainBenchReport {
     pub device: String,
     /// The configuration that ran.
     pub config: TrainBenchConfig,
-    /// Median wall seconds of one full iteration.
+    /// Wall seconds of one full iteration: the timed iterations' wall time over their number
+    /// (with steps in flight, one iteration's own wall time means nothing).
     pub s_per_iter: f64,
     /// Iterations per second (1 / s_per_iter; 0 when that is 0).
     pub iters_per_s: f64,
@@ -69,8 +78,9 @@ const RATES: LearningRates = LearningRates {
 };
 
 /// Trains [`random_scene`] against renders of another random scene for one warm-up round
-/// over the views plus `iterations` timed steps, then runs [`bench_splat`] (2 rounds) on the
-/// same scene for the floor. Fails when a render, the trainer or a step fails.
+/// over the views plus `iterations` timed steps, replayed as `train` replays them with
+/// `in_flight` steps on the queue, then runs [`bench_splat`] (2 rounds) on the same scene
+/// for the floor. Fails when a render, the trainer or a step fails.
 pub fn bench_train(
     ctx: &Arc<GpuContext>,
     config: &TrainBenchConfig,
@@ -88,24 +98,33 @@ pub fn bench_train(
     }
     drop(splatter);
     let mut trainer = Trainer::new(ctx, &scene, &views)?;
-    let (mut walls, mut passes) = (Vec::new(), Vec::new());
-    let mut clock = ClockReading::default();
-    for it in 0..c.views + config.iterations {
-        let (start, before) = (Instant::now(), ctx.clock());
+    let mut ring = StepRing::new(&mut trainer, config.in_flight)?;
+    let step = |ring: &mut StepRing, trainer: &mut Trainer, it: usize| {
         let adam = AdamParams::new(&RATES, it as u32 + 1, trainer.gaussians(), trainer.sh_degree());
-        let (times, _) =
-            trainer.step(it % c.views, &settings, [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0], &adam)?;
-        if it >= c.views {
-            walls.push(start.elapsed().as_secs_f64());
-            passes.push(super::splat::top_level_ms(&[times]));
-            clock = clock.plus(&ctx.clock().since(&before));
-        }
+        ring.step(trainer, (&BenchStage, WEIGHTS), it % c.views, &settings, &adam)
+    };
+    for it in 0..c.views {
+        step(&mut ring, &mut trainer, it)?;
     }
-    let wall_s: f64 = walls.iter().sum();
-    let host_ms_per_iter = (wall_s - clock.device_s) * 1e3 / walls.len().max(1) as f64;
+    ring.drain(&mut trainer)?;
+    let (start, before) = (Instant::now(), ctx.clock());
+    let mut finished = Vec::new();
+    for it in c.views..c.views + config.iterations {
+        finished.extend(step(&mut ring, &mut trainer, it)?);
+    }
+    finished.extend(ring.drain(&mut trainer)?);
+    let wall_s = start.elapsed().as_secs_f64();
+    let clock = ctx.clock().since(&before);
+    let iterations = config.iterations.max(1) as f64;
+    let host_ms_per_iter = (wall_s - clock.device_s) * 1e3 / iterations;
     let host_fraction = clock.host_share(wall_s);
+    let passes: Vec<_> = finished
+        .iter()
+        .map(|f| super::splat::top_level_ms(std::slice::from_ref(&f.times)))
+        .collect();
     let passes_ms = super::median_per_pass(&passes);
-    let s_per_iter = super::median(walls);
+    let s_per_iter = wall_s / iterations;
+    drop(ring);
     drop(trainer);
     // A loss run is about a tenth of an iteration: four per iteration steadies the median.
     let loss_ms = [
@@ -127,6 +146,14 @@ pub fn bench_train(
         host_fraction,
     })
 }
+
+/// The channel weights of the fit's defaults.
+const WEIGHTS: [f32; 4] = [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 3.0];
+
+/// The splatting loss alone, then Adam: a fit's step without densification.
+struct BenchStage;
+
+impl StepTerms for BenchStage {}
 
 /// Median GPU ms over `runs` of the image loss scoring `renders` renders (the next views'
 /// targets, so the images are realistic) against the first view's target.

@@ -227,6 +227,12 @@ impl GraphDeformer {
         rotation_rate: f32,
         step: u32,
     ) -> GpuResult<()> {
+        let adam = self.adam_params(translation_rate, rotation_rate, step);
+        self.adam.record_step(rec, &self.nodes, &self.node_grads, &adam)
+    }
+
+    /// The Adam parameters of step `step` (from 1) of the node transforms.
+    pub fn adam_params(&self, translation_rate: f32, rotation_rate: f32, step: u32) -> AdamParams {
         let rates = LearningRates {
             positions: translation_rate,
             log_scales: 0.0,
@@ -235,12 +241,24 @@ impl GraphDeformer {
             sh_dc: 0.0,
             sh_rest: 0.0,
         };
-        self.adam.record_step(
-            rec,
-            &self.nodes,
-            &self.node_grads,
-            &AdamParams::new(&rates, step, self.nodes(), 0),
-        )
+        AdamParams::new(&rates, step, self.nodes(), 0)
+    }
+
+    /// Makes room for `slots` steps in flight ([`Self::record_adam_from`]).
+    pub fn reserve_step_slots(&mut self, slots: usize) -> GpuResult<()> {
+        self.adam.reserve_slots(slots)
+    }
+
+    /// Sets the parameters ([`Self::adam_params`]) of the step recorded with ring slot `slot`;
+    /// no submission that uses the slot may be on the queue.
+    pub fn set_step(&self, slot: usize, adam: &AdamParams) {
+        self.adam.set_step(slot, adam);
+    }
+
+    /// Records one Adam step of the node transforms with the parameters in ring slot `slot`
+    /// when it runs: a step recorded once and replayed.
+    pub fn record_adam_from<'a>(&'a self, rec: &mut Recorder<'a>, slot: usize) -> GpuResult<()> {
+        self.adam.record_step_from(rec, &self.nodes, &self.node_grads, slot)
     }
 
     /// The ARAP energy summed since the last call (which restarts the sum).

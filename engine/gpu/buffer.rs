@@ -35,6 +35,13 @@ pub struct BufferBinding<'a> {
     _buffer: PhantomData<&'a ()>,
 }
 
+impl BufferBinding<'_> {
+    /// The whole of `buffer`; the caller keeps it alive as long as the binding is used.
+    pub(crate) fn whole(buffer: vk::Buffer) -> Self {
+        Self { buffer, offset: 0, range: vk::WHOLE_SIZE, _buffer: PhantomData }
+    }
+}
+
 impl<T: Pod> GpuBuffer<T> {
     /// A device buffer of `len` elements (contents undefined). Refuses sizes over the device's
     /// `maxStorageBufferRange` or `maxMemoryAllocationSize` with an error naming the buffer.
@@ -89,7 +96,7 @@ impl<T: Pod> GpuBuffer<T> {
     /// The whole buffer as a dispatch binding.
     #[inline]
     pub fn binding(&self) -> BufferBinding<'_> {
-        BufferBinding { buffer: self.raw, offset: 0, range: vk::WHOLE_SIZE, _buffer: PhantomData }
+        BufferBinding::whole(self.raw)
     }
 
     #[inline]
@@ -105,6 +112,7 @@ impl<T: Pod> GpuBuffer<T> {
         if data.is_empty() {
             return Ok(());
         }
+        self.ctx.settle();
         if let Some(mapped) = self.coherent_mapping() {
             let bytes: &[u8] = bytemuck::cast_slice(data);
             unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), mapped, bytes.len()) };
@@ -146,6 +154,7 @@ impl<T: Pod> GpuBuffer<T> {
         if len == 0 {
             return Ok(out);
         }
+        self.ctx.settle();
         if let Some(mapped) = self.coherent_mapping() {
             let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
             unsafe {
@@ -196,6 +205,8 @@ impl<T: Pod> GpuBuffer<T> {
 
 impl<T: Pod> Drop for GpuBuffer<T> {
     fn drop(&mut self) {
+        self.ctx.settle();
+        self.ctx.replays().resource_destroyed();
         if let Some(allocation) = self.allocation.take() {
             free(&self.ctx, self.raw, allocation);
         }

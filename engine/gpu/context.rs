@@ -5,6 +5,7 @@
 use super::error::{GpuError, GpuResult, VkContext};
 use super::features::{DeviceCapabilities, REQUIRED_EXTENSIONS};
 use super::host_clock::{ClockReading, HostClock};
+use super::replay::ReplayState;
 use super::select::{choose_device, DeviceInfo, DEVICE_ENV};
 use super::staging::StagingPool;
 use super::usage::{BufferBytes, BufferUsage};
@@ -14,8 +15,8 @@ use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 /// How to create a context. `None` fields fall back to the environment (`TAGSPLAT_DEVICE`,
-/// `TAGSPLAT_VALIDATION=1`, `TAGSPLAT_FORCE_STAGING=1`) and then to the defaults (policy, off,
-/// off). Forced staging sends every upload and readback through staging buffers even where the
+/// `TAGSPLAT_VALIDATION=1`, `TAGSPLAT_FORCE_STAGING=1`, `TAGSPLAT_IN_FLIGHT=N`) and then to
+/// the defaults (policy, off, off, by device). Forced staging sends every upload and readback through staging buffers even where the
 /// device's memory is host-visible (lavapipe), so CI runs a discrete GPU's path.
 #[derive(Clone, Debug, Default)]
 pub struct ContextOptions {
@@ -25,6 +26,30 @@ pub struct ContextOptions {
     pub validation: Option<bool>,
     /// Whether to send every upload and readback through staging buffers.
     pub force_staging: Option<bool>,
+    /// Training steps on the queue at once, 1 to [`MAX_STEPS_IN_FLIGHT`] (default: 1 on a CPU
+    /// device, whose host and device share the cores, 3 elsewhere). Every depth gives the same
+    /// bytes run to run; depths differ from one another only where a step's intersections
+    /// outgrew the splatter's buffers.
+    pub steps_in_flight: Option<usize>,
+}
+
+/// Set to a number from 1 to [`MAX_STEPS_IN_FLIGHT`]: [`ContextOptions::steps_in_flight`].
+pub const IN_FLIGHT_ENV: &str = "TAGSPLAT_IN_FLIGHT";
+/// The most training steps on the queue at once.
+pub const MAX_STEPS_IN_FLIGHT: usize = 8;
+
+/// The steps in flight `options` ask for, else [`IN_FLIGHT_ENV`], else the device's default.
+fn steps_in_flight(options: &ContextOptions, info: &DeviceInfo) -> GpuResult<usize> {
+    let (value, variable) = match (options.steps_in_flight, std::env::var(IN_FLIGHT_ENV)) {
+        (Some(n), _) => (n.to_string(), "ContextOptions::steps_in_flight"),
+        (None, Ok(value)) => (value, IN_FLIGHT_ENV),
+        (None, Err(_)) if info.kind == vk::PhysicalDeviceType::CPU => return Ok(1),
+        (None, Err(_)) => return Ok(3),
+    };
+    match value.trim().parse::<usize>() {
+        Ok(n) if (1..=MAX_STEPS_IN_FLIGHT).contains(&n) => Ok(n),
+        _ => Err(GpuError::InvalidSetting { variable, value, expected: "a number from 1 to 8" }),
+    }
 }
 
 /// Device limits and properties the engine sizes its work by.
@@ -85,6 +110,8 @@ pub struct GpuContext {
     force_staging: bool,
     clock: HostClock,
     buffers: BufferUsage,
+    replays: ReplayState,
+    in_flight: usize,
 }
 
 /// Set to 1, forces the staging path (see [`ContextOptions`]).
@@ -117,7 +144,9 @@ impl GpuContext {
             let chosen = choose_device(&devices, wanted.as_deref())?;
             Ok((devices[chosen].clone(), handles[chosen]))
         })();
-        let (info, physical_device) = match rest {
+        let rest =
+            rest.and_then(|(info, device)| Ok((steps_in_flight(options, &info)?, info, device)));
+        let (in_flight, info, physical_device) = match rest {
             Ok(v) => v,
             Err(e) => {
                 unsafe { destroy_instance(&instance, messenger) };
@@ -187,6 +216,8 @@ impl GpuContext {
                 .unwrap_or_else(|| std::env::var(FORCE_STAGING_ENV).is_ok_and(|v| v == "1")),
             clock: HostClock::default(),
             buffers: BufferUsage::default(),
+            replays: ReplayState::default(),
+            in_flight,
         }))
     }
 
@@ -219,6 +250,11 @@ impl GpuContext {
         self.force_staging
     }
 
+    /// Training steps on the queue at once ([`ContextOptions::steps_in_flight`]).
+    pub fn steps_in_flight(&self) -> usize {
+        self.in_flight
+    }
+
     /// Recording, waiting and device time of every submission so far (see [`ClockReading`]).
     pub fn clock(&self) -> ClockReading {
         self.clock.read()
@@ -237,6 +273,21 @@ impl GpuContext {
     /// The running totals each submission adds to.
     pub(crate) fn host_clock(&self) -> &HostClock {
         &self.clock
+    }
+
+    /// What recorded command buffers need to know: whether the resources they name still
+    /// exist, and whether any is on the queue (see [`super::Replay`]).
+    pub(crate) fn replays(&self) -> &ReplayState {
+        &self.replays
+    }
+
+    /// Waits until no replayed batch is on the queue. Called before the host touches or frees
+    /// GPU memory, which a batch still running may use.
+    pub(crate) fn settle(&self) {
+        if self.replays.in_flight() {
+            // A failed wait leaves nothing to protect: the device is lost.
+            let _ = unsafe { self.device.queue_wait_idle(*self.queue()) };
+        }
     }
 
     /// The staging buffers (lock held from the host copy to the fence).

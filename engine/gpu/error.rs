@@ -93,6 +93,9 @@ pub enum GpuError {
         /// The driver's result.
         result: vk::Result,
     },
+    /// A batch of recorded command buffers cannot go on the queue (see `Batch::submit`).
+    #[error("cannot submit the batch: {0}")]
+    BatchRefused(&'static str),
     /// An environment variable that tunes the engine holds a value it does not accept.
     #[error("environment variable {variable}=\"{value}\" is not valid; expected {expected}")]
     InvalidSetting {

@@ -22,7 +22,6 @@ impl HostClock {
     /// Adds one submission: its recording and waiting wall times, and its device span (None
     /// where the queue writes no timestamps).
     pub(crate) fn add(&self, recording: Duration, waiting: Duration, device_ms: Option<f64>) {
-        let ns = |d: Duration| d.as_nanos().min(u64::MAX as u128) as u64;
         self.submissions.fetch_add(1, Ordering::Relaxed);
         self.recording_ns.fetch_add(ns(recording), Ordering::Relaxed);
         self.waiting_ns.fetch_add(ns(waiting), Ordering::Relaxed);
@@ -30,6 +29,12 @@ impl HostClock {
             self.timed_submissions.fetch_add(1, Ordering::Relaxed);
             self.device_ns.fetch_add((ms.max(0.0) * 1e6) as u64, Ordering::Relaxed);
         }
+    }
+
+    /// Adds the recording time of a command buffer recorded once and replayed (its
+    /// submissions add their waiting and device time with zero recording).
+    pub(crate) fn add_recording(&self, recording: Duration) {
+        self.recording_ns.fetch_add(ns(recording), Ordering::Relaxed);
     }
 
     pub(crate) fn read(&self) -> ClockReading {
@@ -42,6 +47,10 @@ impl HostClock {
             device_s: s(&self.device_ns),
         }
     }
+}
+
+fn ns(d: Duration) -> u64 {
+    d.as_nanos().min(u64::MAX as u128) as u64
 }
 
 /// A context's totals since it was created ([`GpuContext::clock`](super::GpuContext::clock));

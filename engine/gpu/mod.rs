@@ -7,8 +7,10 @@ mod error;
 mod features;
 mod fixed_sum;
 mod host_clock;
+mod host_ring;
 mod pipeline;
 mod recorder;
+mod replay;
 mod select;
 mod shader;
 mod staging;
@@ -17,13 +19,17 @@ mod usage;
 mod validation;
 
 pub use buffer::{BufferBinding, GpuBuffer};
-pub use context::{ContextOptions, DeviceLimits, GpuContext, FORCE_STAGING_ENV};
+pub use context::{
+    ContextOptions, DeviceLimits, GpuContext, FORCE_STAGING_ENV, IN_FLIGHT_ENV, MAX_STEPS_IN_FLIGHT,
+};
 pub use error::{GpuError, GpuResult};
 pub use features::DeviceCapabilities;
 pub use fixed_sum::{decode_fixed_sums, FixedPrecision, FixedResolve, FixedSums};
 pub use host_clock::ClockReading;
+pub use host_ring::HostRing;
 pub use pipeline::{ComputePipeline, PipelineDesc};
 pub use recorder::Recorder;
+pub use replay::{Batch, Replay};
 pub use select::{choose_device, DeviceInfo, DEVICE_ENV};
 pub(crate) use shader::push_layout;
 pub use shader::Shader;

@@ -128,6 +128,8 @@ impl ComputePipeline {
 
 impl Drop for ComputePipeline {
     fn drop(&mut self) {
+        self.ctx.settle();
+        self.ctx.replays().resource_destroyed();
         let device = self.ctx.device();
         unsafe {
             device.destroy_pipeline(self.pipeline, None);

@@ -1,15 +1,19 @@
 //! Command recording: dispatches, copies and fills into one command buffer, a barrier between
-//! every two commands, timestamps around named passes, then one submit that waits on a fence.
+//! every two commands, timestamps around named passes, then one submit that waits on a fence,
+//! or, for a command buffer run many times, a [`Replay`] to submit in [`Batch`](super::Batch)es.
 //!
 //! Barriers: every command may read what the one before it wrote, so the recorder puts a full
-//! compute/transfer memory barrier between consecutive commands. Kernels in this engine are
+//! compute/transfer memory barrier between consecutive commands, and one before the first
+//! (what earlier submissions wrote, when several are on the queue). Kernels in this engine are
 //! chained (project → bin → sort → rasterize), so almost every pair depends anyway, and this
 //! keeps synchronization validation clean by construction.
 
 use super::buffer::{BufferBinding, GpuBuffer};
 use super::context::GpuContext;
 use super::error::{GpuError, GpuResult, VkContext};
+use super::host_ring::HostRing;
 use super::pipeline::ComputePipeline;
+use super::replay::Replay;
 use super::timing::{PassTimes, Timestamps};
 use ash::vk;
 use bytemuck::Pod;
@@ -41,6 +45,17 @@ const STAGES: vk::PipelineStageFlags = vk::PipelineStageFlags::from_raw(
 impl<'a> Recorder<'a> {
     /// An empty recorder with its own command pool, command buffer and fence.
     pub fn new(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
+        Self::begin(ctx, vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT)
+    }
+
+    /// An empty recorder whose commands become a [`Replay`] ([`Self::finish`]), submitted as
+    /// often as wanted. Anything that changes between submissions must be read from a buffer:
+    /// push constants and bindings are fixed at recording.
+    pub fn reusable(ctx: &Arc<GpuContext>) -> GpuResult<Self> {
+        Self::begin(ctx, vk::CommandBufferUsageFlags::empty())
+    }
+
+    fn begin(ctx: &Arc<GpuContext>, usage: vk::CommandBufferUsageFlags) -> GpuResult<Self> {
         let device = ctx.device();
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(ctx.queue_family())
@@ -52,7 +67,7 @@ impl<'a> Recorder<'a> {
             cmd: vk::CommandBuffer::null(),
             fence: vk::Fence::null(),
             timestamps: Timestamps::new(ctx),
-            pending_writes: false,
+            pending_writes: true,
             in_flight: false,
             started: Instant::now(),
             _resources: PhantomData,
@@ -65,8 +80,7 @@ impl<'a> Recorder<'a> {
             .during("vkAllocateCommandBuffers")?[0];
         recorder.fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }
             .during("vkCreateFence")?;
-        let begin = vk::CommandBufferBeginInfo::default()
-            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        let begin = vk::CommandBufferBeginInfo::default().flags(usage);
         unsafe { device.begin_command_buffer(recorder.cmd, &begin) }
             .during("vkBeginCommandBuffer")?;
         recorder.timestamps.mark_span(device, recorder.cmd, false);
@@ -209,6 +223,22 @@ impl<'a> Recorder<'a> {
         self.pending_writes = true;
     }
 
+    /// Copies element `index` of `src` into slot `slot` of `ring`, for the host to read once
+    /// the submission is done.
+    pub fn copy_to_ring<T: Pod>(
+        &mut self,
+        (src, index): (&'a GpuBuffer<T>, usize),
+        (ring, slot): (&'a HostRing<T>, usize),
+    ) {
+        assert!(index < src.len() && slot < ring.slots(), "copy to a ring out of bounds");
+        let element = size_of::<T>() as u64;
+        self.copy_bytes(
+            (src.raw(), index as u64 * element),
+            (ring.raw(), slot as u64 * element),
+            element,
+        );
+    }
+
     /// Fills the whole buffer with copies of the 32-bit `value`.
     pub fn fill_buffer<T: Pod>(&mut self, buffer: &'a GpuBuffer<T>, value: u32) {
         if buffer.is_empty() {
@@ -232,9 +262,43 @@ impl<'a> Recorder<'a> {
 
     /// Submits everything recorded, waits until the GPU has finished, and returns the pass times.
     pub fn submit_and_wait(mut self) -> GpuResult<PassTimes> {
+        let recording = self.end()?;
+        let submitted = Instant::now();
         let device = self.ctx.device();
-        let (recording, submitted) = unsafe {
-            // Make every write visible to the host, which reads results after the fence.
+        unsafe {
+            let cmds = [self.cmd];
+            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            {
+                let queue = self.ctx.queue();
+                device.queue_submit(*queue, &[submit], self.fence).during("vkQueueSubmit")?;
+            }
+            self.in_flight = true;
+            device.wait_for_fences(&[self.fence], true, u64::MAX).during("vkWaitForFences")?;
+            self.in_flight = false;
+        }
+        let waiting = submitted.elapsed();
+        let (times, device_ms) = self.timestamps.read(device)?;
+        self.ctx.host_clock().add(recording, waiting, device_ms);
+        Ok(times)
+    }
+
+    /// Ends the recording as a [`Replay`]. Its recording time goes to the context's host clock
+    /// now, its waiting and device time with each [`Batch`](super::Batch) that runs it.
+    pub fn finish(mut self) -> GpuResult<Replay> {
+        let recording = self.end()?;
+        self.ctx.host_clock().add_recording(recording);
+        let commands = (self.pool, self.cmd);
+        // The replay owns the pool, command buffer and queries now; Drop frees only the fence.
+        (self.pool, self.cmd) = (vk::CommandPool::null(), vk::CommandBuffer::null());
+        let timestamps = std::mem::replace(&mut self.timestamps, Timestamps::new(&self.ctx));
+        Ok(Replay::new(self.ctx.clone(), commands, timestamps))
+    }
+
+    /// Makes every write visible to the host (which reads results after the fence), marks the
+    /// device span's end and ends the command buffer; returns the time spent recording.
+    fn end(&mut self) -> GpuResult<std::time::Duration> {
+        let device = self.ctx.device();
+        unsafe {
             let to_host = vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
                 .dst_access_mask(vk::AccessFlags::HOST_READ);
@@ -249,22 +313,8 @@ impl<'a> Recorder<'a> {
             );
             self.timestamps.mark_span(device, self.cmd, true);
             device.end_command_buffer(self.cmd).during("vkEndCommandBuffer")?;
-            let (recording, submitted) = (self.started.elapsed(), Instant::now());
-            let cmds = [self.cmd];
-            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
-            {
-                let queue = self.ctx.queue();
-                device.queue_submit(*queue, &[submit], self.fence).during("vkQueueSubmit")?;
-            }
-            self.in_flight = true;
-            device.wait_for_fences(&[self.fence], true, u64::MAX).during("vkWaitForFences")?;
-            self.in_flight = false;
-            (recording, submitted)
-        };
-        let waiting = submitted.elapsed();
-        let (times, device_ms) = self.timestamps.read(device)?;
-        self.ctx.host_clock().add(recording, waiting, device_ms);
-        Ok(times)
+        }
+        Ok(self.started.elapsed())
     }
 
     fn barrier_if_needed(&mut self) {

@@ -3,8 +3,8 @@
 //! each parameter buffer; [`Adam::remap`] carries them through a change of the Gaussian set.
 
 use crate::gpu::{
-    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, PipelineDesc,
-    Recorder,
+    push_layout, ComputePipeline, GpuBuffer, GpuContext, GpuError, GpuResult, HostRing,
+    PipelineDesc, Recorder,
 };
 use crate::shaders;
 use crate::splat::{sh_coefficients, GaussianBuffers};
@@ -35,9 +35,10 @@ pub struct LearningRates {
     pub sh_rest: f32,
 }
 
-/// Push constants of adam_step.comp (`AdamParams` in shaders/optim/adam.glsl).
+/// One step's parameters as adam_step.comp reads them from a ring slot (`AdamParams` in
+/// shaders/optim/adam.glsl): five 16-byte vectors, so std430 lays them out as here.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct AdamParams {
     lr_a: [f32; 4],
     lr_b: [f32; 4],
@@ -45,7 +46,15 @@ pub struct AdamParams {
     bias: [f32; 4],
     counts: [u32; 4],
 }
-push_layout!(AdamParams: [OPTIM_ADAM_STEP], [lr_a, lr_b, betas, bias, counts]);
+const _: () = assert!(size_of::<AdamParams>() == 80);
+
+/// Push constants of adam_step.comp: the ring slot a recorded step reads its parameters from.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct AdamSlot {
+    slot: u32,
+}
+push_layout!(AdamSlot: [OPTIM_ADAM_STEP], [slot]);
 
 impl AdamParams {
     /// `step` counts from 1 (the bias corrections need it).
@@ -82,6 +91,8 @@ pub struct Adam {
     remap_rows: ComputePipeline,
     /// (m, v) per parameter float, in the order of [`GaussianBuffers`]' buffers.
     moments: [GpuBuffer<[f32; 2]>; 5],
+    /// Each step's parameters, one slot per step in flight ([`Self::reserve_slots`]).
+    steps: HostRing<AdamParams>,
     gaussians: usize,
     sh_degree: u32,
 }
@@ -118,6 +129,7 @@ impl Adam {
             step: pipeline("adam step", &shaders::OPTIM_ADAM_STEP)?,
             remap_rows: pipeline("adam remap rows", &shaders::OPTIM_REMAP_ROWS)?,
             moments: zero_moments(ctx, params.len(), params.sh_degree())?,
+            steps: HostRing::new(ctx, "adam step parameters", 1)?,
             gaussians: params.len(),
             sh_degree: params.sh_degree(),
         };
@@ -137,13 +149,42 @@ impl Adam {
         self.gaussians == 0
     }
 
-    /// Records one Adam step of `params` along `grads` (both shaped like the optimizer).
+    /// Records one Adam step of `params` along `grads` (both shaped like the optimizer) with
+    /// `adam`, written to slot 0 of the step ring now: for a recording submitted before the
+    /// next call (a replayed step uses [`Self::record_step_from`]).
     pub fn record_step<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
         params: &'a GaussianBuffers,
         grads: &'a GaussianBuffers,
         adam: &AdamParams,
+    ) -> GpuResult<()> {
+        self.set_step(0, adam);
+        self.record_step_from(rec, params, grads, 0)
+    }
+
+    /// Makes room for `slots` steps in flight; the slots start zeroed.
+    pub fn reserve_slots(&mut self, slots: usize) -> GpuResult<()> {
+        if self.steps.slots() < slots {
+            self.steps = HostRing::new(&self.ctx, "adam step parameters", slots)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the parameters a step recorded with `slot` will use; no submission that reads
+    /// the slot may be on the queue.
+    pub fn set_step(&self, slot: usize, adam: &AdamParams) {
+        self.steps.write(slot, adam);
+    }
+
+    /// Records one Adam step of `params` along `grads` (both shaped like the optimizer) with
+    /// the parameters in ring slot `slot` when it runs ([`Self::set_step`]).
+    pub fn record_step_from<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        params: &'a GaussianBuffers,
+        grads: &'a GaussianBuffers,
+        slot: usize,
     ) -> GpuResult<()> {
         for (what, buffers) in [("adam parameters", params), ("adam gradients", grads)] {
             if buffers.len() != self.gaussians || buffers.sh_degree() != self.sh_degree {
@@ -154,6 +195,14 @@ impl Adam {
                     capacity: self.gaussians,
                 });
             }
+        }
+        if slot >= self.steps.slots() {
+            return Err(GpuError::LengthMismatch {
+                what: "adam step slot",
+                name: "adam step parameters".into(),
+                len: slot + 1,
+                capacity: self.steps.slots(),
+            });
         }
         // Names of adam_step.comp: parameters, their gradients (g_) and moments (m_).
         let moments = ["m_positions", "m_log_scales", "m_rotations", "m_opacity_logits", "m_sh"];
@@ -168,11 +217,13 @@ impl Adam {
                 "g_sh",
             ]))
             .chain(moments.into_iter().zip(&self.moments).map(|(name, m)| (name, m.binding())))
+            .chain([("steps", self.steps.binding())])
             .collect();
         // One invocation per four floats of each buffer (see adam_step.comp).
         let chunks: usize =
             row_widths(self.sh_degree).iter().map(|w| (w * self.gaussians).div_ceil(4)).sum();
-        rec.dispatch_1d(&self.step, &bindings, adam, chunks.div_ceil(WORKGROUP as usize) as u64)
+        let groups = chunks.div_ceil(WORKGROUP as usize) as u64;
+        rec.dispatch_1d(&self.step, &bindings, &AdamSlot { slot: slot as u32 }, groups)
     }
 
     /// Carries the moments to a new Gaussian set: new row `i` takes the moments of old row

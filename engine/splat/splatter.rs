@@ -15,8 +15,8 @@ use super::stages::{Kernels, RasterInputs, RasterOutputs};
 use super::{RenderSettings, SplatError};
 use crate::camera::Camera;
 use crate::gpu::{
-    FixedPrecision, FixedResolve, FixedSums, GpuBuffer, GpuContext, GpuError, GpuResult, PassTimes,
-    Recorder,
+    FixedPrecision, FixedResolve, FixedSums, GpuBuffer, GpuContext, GpuError, GpuResult, HostRing,
+    PassTimes, Recorder,
 };
 use crate::sort::{PrefixScan, RadixSort};
 use bytemuck::Pod;
@@ -277,8 +277,25 @@ impl Splatter {
     /// was computed from it) lacked those past the capacity, and the buffers have grown so the
     /// next forward fits.
     pub fn finish_forward(&mut self, frame: FrameParams) -> Result<bool, SplatError> {
-        let n = frame.gaussians();
-        let count = self.tile_offsets.read_range(n, 1)?[0] as usize;
+        let count = self.tile_offsets.read_range(frame.gaussians(), 1)?[0];
+        self.finish_counted(frame, count)
+    }
+
+    /// Records copying the intersection count of the forward recorded before (of `frame`) into
+    /// `slot` of `counts`, for [`Self::finish_counted`] once the submission is done: a step
+    /// replayed with others in flight learns its count without a readback of its own.
+    pub fn record_count_copy<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        frame: &FrameParams,
+        (counts, slot): (&'a HostRing<u32>, usize),
+    ) {
+        rec.copy_to_ring((&self.tile_offsets, frame.gaussians()), (counts, slot));
+    }
+
+    /// [`Self::finish_forward`] with the count already read (see [`Self::record_count_copy`]).
+    pub fn finish_counted(&mut self, frame: FrameParams, count: u32) -> Result<bool, SplatError> {
+        let (n, count) = (frame.gaussians(), count as usize);
         self.last_frame = Some(frame);
         self.last_intersections = count;
         self.intersections_per_gaussian =

@@ -3,6 +3,7 @@
 
 use super::config::{FitConfig, LearningRateConfig};
 use super::densify::{densify_and_prune, DensifyRules};
+use super::in_flight::StepTerms;
 use super::optimize::{optimize, Schedule, Stage};
 use super::plateau::Plateau;
 use super::report::{CurvePoint, DensifyEvent, FitReport};
@@ -145,6 +146,8 @@ struct FitStage<'a> {
     progress: &'a mut dyn FnMut(Progress),
 }
 
+impl StepTerms for FitStage<'_> {}
+
 impl Stage for FitStage<'_> {
     fn rates(&self, it: u32, iterations: u32) -> LearningRates {
         learning_rates(&self.config.learning_rates, self.extent, it, iterations)
@@ -177,6 +180,10 @@ impl Stage for FitStage<'_> {
         Ok(())
     }
 
+    fn evaluates_after(&self, it: u32, iterations: u32) -> bool {
+        it.is_multiple_of(self.config.report.eval_every) || it == iterations
+    }
+
     fn iteration_done(
         &mut self,
         trainer: &mut Trainer,
@@ -184,7 +191,7 @@ impl Stage for FitStage<'_> {
         (it, iterations): (u32, u32),
         train_s: f64,
     ) -> Result<(), TrainError> {
-        if it % self.config.report.eval_every == 0 || it == iterations {
+        if self.evaluates_after(it, iterations) {
             let (psnr, ssim, _) = evaluate(trainer, self.eval, settings, false)?;
             let gaussians = trainer.gaussians();
             self.curve.push(CurvePoint { iteration: it, wall_s: train_s, psnr, ssim, gaussians });

@@ -6,11 +6,12 @@
 pub mod config;
 pub mod densify;
 mod fit;
+pub(crate) mod in_flight;
 pub mod init;
 mod job;
 pub mod memory;
 mod mesh_term;
-mod optimize;
+pub(crate) mod optimize;
 pub mod output;
 pub mod pipeline;
 pub(crate) mod plateau;

@@ -15,13 +15,14 @@
 //! own optimiser in pipeline/graph_stage.rs and keeps its own loop; it follows the same
 //! non-finite policy with [`non_finite_detail`], without checkpoints, as `train` does.)
 
+use super::in_flight::{StepRing, StepTerms};
 use super::plateau::{Plateau, StopReason};
 use super::schedule::{sh_degree_at, DensifyWindow, ViewCycle};
 use super::{TrainError, Trainer};
-use crate::gpu::{PassTimes, Recorder};
+use crate::gpu::PassTimes;
 use crate::optim::{AdamParams, LearningRates};
 use crate::rng::SplitMix64;
-use crate::splat::{FrameParams, GaussianScene, RenderSettings};
+use crate::splat::{GaussianScene, RenderSettings};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -39,24 +40,10 @@ pub(crate) struct Schedule {
     pub checkpoint: bool,
 }
 
-/// What a stage adds to the loop.
-pub(crate) trait Stage {
+/// What a stage adds to the loop (beyond the terms of its steps).
+pub(crate) trait Stage: StepTerms {
     /// The learning rates of iteration `it` of `iterations`.
     fn rates(&self, it: u32, iterations: u32) -> LearningRates;
-
-    /// Records a step's terms on training view `view`: the splatting loss (weights per rgba
-    /// channel) and whatever the stage adds, every gradient added to the trainer's. The
-    /// splatting loss alone by default.
-    fn record_step<'a>(
-        &'a self,
-        trainer: &'a Trainer,
-        rec: &mut Recorder<'a>,
-        view: usize,
-        frame: &FrameParams,
-        splat_weights: [f32; 4],
-    ) -> Result<(), TrainError> {
-        trainer.record_splat(rec, view, frame, splat_weights, None)
-    }
 
     /// The mean weighted loss over iterations `first..=last` (all summed on the GPU since the
     /// last call, which restarts the sums), or what went non-finite.
@@ -75,8 +62,15 @@ pub(crate) trait Stage {
         rng: &mut SplitMix64,
     ) -> Result<(), TrainError>;
 
+    /// Whether [`Self::iteration_done`] after iteration `it` of `iterations` uses the GPU (an
+    /// evaluation): the loop first finishes every step in flight. None by default.
+    fn evaluates_after(&self, _it: u32, _iterations: u32) -> bool {
+        false
+    }
+
     /// After every iteration (and its densification): evaluation curves, progress.
-    /// `progress` is (iteration, of iterations).
+    /// `progress` is (iteration, of iterations). It may use the GPU only where
+    /// [`Self::evaluates_after`] says so.
     fn iteration_done(
         &mut self,
         trainer: &mut Trainer,
@@ -124,6 +118,7 @@ pub(crate) fn optimize(
     };
     let (iterations, mut views, mut interval_start) =
         (schedule.iterations, ViewCycle::default(), 1);
+    let mut ring = StepRing::new(trainer, trainer.context().steps_in_flight())?;
     for it in 1..=iterations {
         let t0 = Instant::now();
         let view = views.next(trainer.views(), rng);
@@ -132,17 +127,23 @@ pub(crate) fn optimize(
         }
         let rates = stage.rates(it, iterations);
         let adam = AdamParams::new(&rates, it, trainer.gaussians(), trainer.sh_degree());
-        let frame = trainer.prepare_step(view, settings)?;
-        let mut rec = Recorder::new(trainer.context())?;
-        stage.record_step(trainer, &mut rec, view, &frame, schedule.splat_weights)?;
-        trainer.record_adam(&mut rec, &adam)?;
-        add_times(&mut outcome.passes_ms, &rec.submit_and_wait()?);
-        outcome.truncated_steps += (!trainer.finish_step(frame)?) as u32;
+        let terms: (&dyn StepTerms, _) = (&*stage, schedule.splat_weights);
+        let mut finished = ring.step(trainer, terms, view, settings, &adam)?;
+        let pass_ends = plateau.pass_ends(it);
+        let densify = schedule.densify.is_some_and(|window| window.due(it, iterations));
+        // The host reads or changes the trainer's buffers after this iteration: finish all.
+        if pass_ends || densify || stage.evaluates_after(it, iterations) || it == iterations {
+            finished.extend(ring.drain(trainer)?);
+        }
+        for step in finished {
+            add_times(&mut outcome.passes_ms, &step.times);
+            outcome.truncated_steps += !step.complete as u32;
+        }
         outcome.train_s += t0.elapsed().as_secs_f64();
         outcome.iterations = it;
 
         let mut pass_loss = None;
-        if plateau.pass_ends(it) {
+        if pass_ends {
             match stage.read_losses(trainer, interval_start, it)? {
                 Ok(mean) => pass_loss = Some(mean),
                 Err(terms) => {
@@ -157,7 +158,7 @@ pub(crate) fn optimize(
             }
             interval_start = it + 1;
         }
-        if schedule.densify.is_some_and(|window| window.due(it, iterations)) {
+        if densify {
             let t0 = Instant::now();
             stage.densify(trainer, it, rng)?;
             outcome.train_s += t0.elapsed().as_secs_f64();

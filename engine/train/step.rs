@@ -5,7 +5,7 @@
 use super::views::ViewTarget;
 use super::TrainError;
 use crate::camera::Camera;
-use crate::gpu::{FixedSums, GpuBuffer, GpuContext, PassTimes, Recorder};
+use crate::gpu::{FixedSums, GpuBuffer, GpuContext, HostRing, Recorder};
 use crate::loss::{ImageLoss, LossTarget, LossTerms, ScoredRender};
 use crate::optim::{Adam, AdamParams};
 use crate::splat::{FrameParams, GaussianBuffers, GaussianScene, RenderSettings, Splatter};
@@ -131,25 +131,6 @@ impl Trainer {
         self.state.params.sh_degree()
     }
 
-    /// forward → loss (λ per rgba channel) → backward → Adam on training view `view`, in one
-    /// submission. Returns the pass times and whether every intersection fit the splatter's
-    /// buffers (see [`Self::finish_step`]).
-    pub fn step(
-        &mut self,
-        view: usize,
-        settings: &RenderSettings,
-        lambda: [f32; 4],
-        adam: &AdamParams,
-    ) -> Result<(PassTimes, bool), TrainError> {
-        let frame = self.prepare_step(view, settings)?;
-        let mut rec = Recorder::new(&self.ctx)?;
-        self.record_splat(&mut rec, view, &frame, lambda, None)?;
-        self.record_adam(&mut rec, adam)?;
-        let times = rec.submit_and_wait()?;
-        let complete = self.finish_step(frame)?;
-        Ok((times, complete))
-    }
-
     /// Sizes the splatter for training view `view`; the frame goes to the record calls of
     /// this step and then to [`Self::finish_step`]. A step with more terms than the splatting
     /// loss records them between [`Self::record_splat`] and [`Self::record_adam`], adding
@@ -209,23 +190,54 @@ impl Trainer {
         Ok(())
     }
 
-    /// Records the Adam step along the gradients recorded so far.
-    pub fn record_adam<'a>(
-        &'a self,
-        rec: &mut Recorder<'a>,
-        adam: &AdamParams,
-    ) -> Result<(), TrainError> {
-        rec.begin_pass("adam");
-        self.adam.record_step(rec, &self.state.params, &self.state.grads, adam)?;
-        rec.end_pass();
-        Ok(())
-    }
-
     /// After the step's submission completed: whether every intersection fit the splatter's
     /// buffers. When not, the step rendered without those past the capacity (its gradient is
     /// slightly off) and the buffers have grown for the next.
     pub fn finish_step(&mut self, frame: FrameParams) -> Result<bool, TrainError> {
         Ok(self.splatter.finish_forward(frame)?)
+    }
+
+    /// Makes room for `slots` steps in flight ([`Self::record_step_tail`]).
+    pub fn reserve_step_slots(&mut self, slots: usize) -> Result<(), TrainError> {
+        Ok(self.adam.reserve_slots(slots)?)
+    }
+
+    /// Sets the Adam parameters of the step recorded with ring slot `slot`; no submission that
+    /// uses the slot may be on the queue.
+    pub fn set_adam_step(&self, slot: usize, adam: &AdamParams) {
+        self.adam.set_step(slot, adam);
+    }
+
+    /// Records the end of a step replayed with others in flight: the Adam step with the
+    /// parameters of ring slot `slot` ([`Self::set_adam_step`]) and the copy of the forward's
+    /// intersection count (of `frame`) into `counts[slot]`, for [`Self::finish_counted`].
+    pub fn record_step_tail<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        frame: &FrameParams,
+        (counts, slot): (&'a HostRing<u32>, usize),
+    ) -> Result<(), TrainError> {
+        rec.begin_pass("adam");
+        self.adam.record_step_from(rec, &self.state.params, &self.state.grads, slot)?;
+        rec.end_pass();
+        self.record_count_copy(rec, frame, (counts, slot));
+        Ok(())
+    }
+
+    /// Records copying the intersection count of the step's forward (of `frame`) into
+    /// `counts[slot]`, for [`Self::finish_counted`].
+    pub fn record_count_copy<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        frame: &FrameParams,
+        counts: (&'a HostRing<u32>, usize),
+    ) {
+        self.splatter.record_count_copy(rec, frame, counts);
+    }
+
+    /// [`Self::finish_step`] with the intersection count already read.
+    pub fn finish_counted(&mut self, frame: FrameParams, count: u32) -> Result<bool, TrainError> {
+        Ok(self.splatter.finish_counted(frame, count)?)
     }
 
     /// The Gaussian parameters on the GPU.

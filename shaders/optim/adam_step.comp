@@ -33,6 +33,8 @@ MOMENTS(11, m_log_scales)
 MOMENTS(12, m_rotations)
 MOMENTS(13, m_opacity_logits)
 MOMENTS(14, m_sh)
+layout(std430, binding = 15) readonly buffer AdamSteps { AdamParams steps[]; };
+#define params steps[adam_slot.slot]
 
 // Updates the moments and returns the step to subtract, for four floats.
 vec4 adam(inout vec4 m, inout vec4 v, vec4 g, vec4 lr) {

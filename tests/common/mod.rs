@@ -14,7 +14,12 @@ pub struct TestGpu {
 
 /// A validated context on the device the environment picks (lavapipe on CI).
 pub fn gpu() -> TestGpu {
-    let options = ContextOptions { validation: Some(true), ..Default::default() };
+    gpu_with(ContextOptions::default())
+}
+
+/// [`gpu`] with other options (validation stays on).
+pub fn gpu_with(options: ContextOptions) -> TestGpu {
+    let options = ContextOptions { validation: Some(true), ..options };
     let ctx =
         GpuContext::new(&options).unwrap_or_else(|e| panic!("cannot create a Vulkan context: {e}"));
     let log = ctx.validation().clone();

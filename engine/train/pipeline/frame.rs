@@ -21,6 +21,7 @@ use crate::topology::{
     compose, densify, face_scores, prune, DensifyConfig, ManifoldMesh, PruneConfig,
 };
 use crate::train::fit::{self, learning_rates, scene_extent};
+use crate::train::in_flight::StepTerms;
 use crate::train::mesh_term::MeshTerm;
 use crate::train::optimize::{optimize, LoopOutcome, Schedule, Stage};
 use crate::train::plateau::{Plateau, StopReason};
@@ -483,23 +484,7 @@ struct FrameStage<'a, 'm> {
     progress: &'a mut dyn FnMut(u32, u32),
 }
 
-impl Stage for FrameStage<'_, '_> {
-    fn rates(&self, it: u32, iterations: u32) -> LearningRates {
-        if !self.colour_only {
-            return frame_rates(self.config, self.extent, it, iterations, self.canonical);
-        }
-        let rates = learning_rates(&self.config.learning_rates, self.extent, it, iterations);
-        let scale = self.config.temporal.colour_lr_scale;
-        LearningRates {
-            positions: 0.0,
-            log_scales: 0.0,
-            rotations: 0.0,
-            opacity_logits: 0.0,
-            sh_dc: scale * rates.sh_dc,
-            sh_rest: scale * rates.sh_rest,
-        }
-    }
-
+impl StepTerms for FrameStage<'_, '_> {
     fn record_step<'a>(
         &'a self,
         trainer: &'a Trainer,
@@ -534,6 +519,24 @@ impl Stage for FrameStage<'_, '_> {
         terms.matches.record(rec, (&params.positions, &grads.positions), t, near)?;
         rec.end_pass();
         Ok(())
+    }
+}
+
+impl Stage for FrameStage<'_, '_> {
+    fn rates(&self, it: u32, iterations: u32) -> LearningRates {
+        if !self.colour_only {
+            return frame_rates(self.config, self.extent, it, iterations, self.canonical);
+        }
+        let rates = learning_rates(&self.config.learning_rates, self.extent, it, iterations);
+        let scale = self.config.temporal.colour_lr_scale;
+        LearningRates {
+            positions: 0.0,
+            log_scales: 0.0,
+            rotations: 0.0,
+            opacity_logits: 0.0,
+            sh_dc: scale * rates.sh_dc,
+            sh_rest: scale * rates.sh_rest,
+        }
     }
 
     fn read_losses(

@@ -7,12 +7,14 @@
 use super::config::{ReferencePose, TrainConfig};
 use super::frame::MatchTerms;
 use crate::deform::{build_graph, fit_nodes, GraphDeformer};
-use crate::gpu::{GpuContext, Recorder};
+use crate::gpu::{GpuContext, HostRing, Recorder};
 use crate::loss::silhouette::{CoverageTerm, SilhouetteTerm};
 use crate::mesh::bounding_diagonal;
+use crate::optim::AdamParams;
 use crate::regularize::Neighbourhoods;
 use crate::rng::SplitMix64;
-use crate::splat::{GaussianScene, RenderSettings};
+use crate::splat::{FrameParams, GaussianScene, RenderSettings};
+use crate::train::in_flight::{StepRing, StepTerms};
 use crate::train::mesh_term::MeshTerm;
 use crate::train::optimize::non_finite_detail;
 use crate::train::plateau::{Plateau, StopReason};
@@ -113,55 +115,29 @@ pub fn solve_graph(
         let mut plateau =
             Plateau::new(g.min_iterations, g.iterations, views.len(), config.temporal.tolerance);
         let (mut cycle, mut pass_start) = (ViewCycle::default(), 1);
+        deformer.reserve_step_slots(ctx.steps_in_flight())?;
+        let mut ring = StepRing::new(&mut trainer, ctx.steps_in_flight())?;
+        let deformer = &*deformer;
+        let terms = GraphStep {
+            input,
+            config,
+            deformer,
+            mesh_term: &mesh_term,
+            coverage: &coverage,
+            weights,
+            settings,
+        };
+        let step = (&terms as &dyn StepTerms, weights.gaussians);
         for it in 1.. {
             let view = cycle.next(views.len(), rng);
-            let frame = trainer.prepare_step(view, settings)?;
-            let mut rec = Recorder::new(ctx)?;
-            mesh_term.record_step_with(
-                &trainer,
-                &mut rec,
-                (view, &frame),
-                [weights.gaussians, weights.mesh],
-                settings.background,
-            )?;
-            input.silhouette.record(
-                &mut rec,
-                &trainer.params().positions,
-                &trainer.grads().positions,
-                config.temporal.silhouette,
-                settings.near,
-            )?;
-            let images = (trainer.target(view), trainer.rendered());
-            coverage.record(
-                &mut rec,
-                trainer.camera(view),
-                images,
-                &trainer.params().positions,
-                &trainer.grads().positions,
-                config.temporal.coverage,
-                settings.near,
-            )?;
-            input.matches.record(
-                &mut rec,
-                (&trainer.params().positions, &trainer.grads().positions),
-                &config.temporal,
-                settings.near,
-            )?;
-            deformer.record_gradients(&mut rec, &trainer.grads().positions)?;
             adam_step += 1;
             // Tenfold decay over the level's cap.
             let decay = 0.1f32.powf(it as f32 / g.iterations as f32);
-            deformer.record_adam(
-                &mut rec,
-                g.translation_lr * diagonal * decay,
-                g.rotation_lr * decay,
-                adam_step,
-            )?;
-            deformer.record_blend(&mut rec, trainer.params())?;
-            rec.submit_and_wait()?;
-            trainer.finish_step(frame)?;
-
+            let rates = (g.translation_lr * diagonal * decay, g.rotation_lr * decay);
+            let adam = deformer.adam_params(rates.0, rates.1, adam_step);
+            ring.step(&mut trainer, step, view, settings, &adam)?;
             let pass_loss = if plateau.pass_ends(it) {
+                ring.drain(&mut trainer)?;
                 let terms = [
                     ("Gaussian image", trainer.take_terms()?.total(weights.gaussians)),
                     ("mesh image", mesh_term.take_terms()?.total(weights.mesh)),
@@ -199,9 +175,70 @@ pub fn solve_graph(
                 break;
             }
         }
+        ring.drain(&mut trainer)?;
         moved = trainer.scene()?;
     }
     Ok((moved, report))
+}
+
+/// A step of the graph solve: the Gaussian and mesh image terms, silhouette, coverage, flow
+/// and anchors on the blended Gaussians, their position gradients carried to the nodes; its
+/// tail moves the nodes (Adam) and blends the Gaussians from them.
+struct GraphStep<'a> {
+    input: &'a GraphInput<'a>,
+    config: &'a TrainConfig,
+    deformer: &'a GraphDeformer,
+    mesh_term: &'a MeshTerm,
+    coverage: &'a CoverageTerm,
+    weights: ImageWeights,
+    settings: &'a RenderSettings,
+}
+
+impl StepTerms for GraphStep<'_> {
+    fn record_step<'a>(
+        &'a self,
+        trainer: &'a Trainer,
+        rec: &mut Recorder<'a>,
+        view: usize,
+        frame: &FrameParams,
+        splat_weights: [f32; 4],
+    ) -> Result<(), TrainError> {
+        let (t, near) = (&self.config.temporal, self.settings.near);
+        let (params, grads) = (trainer.params(), trainer.grads());
+        let weights = [splat_weights, self.weights.mesh];
+        let background = self.settings.background;
+        self.mesh_term.record_step_with(trainer, rec, (view, frame), weights, background)?;
+        self.input.silhouette.record(
+            rec,
+            &params.positions,
+            &grads.positions,
+            t.silhouette,
+            near,
+        )?;
+        let images = (trainer.target(view), trainer.rendered());
+        let camera = trainer.camera(view);
+        let positions = (&params.positions, &grads.positions);
+        self.coverage.record(rec, camera, images, positions.0, positions.1, t.coverage, near)?;
+        self.input.matches.record(rec, positions, t, near)?;
+        Ok(self.deformer.record_gradients(rec, &grads.positions)?)
+    }
+
+    fn record_tail<'a>(
+        &'a self,
+        trainer: &'a Trainer,
+        rec: &mut Recorder<'a>,
+        frame: &FrameParams,
+        counts: (&'a HostRing<u32>, usize),
+    ) -> Result<(), TrainError> {
+        self.deformer.record_adam_from(rec, counts.1)?;
+        self.deformer.record_blend(rec, trainer.params())?;
+        trainer.record_count_copy(rec, frame, counts);
+        Ok(())
+    }
+
+    fn set_step(&self, _: &Trainer, slot: usize, adam: &AdamParams) {
+        self.deformer.set_step(slot, adam);
+    }
 }
 
 /// A graph of `nodes` nodes over the configured rest pose (`pose`, the surface reached so far,
