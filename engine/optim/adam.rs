@@ -12,6 +12,8 @@ use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
 
 const WORKGROUP: u32 = 128;
+/// Four-float chunks each invocation of adam_step.comp updates (specialization constant 1).
+const CHUNKS_PER_INVOCATION: u32 = 8;
 const BETA1: f64 = 0.9;
 const BETA2: f64 = 0.999;
 const EPSILON: f32 = 1e-15;
@@ -121,13 +123,14 @@ fn zero_moments(
 impl Adam {
     /// An optimizer for parameters shaped like `params`, moments at zero.
     pub fn new(ctx: &Arc<GpuContext>, params: &GaussianBuffers) -> GpuResult<Self> {
-        let pipeline = |name, shader| {
-            ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization: &[WORKGROUP] })
+        let pipeline = |name, shader, specialization| {
+            ComputePipeline::new(ctx, &PipelineDesc { name, shader, specialization })
         };
+        let step = [WORKGROUP, CHUNKS_PER_INVOCATION];
         let adam = Self {
             ctx: ctx.clone(),
-            step: pipeline("adam step", &shaders::OPTIM_ADAM_STEP)?,
-            remap_rows: pipeline("adam remap rows", &shaders::OPTIM_REMAP_ROWS)?,
+            step: pipeline("adam step", &shaders::OPTIM_ADAM_STEP, &step)?,
+            remap_rows: pipeline("adam remap rows", &shaders::OPTIM_REMAP_ROWS, &[WORKGROUP])?,
             moments: zero_moments(ctx, params.len(), params.sh_degree())?,
             steps: HostRing::new(ctx, "adam step parameters", 1)?,
             gaussians: params.len(),
@@ -219,10 +222,10 @@ impl Adam {
             .chain(moments.into_iter().zip(&self.moments).map(|(name, m)| (name, m.binding())))
             .chain([("steps", self.steps.binding())])
             .collect();
-        // One invocation per four floats of each buffer (see adam_step.comp).
+        // One invocation per CHUNKS_PER_INVOCATION chunks of four floats (see adam_step.comp).
         let chunks: usize =
             row_widths(self.sh_degree).iter().map(|w| (w * self.gaussians).div_ceil(4)).sum();
-        let groups = chunks.div_ceil(WORKGROUP as usize) as u64;
+        let groups = chunks.div_ceil((WORKGROUP * CHUNKS_PER_INVOCATION) as usize) as u64;
         rec.dispatch_1d(&self.step, &bindings, &AdamSlot { slot: slot as u32 }, groups)
     }
 

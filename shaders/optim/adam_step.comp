@@ -1,13 +1,14 @@
 #version 460
 #extension GL_EXT_control_flow_attributes : require
-// Adam over every parameter group in one dispatch. One invocation per chunk of four floats of
-// one buffer (positions, log-scales, rotations, opacity logits, SH in turn), loaded as two
+// Adam over every parameter group in one dispatch. Each invocation updates a few chunks of four
+// floats of one buffer (positions, log-scales, rotations, opacity logits, SH in turn), loaded as two
 // 64-bit words: on CPU devices every buffer access is a loop over lanes and a scalar access
 // per component, so four floats in two words is four times fewer loops and half the accesses.
 // Moments (m, v) are interleaved beside each float; a buffer whose length is not a multiple of
 // four ends in a chunk updated float by float.
 #include "adam.glsl"
 #include "../common/wide_vec4.glsl"
+#include "../common/grid.glsl"
 layout(local_size_x_id = 0) in;
 
 // Each buffer is bound once and seen both as floats and as four floats in two 64-bit words
@@ -34,7 +35,10 @@ MOMENTS(12, m_rotations)
 MOMENTS(13, m_opacity_logits)
 MOMENTS(14, m_sh)
 layout(std430, binding = 15) readonly buffer AdamSteps { AdamParams steps[]; };
-#define params steps[adam_slot.slot]
+// This step's parameters (main loads them from the ring slot).
+AdamParams params;
+// Set by engine/optim/adam.rs, which sizes the dispatch by it.
+layout(constant_id = 1) const uint CHUNKS_PER_INVOCATION = 8u;
 
 // Updates the moments and returns the step to subtract, for four floats.
 vec4 adam(inout vec4 m, inout vec4 v, vec4 g, vec4 lr) {
@@ -85,10 +89,8 @@ vec4 sh_rates(uint j) {
 
 uint chunks(uint len) { return (len + 3u) / 4u; }
 
-void main() {
-    uint n = params.counts.x;
-    uint lens[5] = uint[5](3u * n, 3u * n, 4u * n, n, 3u * params.counts.y * n);
-    uint c = gl_GlobalInvocationID.x;
+// Updates chunk c of the five buffers laid end to end.
+void update(uint c, uint lens[5]) {
     if (c < chunks(lens[0])) { UPDATE(positions, g_positions, m_positions, lens[0], c, RATE_POSITIONS) return; }
     c -= chunks(lens[0]);
     if (c < chunks(lens[1])) { UPDATE(log_scales, g_log_scales, m_log_scales, lens[1], c, RATE_SCALES) return; }
@@ -98,4 +100,18 @@ void main() {
     if (c < chunks(lens[3])) { UPDATE(opacity_logits, g_opacity_logits, m_opacity_logits, lens[3], c, RATE_OPACITY) return; }
     c -= chunks(lens[3]);
     if (c < chunks(lens[4])) { UPDATE(sh, g_sh, m_sh, lens[4], c, RATE_SH) }
+}
+
+void main() {
+    // The step's parameters, read once: on CPU devices every buffer read is a loop over lanes,
+    // so each invocation updates CHUNKS_PER_INVOCATION chunks to share that read. A workgroup's
+    // lanes take consecutive chunks in each round (coalesced on a GPU).
+    params = steps[adam_slot.slot];
+    uint n = params.counts.x;
+    uint lens[5] = uint[5](3u * n, 3u * n, 4u * n, n, 3u * params.counts.y * n);
+    uint width = gl_WorkGroupSize.x;
+    uint first = flat_workgroup_id() * width * CHUNKS_PER_INVOCATION + gl_LocalInvocationID.x;
+    [[unroll]] for (uint k = 0u; k < CHUNKS_PER_INVOCATION; k++) {
+        update(first + k * width, lens);
+    }
 }
