@@ -132,9 +132,9 @@ impl Trainer {
     }
 
     /// Sizes the splatter for training view `view`; the frame goes to the record calls of
-    /// this step and then to [`Self::finish_step`]. A step with more terms than the splatting
-    /// loss records them between [`Self::record_splat`] and [`Self::record_adam`], adding
-    /// their gradients to [`Self::grads`].
+    /// this step and then to [`Self::finish_step`] (or [`Self::finish_counted`]). A step with
+    /// more terms than the splatting loss records them after [`Self::record_splat`] and before
+    /// [`Self::record_step_tail`], adding their gradients to [`Self::grads`].
     pub fn prepare_step(
         &mut self,
         view: usize,
