@@ -300,3 +300,155 @@ fn a_bad_pixel_makes_only_its_channel_nan() {
         assert!((terms.dssim[c] as f64 - clean.dssim[c]).abs() < 1e-5, "{terms:?}");
     }
 }
+
+// ---- The camera colour maps (loss::colour_map) ----
+
+use tagsplat::loss::colour_map::affine::{fix_gauge, IDENTITY};
+use tagsplat::loss::colour_map::{
+    reference as colour_reference, CameraColour, ColourMap, MappedRender,
+};
+
+/// A gain and offset per channel, different for each camera.
+fn camera_map(camera: usize) -> ColourMap {
+    let g = |k: usize| 0.85 + 0.07 * ((camera * 3 + k) % 5) as f32;
+    let o = |k: usize| 0.02 * ((camera + k) % 3) as f32 - 0.02;
+    [[g(0), 0.0, 0.0, o(0)], [0.0, g(1), 0.0, o(1)], [0.0, 0.0, g(2), o(2)]]
+}
+
+/// Renders over `background`: premultiplied colours in [0, α], some pixels empty.
+fn renders_over(pixels: usize, background: [f32; 3], seed: u64) -> Vec<[f32; 4]> {
+    let mut r = rng(seed);
+    (0..pixels)
+        .map(|i| {
+            let alpha = if i % 7 == 0 { 0.0 } else { (0.2 + r.next_f64()).min(1.0) as f32 };
+            let p = [0; 3].map(|_| alpha * r.next_f64() as f32);
+            [0, 1, 2]
+                .map(|k| p[k] + (1.0 - alpha) * background[k])
+                .into_iter()
+                .chain([alpha])
+                .collect::<Vec<_>>()
+                .try_into()
+                .unwrap()
+        })
+        .collect()
+}
+
+fn to_f64(p: [f32; 4]) -> [f64; 4] {
+    p.map(f64::from)
+}
+
+#[test]
+fn colour_maps_see_renders_as_the_reference_and_carry_the_gradient_back() {
+    let test = gpu();
+    let ctx = test.ctx();
+    // Not a multiple of a workgroup's pixels, so the tail and empty invocations are exercised.
+    let (pixels, background) = (37 * 23, [0.2f32, 0.5, 0.1]);
+    let maps: Vec<ColourMap> = (0..3).map(camera_map).collect();
+    let colour = CameraColour::new(ctx, &maps, 1, pixels).unwrap();
+    let render = renders_over(pixels, background, 11);
+    let target = renders_over(pixels, background, 12);
+    let seen_gradient = renders_over(pixels, [0.0; 3], 13);
+    let upload = |name, data: &[[f32; 4]]| GpuBuffer::from_slice(ctx, name, data).unwrap();
+    let (render_buf, target_buf) = (upload("render", &render), upload("target", &target));
+    let gradient = GpuBuffer::<[f32; 4]>::new(ctx, "gradient", pixels).unwrap();
+    let seen_gradient_buf = upload("seen gradient", &seen_gradient);
+    let mapped = MappedRender {
+        camera: 2,
+        render: &render_buf,
+        slot: 0,
+        fit_against: Some(&target_buf),
+        pixels,
+        background,
+    };
+    let mut rec = Recorder::new(ctx).unwrap();
+    rec.copy_buffer(&seen_gradient_buf, colour.seen_gradient(0), pixels);
+    colour.record_forward(&mut rec, &mapped).unwrap();
+    colour.record_backward(&mut rec, &mapped, &gradient).unwrap();
+    rec.submit_and_wait().unwrap();
+
+    let bg = background.map(f64::from);
+    let seen = colour.seen(0).read().unwrap();
+    let expect: Vec<[f64; 4]> =
+        render.iter().map(|&c| colour_reference::seen(&maps[2], to_f64(c), bg)).collect();
+    assert!(gradient_error(&seen, &expect) < 1e-6, "seen: {}", gradient_error(&seen, &expect));
+    let expect: Vec<[f64; 4]> = seen_gradient
+        .iter()
+        .map(|&g| colour_reference::seen_backward(&maps[2], to_f64(g), bg))
+        .collect();
+    let back = gradient.read().unwrap();
+    assert!(gradient_error(&back, &expect) < 1e-6, "backward: {}", gradient_error(&back, &expect));
+
+    let moments = colour.take_moments().unwrap();
+    let (c64, t64): (Vec<_>, Vec<_>) =
+        render.iter().zip(&target).map(|(&c, &t)| (to_f64(c), to_f64(t))).unzip();
+    let want = colour_reference::moments(&c64, &t64, bg);
+    let (camera_2, others) = (&moments[44..66], [&moments[..44], &moments[66..]].concat());
+    for (m, (got, want)) in camera_2.iter().zip(&want).enumerate() {
+        assert!(
+            (got - want).abs() <= 1e-5 * want.abs().max(1.0),
+            "moment {m}: {got} against {want}"
+        );
+    }
+    assert!(others.iter().all(|&m| m == 0.0), "only the camera's own moments are summed");
+}
+
+#[test]
+fn colour_map_backward_matches_central_differences() {
+    // L = Σ w · seen(c) over a pixel; its gradient in c is the backward of w.
+    let (map, background) = (camera_map(4), [0.3, 0.1, 0.6]);
+    let (c, w) = ([0.4, 0.2, 0.5, 0.7], [0.9, -0.4, 0.3, 1.2]);
+    let loss = |c: [f64; 4]| -> f64 {
+        let s = colour_reference::seen(&map, c, background);
+        (0..4).map(|k| w[k] * s[k]).sum()
+    };
+    let analytic = colour_reference::seen_backward(&map, w, background);
+    let h = 1e-6;
+    for i in 0..4 {
+        let (mut up, mut down) = (c, c);
+        up[i] += h;
+        down[i] -= h;
+        let numeric = (loss(up) - loss(down)) / (2.0 * h);
+        assert!(
+            (numeric - analytic[i]).abs() < 1e-8,
+            "channel {i}: {numeric} against {}",
+            analytic[i]
+        );
+    }
+}
+
+#[test]
+fn a_refit_recovers_each_cameras_gain_and_offset_up_to_the_shared_gauge() {
+    let test = gpu();
+    let ctx = test.ctx();
+    let (pixels, background, cameras) = (40 * 30, [0.0f32; 3], 4);
+    let truth: Vec<ColourMap> = (0..cameras).map(camera_map).collect();
+    let mut colour = CameraColour::new(ctx, &vec![IDENTITY; cameras], 1, pixels).unwrap();
+    let bg = background.map(f64::from);
+    let mut buffers = Vec::new();
+    for (camera, map) in truth.iter().enumerate() {
+        let render = renders_over(pixels, background, 20 + camera as u64);
+        let target: Vec<[f32; 4]> = render
+            .iter()
+            .map(|&c| colour_reference::seen(map, to_f64(c), bg).map(|v| v as f32))
+            .collect();
+        buffers.push((
+            GpuBuffer::from_slice(ctx, "render", &render).unwrap(),
+            GpuBuffer::from_slice(ctx, "target", &target).unwrap(),
+        ));
+    }
+    let mut rec = Recorder::new(ctx).unwrap();
+    for (camera, (render, target)) in buffers.iter().enumerate() {
+        let mapped =
+            MappedRender { camera, render, slot: 0, fit_against: Some(target), pixels, background };
+        colour.record_forward(&mut rec, &mapped).unwrap();
+    }
+    rec.submit_and_wait().unwrap();
+    let fitted = colour.refit(1e-9).unwrap();
+    assert_eq!(fitted, colour.maps().unwrap());
+    let want = fix_gauge(&truth);
+    for (got, want) in fitted.iter().flatten().flatten().zip(want.iter().flatten().flatten()) {
+        assert!((got - want).abs() < 1e-4, "{fitted:?} against {want:?}");
+    }
+    // The moments restarted: a refit with nothing summed keeps every map.
+    assert_eq!(colour.refit(1e-9).unwrap(), fitted);
+}

@@ -5,6 +5,7 @@
 //! tells a colour mismatch from a wrong surface (as appearance-embedding methods evaluate).
 
 use super::{psnr, EvalError};
+use crate::loss::colour_map::affine::solve_rows;
 
 /// PSNR in dB of `pred` mapped by its best affine colour map onto `gt`; both interleaved RGB
 /// in [0, 1], same length. At least the plain PSNR (the identity is one such map). A render
@@ -44,33 +45,7 @@ fn fit_affine(pred: &[f32], gt: &[f32]) -> [[f64; 4]; 3] {
         }
     }
     let ridge = 1e-9 * (0..4).map(|i| normal[i][i]).sum::<f64>().max(1e-30);
-    (0..4).for_each(|i| normal[i][i] += ridge);
-    rhs.map(|b| solve4(normal, b))
-}
-
-/// `x` with `m x = b` for a symmetric positive definite `m` (Gaussian elimination with
-/// partial pivoting).
-fn solve4(mut m: [[f64; 4]; 4], mut b: [f64; 4]) -> [f64; 4] {
-    for col in 0..4 {
-        let pivot = (col..4).max_by(|&a, &c| m[a][col].abs().total_cmp(&m[c][col].abs()));
-        let pivot = pivot.unwrap_or(col);
-        m.swap(col, pivot);
-        b.swap(col, pivot);
-        for row in col + 1..4 {
-            let f = m[row][col] / m[col][col];
-            let pivot_row = m[col];
-            for (value, p) in m[row].iter_mut().zip(pivot_row).skip(col) {
-                *value -= f * p;
-            }
-            b[row] -= f * b[col];
-        }
-    }
-    let mut x = [0.0; 4];
-    for row in (0..4).rev() {
-        let tail: f64 = (row + 1..4).map(|k| m[row][k] * x[k]).sum();
-        x[row] = (b[row] - tail) / m[row][row];
-    }
-    x
+    solve_rows(normal, rhs, ridge, [[0.0; 4]; 3])
 }
 
 #[cfg(test)]

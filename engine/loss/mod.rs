@@ -17,6 +17,7 @@
 //! the same target (a view's Gaussian and mesh renders): they share the target's loads and
 //! its moments.
 
+pub mod colour_map;
 pub mod flow;
 mod params;
 mod pinhole_view;
