@@ -6,7 +6,7 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use tagsplat::dataset::{
-    own, Dataset, DatasetError, Format, LoadOptions, MaskRefinement, PixelCenters,
+    own, CaptureStep, Dataset, DatasetError, Format, LoadOptions, PixelCenters,
 };
 use tagsplat::io::image::{write_png, Image};
 
@@ -489,7 +489,7 @@ fn masks_a_ring_off_are_refined_against_the_background_plate() {
     };
     generate(&o, &dir).unwrap();
     let mut over_black = Dataset::load(&dir).unwrap();
-    let kept = over_black.refine_masks_when(MaskRefinement::Auto, 0, &mut |_, _| {}).unwrap();
+    let kept = over_black.refine_masks_when(CaptureStep::Auto, 0, &mut |_, _| {}).unwrap();
     assert_eq!(kept, None, "over black the masks stay as given");
     let names = over_black.camera_names;
     let mut coverage = Vec::new();
@@ -509,7 +509,7 @@ fn masks_a_ring_off_are_refined_against_the_background_plate() {
     let mut d = Dataset::load(&dir).unwrap();
     let mut reported = Vec::new();
     let mut done = |done, cameras| reported.push((done, cameras));
-    let refined = d.refine_masks_when(MaskRefinement::Auto, 0, &mut done).unwrap();
+    let refined = d.refine_masks_when(CaptureStep::Auto, 0, &mut done).unwrap();
     assert_eq!(refined, Some(views - 1), "over a background every training camera has a plate");
     assert_eq!(reported, (0..views).map(|i| (i, views - 1)).collect::<Vec<_>>());
     let error =

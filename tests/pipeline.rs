@@ -506,3 +506,79 @@ fn frames_that_lose_the_subject_keep_going_and_say_where() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Each camera's own gain per channel: the camera's index in name order picks it.
+fn camera_gain(index: usize) -> [f32; 3] {
+    let g = |k: usize| 0.8 + 0.1 * ((index * 2 + k) % 5) as f32;
+    [g(0), g(1), g(2)]
+}
+
+/// Multiplies every pixel by [`camera_gain`] (the images are premultiplied over black, so
+/// the subject's colour, its outline included) in every view of every frame, as cameras of
+/// different exposure and white balance would see it. Returns per camera its name, gain, and
+/// the mean colour it then sees of the subject's fully covered pixels at frame 0.
+fn expose_cameras(data: &Path) -> Vec<(String, [f32; 3], [f32; 3])> {
+    let mut cameras: Vec<String> = std::fs::read_dir(data.join("images"))
+        .unwrap()
+        .map(|c| c.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    cameras.sort();
+    let mut seen = Vec::new();
+    for (index, camera) in cameras.iter().enumerate() {
+        let mut frame0 = ([0.0f64; 3], 0usize);
+        for frame in std::fs::read_dir(data.join("images").join(camera)).unwrap() {
+            let name = frame.unwrap().file_name();
+            let image_path = data.join("images").join(camera).join(&name);
+            let mut image = image::open(&image_path).unwrap().to_rgb8();
+            let mask = image::open(data.join("masks").join(camera).join(&name)).unwrap().to_luma8();
+            for (pixel, alpha) in image.pixels_mut().zip(mask.pixels()) {
+                for (c, gain) in pixel.0.iter_mut().zip(camera_gain(index)) {
+                    *c = (*c as f32 * gain).round().min(255.0) as u8;
+                }
+                if alpha.0[0] == 255 && name.to_string_lossy().starts_with("000000.") {
+                    (0..3).for_each(|k| frame0.0[k] += pixel.0[k] as f64 / 255.0);
+                    frame0.1 += 1;
+                }
+            }
+            image.save(&image_path).unwrap();
+        }
+        let mean = frame0.0.map(|sum| (sum / frame0.1.max(1) as f64) as f32);
+        seen.push((camera.clone(), camera_gain(index), mean));
+    }
+    seen
+}
+
+#[test]
+fn each_cameras_exposure_is_learned_on_frame_0() {
+    let g = gpu();
+    let dir = temp("camera-colour");
+    let data = dir.join("data");
+    sequence(&data);
+    let applied = expose_cameras(&data);
+    let mut config = quick_config();
+    config.camera_colour.learn = tagsplat::train::pipeline::CaptureStep::Always;
+    config.camera_colour.from_iteration = 0;
+    config.canonical.iterations = 400;
+    let report =
+        run_train(g.ctx(), &job(&data, &dir.join("out"), config, Some(0..2)), &mut |_| {}).unwrap();
+    let learned = &report.frames[0].camera_colour;
+    assert!(report.frames[1].camera_colour.is_empty(), "frame 0 holds the maps");
+    let train: Vec<_> = applied.iter().filter(|(name, ..)| learned.contains_key(name)).collect();
+    assert!(train.len() >= 6, "one map per training camera: {learned:?}");
+    // The maps' mean is the identity, so the scene's colours are the mean camera's: a colour
+    // x of the subject is about mean_gain · x in the scene, and camera i must map it to
+    // gain_i · x. Checked at the subject's mean colour each camera sees (a subject of few
+    // colours fixes a map there, not how it splits into gain and offset).
+    for k in 0..3 {
+        let mean_gain = train.iter().map(|(_, gain, _)| gain[k]).sum::<f32>() / train.len() as f32;
+        for (name, gain, seen) in &train {
+            let map = learned[name][k];
+            let scene = mean_gain * seen[k] / gain[k];
+            let got = map[k] * scene + map[3];
+            let message =
+                format!("{name} channel {k}: sees {got:.3} of the subject, saw {:.3}", seen[k]);
+            assert!((got - seen[k]).abs() < 0.03, "{message} (map {map:?})");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -207,17 +207,29 @@ pub struct Frame {
     pub views: Vec<View>,
 }
 
-/// When a dataset's masks are refined from its images ([`Dataset::refine_masks_when`]).
+/// When a step meant for a studio's capture runs: refining the masks from the images
+/// ([`Dataset::refine_masks_when`]), learning each camera's colour response.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum MaskRefinement {
-    /// Where the images carry a background ([`background::background_share`]): over black,
-    /// the plate says nothing the masks do not.
+pub enum CaptureStep {
+    /// Where the images carry a background ([`background::background_share`]): renders over
+    /// black come from one virtual camera, and a plate says nothing the masks do not.
     Auto,
     /// Always.
     Always,
-    /// Never: the masks as given.
+    /// Never (the masks as given, the colours as seen).
     Never,
+}
+
+impl CaptureStep {
+    /// Whether the step runs on `dataset`; `Auto` looks at frame `frame`'s images.
+    pub fn applies(self, dataset: &Dataset, frame: usize) -> Result<bool, DatasetError> {
+        Ok(match self {
+            Self::Auto => background::background_share(dataset, frame)? > BACKGROUND_SHARE,
+            Self::Always => true,
+            Self::Never => false,
+        })
+    }
 }
 
 /// A loaded multi-view dataset: cameras in the engine's convention, frames in time order, and
@@ -419,16 +431,11 @@ impl Dataset {
     /// masks stay as given.
     pub fn refine_masks_when(
         &mut self,
-        when: MaskRefinement,
+        when: CaptureStep,
         frame: usize,
         done: &mut dyn FnMut(usize, usize),
     ) -> Result<Option<usize>, DatasetError> {
-        let refine = match when {
-            MaskRefinement::Auto => background::background_share(self, frame)? > BACKGROUND_SHARE,
-            MaskRefinement::Always => true,
-            MaskRefinement::Never => false,
-        };
-        refine.then(|| self.refine_masks(done)).transpose()
+        when.applies(self, frame)?.then(|| self.refine_masks(done)).transpose()
     }
 
     /// Refines the training cameras' masks along their outline from the images, against each

@@ -2,7 +2,7 @@
 //! (`tagsplat fit --print-config` prints them). Unknown keys and out-of-range values are errors
 //! naming the key.
 
-use crate::dataset::MaskRefinement;
+use crate::dataset::CaptureStep;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -22,7 +22,7 @@ pub struct FitConfig {
     pub seed: u64,
     /// Whether the training views' masks are refined along their outline from the images
     /// against each camera's background plate, as `train` does (`dataset::matte`).
-    pub refine_masks: MaskRefinement,
+    pub refine_masks: CaptureStep,
     /// Image loss weights.
     pub loss: LossWeights,
     /// Adam learning rates.
@@ -119,7 +119,7 @@ impl Default for FitConfig {
             sh_increase_every: 1000,
             background: [0.0; 3],
             seed: 0,
-            refine_masks: MaskRefinement::Auto,
+            refine_masks: CaptureStep::Auto,
             loss: LossWeights::default(),
             learning_rates: LearningRateConfig::default(),
             densify: DensifyConfig::default(),

@@ -86,6 +86,7 @@ pub fn fit(
         }),
         splat_weights: config.loss.channels(),
         checkpoint: true,
+        colour_refit: None,
     };
     let stats_every = config.report.stats_every as usize;
     let plateau = Plateau::new(config.iterations, config.iterations, stats_every, 0.0);

@@ -54,6 +54,14 @@ pub enum TrainError {
     /// A second render was given to a trainer built without the loss for two.
     #[error("Trainer::record_splat with a second render needs a trainer built with Trainer::with_second_render")]
     NoSecondRender,
+    /// Camera colour maps given for another number of views than the trainer has.
+    #[error("{maps} camera colour maps for {views} training views (one per view)")]
+    ColourMaps {
+        /// Maps given.
+        maps: usize,
+        /// Training views.
+        views: usize,
+    },
     /// A regularizer failed.
     #[error(transparent)]
     Regularize(#[from] crate::regularize::RegularizeError),

@@ -38,6 +38,17 @@ pub(crate) struct Schedule {
     pub splat_weights: [f32; 4],
     /// Whether the trainer checkpoints the last finite Gaussians (see the module docs).
     pub checkpoint: bool,
+    /// When the cameras' colour maps are refitted (trainers that learn camera colour).
+    pub colour_refit: Option<ColourRefit>,
+}
+
+/// Refits of the cameras' colour maps: at the end of every statistics interval from
+/// `from_iteration` on (the moments of earlier intervals are dropped), pulled toward the
+/// identity by `ridge` ([`Trainer::refit_camera_colour`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ColourRefit {
+    pub from_iteration: u32,
+    pub ridge: f64,
 }
 
 /// What a stage adds to the loop (beyond the terms of its steps).
@@ -151,6 +162,9 @@ pub(crate) fn optimize(
                     outcome.non_finite = Some(detail);
                     break;
                 }
+            }
+            if let Some(refit) = schedule.colour_refit {
+                trainer.refit_camera_colour((it >= refit.from_iteration).then_some(refit.ridge))?;
             }
             if schedule.checkpoint && all_finite(&trainer.scene()?) {
                 trainer.checkpoint()?;

@@ -6,6 +6,7 @@ use super::views::ViewTarget;
 use super::TrainError;
 use crate::camera::Camera;
 use crate::gpu::{FixedSums, GpuBuffer, GpuContext, HostRing, Recorder};
+use crate::loss::colour_map::{CameraColour, ColourMap, MappedRender};
 use crate::loss::{ImageLoss, LossTarget, LossTerms, ScoredRender};
 use crate::optim::{Adam, AdamParams};
 use crate::splat::{FrameParams, GaussianBuffers, GaussianScene, RenderSettings, Splatter};
@@ -55,6 +56,15 @@ pub struct Trainer {
     state: GaussianState,
     /// Its moments follow the Gaussian set through [`Trainer::replace`].
     adam: Adam,
+    /// The cameras' colour maps the renders are scored through ([`Trainer::with_camera_colour`]).
+    colour: Option<Colour>,
+}
+
+/// Each training view's colour map, and whether the steps sum the moments of its next fit.
+struct Colour {
+    maps: CameraColour,
+    background: [f32; 3],
+    learn: bool,
 }
 
 impl Trainer {
@@ -84,6 +94,7 @@ impl Trainer {
             terms: LossTerms::sums(ctx, "loss terms")?,
             adam: Adam::new(ctx, &state.params)?,
             state,
+            colour: None,
         };
         let mut rec = Recorder::new(ctx)?;
         rec.fill_buffer(&trainer.grad_depth, 0);
@@ -100,6 +111,41 @@ impl Trainer {
         pair.reserve(self.grad_rgba.len())?;
         self.pair_loss = Some(pair);
         Ok(self)
+    }
+
+    /// Scores every render as its view's camera sees it: through `maps[view]`
+    /// ([`crate::loss::colour_map`]) over `background` (the render settings'). With `learn`,
+    /// each step also sums the moments of its camera's next map, which
+    /// [`Self::refit_camera_colour`] fits. Needs one map per view.
+    pub fn with_camera_colour(
+        mut self,
+        maps: &[ColourMap],
+        background: [f32; 3],
+        learn: bool,
+    ) -> Result<Self, TrainError> {
+        if maps.len() != self.views() {
+            return Err(TrainError::ColourMaps { maps: maps.len(), views: self.views() });
+        }
+        let maps = CameraColour::new(&self.ctx, maps, 2, self.grad_rgba.len())?;
+        self.colour = Some(Colour { maps, background, learn });
+        Ok(self)
+    }
+
+    /// With no step in flight, after a run of steps: each camera's map refitted from the
+    /// moments its renders summed, pulled toward the identity by `ridge`, or with `None` the
+    /// moments dropped and the maps kept. Nothing without learned camera colour.
+    pub fn refit_camera_colour(&mut self, ridge: Option<f64>) -> Result<(), TrainError> {
+        match (self.colour.as_mut(), ridge) {
+            (Some(c), Some(ridge)) if c.learn => drop(c.maps.refit(ridge)?),
+            (Some(c), None) if c.learn => drop(c.maps.take_moments()?),
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// Each view's colour map (None without camera colour).
+    pub fn camera_colour(&self) -> Result<Option<Vec<ColourMap>>, TrainError> {
+        Ok(self.colour.as_ref().map(|c| c.maps.maps()).transpose()?)
     }
 
     /// Counts every view's intersections once, so the splatter's buffers fit them all.
@@ -171,13 +217,16 @@ impl Trainer {
             terms: &self.terms,
             gradient: &self.grad_rgba,
         };
-        match other {
-            None => self.loss.record(rec, &target, &[render])?,
-            Some(other) => {
+        let renders: Vec<ScoredRender> = [Some(render), other].into_iter().flatten().collect();
+        let seen = self.record_seen(rec, view, &renders)?;
+        match *seen.as_slice() {
+            [render] => self.loss.record(rec, &target, &[render])?,
+            _ => {
                 let pair = self.pair_loss.as_ref().ok_or(TrainError::NoSecondRender)?;
-                pair.record(rec, &target, &[render, other])?
+                pair.record(rec, &target, &seen)?
             }
         }
+        self.record_seen_backward(rec, view, &renders)?;
         rec.end_pass();
         splatter.record_backward_of(
             rec,
@@ -188,6 +237,60 @@ impl Trainer {
             &state.densify_stats,
         )?;
         Ok(())
+    }
+
+    /// The renders as view `view`'s camera sees them (the renders themselves without camera
+    /// colour): the first, the Gaussian render, sums its camera's moments when learning.
+    fn record_seen<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        view: usize,
+        renders: &[ScoredRender<'a>],
+    ) -> Result<Vec<ScoredRender<'a>>, TrainError> {
+        let Some(colour) = &self.colour else { return Ok(renders.to_vec()) };
+        let mut seen = Vec::new();
+        for (slot, r) in renders.iter().enumerate() {
+            colour.maps.record_forward(rec, &self.mapped(colour, view, slot, r.image))?;
+            let (image, gradient) = (colour.maps.seen(slot), colour.maps.seen_gradient(slot));
+            seen.push(ScoredRender { image, gradient, ..*r });
+        }
+        Ok(seen)
+    }
+
+    /// dL/d(each render) from dL/d(what the camera saw of it); nothing without camera colour
+    /// (the loss wrote the renders' gradients itself).
+    fn record_seen_backward<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        view: usize,
+        renders: &[ScoredRender<'a>],
+    ) -> Result<(), TrainError> {
+        if let Some(colour) = &self.colour {
+            for (slot, r) in renders.iter().enumerate() {
+                let mapped = self.mapped(colour, view, slot, r.image);
+                colour.maps.record_backward(rec, &mapped, r.gradient)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Render `slot` of a step on view `view`, as the colour maps take it.
+    fn mapped<'a>(
+        &'a self,
+        colour: &'a Colour,
+        view: usize,
+        slot: usize,
+        render: &'a GpuBuffer<[f32; 4]>,
+    ) -> MappedRender<'a> {
+        let camera = &self.cameras[view];
+        MappedRender {
+            camera: view,
+            render,
+            slot,
+            fit_against: (colour.learn && slot == 0).then_some(&self.targets[view]),
+            pixels: camera.width as usize * camera.height as usize,
+            background: colour.background,
+        }
     }
 
     /// After the step's submission completed: whether every intersection fit the splatter's

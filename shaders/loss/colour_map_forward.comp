@@ -2,7 +2,8 @@
 // A render seen through its camera's colour map (colour_map.glsl), and, when asked, the
 // moments the host fits the camera's next map from (engine/loss/colour_map/affine.rs): with
 // z = (p, α) the render's subject and y = target − (1 − α) background what the camera saw of
-// it, the 10 sums Σ z_i z_j (i ≤ j) and the 12 sums Σ y_k z_j.
+// it, the 10 sums Σ z_i z_j (i ≤ j) and the 12 sums Σ y_k z_j, over the pixels that both the
+// render and the target cover (coverage ≥ INTERIOR).
 //
 // The moments steer the optimisation, so their sum must not depend on the device's order:
 // each invocation sums its run of pixels in order, the workgroup adds those in a fixed tree
@@ -16,6 +17,7 @@ layout(local_size_x_id = 0) in;
 layout(constant_id = 0) const uint WORKGROUP = 64;  // a power of two (the tree halves it)
 const uint RUN = 16u;          // pixels per invocation (RUN in engine/loss/colour_map/mod.rs)
 const uint MOMENTS = 22u;      // per camera: 10 of z zᵀ, 12 of y zᵀ
+const float INTERIOR = 0.99;   // the coverage of render and target a pixel's moments need
 
 layout(std430, binding = 0) readonly buffer Maps { vec4 maps[]; };
 layout(std430, binding = 1) readonly buffer Render { u64vec2 render[]; };
@@ -38,8 +40,11 @@ void main() {
         vec3 seen;
         for (uint k = 0u; k < 3u; k++) seen[k] = dot(rows[k], z);
         mapped[i] = pack_vec4(vec4(seen + (1.0 - c.a) * params.background.rgb, c.a));
-        if (accumulate) {
-            vec3 y = unpack_vec4(target[i]).rgb - (1.0 - c.a) * params.background.rgb;
+        vec4 t = unpack_vec4(target[i]);
+        // Only where render and target both say subject: along the outline a pixel's colour
+        // says more about the coverage than about the camera.
+        if (accumulate && min(c.a, t.a) >= INTERIOR) {
+            vec3 y = t.rgb - (1.0 - c.a) * params.background.rgb;
             uint m = 0u;
             for (uint a = 0u; a < 4u; a++) {
                 for (uint b = a; b < 4u; b++) sums[m++] += z[a] * z[b];

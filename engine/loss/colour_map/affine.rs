@@ -52,35 +52,29 @@ pub fn solve4(mut m: [[f64; 4]; 4], mut b: [f64; 4]) -> [f64; 4] {
 pub const IDENTITY: ColourMap = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]];
 
 /// A camera's next map from the `MOMENTS` sums of its renders (colour_map_forward.comp's
-/// order: `Σ z_i z_j` for `i ≤ j`, then `Σ y_k z_j`): per channel a gain and an offset
-/// (`y_k ≈ g_k p_k + o_k α`), pulled toward the identity by `ridge` times the subject's summed
-/// coverage `Σ α²`. A subject's colours are too correlated across channels to fix a full
-/// matrix's cross-terms (docs/log/2026-11-29-camera-colour.md: they swing from frame to frame
-/// while gain and offset hold to 0.01), so the kernels' general map is fitted diagonal. `None`
-/// when the renders covered nothing (the camera keeps its map) or a moment is not finite.
+/// order: `Σ z_i z_j` for `i ≤ j`, then `Σ y_k z_j`): a gain per channel (`y_k ≈ g_k p_k`,
+/// exposure times white balance), pulled toward 1 by `ridge` times the subject's summed
+/// coverage `Σ α²`. The kernels take any affine map, but a subject's colours are too
+/// correlated across channels to fix a full matrix, and too narrow to tell a gain from an
+/// offset (docs/log/2026-11-29-camera-colour.md). `None` when the renders covered nothing (the
+/// camera keeps its map) or a moment is not finite.
 pub fn fit_map(moments: &[f64], ridge: f64) -> Option<ColourMap> {
     if moments.len() != MOMENTS || !moments.iter().all(|m| m.is_finite()) {
         return None;
     }
-    // Index of Σ z_a z_b (a ≤ b) in the upper triangle, row by row.
-    let zz = |a: usize, b: usize| moments[(0..a).map(|r| 4 - r).sum::<usize>() + (b - a)];
-    let coverage = zz(3, 3);
+    // Σ z_k z_k sits at the start of row k of the upper triangle: 0, 4, 7, 9.
+    let squares = [0, 4, 7, 9].map(|i| moments[i]);
+    let coverage = squares[3];
     if coverage <= 0.0 {
         return None;
     }
     let lambda = ridge.max(1e-9) * coverage;
-    let mut map = [[0.0f32; 4]; 3];
+    let mut map = IDENTITY;
     for k in 0..3 {
-        let (pp, pa, aa) = (zz(k, k) + lambda, zz(k, 3), coverage + lambda);
-        let (yp, ya) = (moments[10 + 4 * k + k] + lambda, moments[10 + 4 * k + 3]);
-        let det = pp * aa - pa * pa;
-        let (gain, offset) = ((yp * aa - ya * pa) / det, (pp * ya - pa * yp) / det);
-        if !(gain.is_finite() && offset.is_finite()) {
-            return None;
-        }
-        (map[k][k], map[k][3]) = (gain as f32, offset as f32);
+        let gain = (moments[10 + 4 * k + k] + lambda) / (squares[k] + lambda);
+        map[k][k] = gain as f32;
     }
-    Some(map)
+    map.iter().flatten().all(|v| v.is_finite()).then_some(map)
 }
 
 /// The maps with the same renders' freedom removed: each map composed with the inverse of
@@ -140,9 +134,8 @@ mod tests {
     }
 
     #[test]
-    fn a_cameras_gains_and_offsets_are_recovered_from_its_moments() {
-        let truth: ColourMap =
-            [[0.8, 0.0, 0.0, 0.03], [0.0, 1.1, 0.0, -0.02], [0.0, 0.0, 0.9, 0.05]];
+    fn a_cameras_gains_are_recovered_from_its_moments() {
+        let truth: ColourMap = [[0.8, 0.0, 0.0, 0.0], [0.0, 1.1, 0.0, 0.0], [0.0, 0.0, 0.9, 0.0]];
         let fitted = fit_map(&moments_of(&pixels(400), &truth), 1e-9).unwrap();
         for (f, t) in fitted.iter().flatten().zip(truth.iter().flatten()) {
             assert!((f - t).abs() < 1e-5, "{fitted:?} against {truth:?}");
@@ -150,17 +143,16 @@ mod tests {
     }
 
     #[test]
-    fn the_ridge_keeps_what_one_colour_cannot_fix_at_the_identity() {
-        // Every pixel the same grey: only the map's action on that grey is determined.
-        let grey = vec![[0.5, 0.5, 0.5, 1.0]; 100];
-        let truth: ColourMap = [[1.2, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.8, 0.0]];
-        let fitted = fit_map(&moments_of(&grey, &truth), 1e-3).unwrap();
-        for k in 0..3 {
-            let seen: f32 = (0..3).map(|j| 0.5 * fitted[k][j]).sum::<f32>() + fitted[k][3];
-            let want = 0.5 * truth[k][k];
-            assert!((seen - want).abs() < 2e-3, "channel {k}: {seen} against {want}");
-            assert!(fitted[k].iter().all(|v| v.abs() < 2.0), "{fitted:?}");
-        }
+    fn the_ridge_keeps_what_the_renders_cannot_fix_at_the_identity() {
+        // A subject with no red: its red gain stays 1; green and blue are fitted.
+        let pixels: Vec<[f64; 4]> = pixels(200).iter().map(|p| [0.0, p[1], p[2], p[3]]).collect();
+        let truth: ColourMap = [[1.3, 0.0, 0.0, 0.0], [0.0, 0.9, 0.0, 0.0], [0.0, 0.0, 1.1, 0.0]];
+        let fitted = fit_map(&moments_of(&pixels, &truth), 1e-3).unwrap();
+        assert_eq!(fitted[0][0], 1.0);
+        assert!(
+            (fitted[1][1] - 0.9).abs() < 1e-3 && (fitted[2][2] - 1.1).abs() < 1e-3,
+            "{fitted:?}"
+        );
         assert_eq!(fit_map(&[0.0; MOMENTS], 0.01), None, "no coverage: keep the map");
         assert_eq!(fit_map(&[f64::NAN; MOMENTS], 0.01), None);
     }

@@ -38,10 +38,16 @@ fn subject(c: [f64; 4], background: [f64; 3]) -> [f64; 4] {
     ]
 }
 
-/// The forward's moments of renders `c` against targets `t` (the kernel's order).
+/// The coverage of render and target a pixel's moments need (colour_map_forward.comp
+/// `INTERIOR`).
+pub const INTERIOR: f32 = 0.99;
+
+/// The forward's moments of renders `c` against targets `t` (the kernel's order), over the
+/// pixels both cover.
 pub fn moments(c: &[[f64; 4]], t: &[[f64; 4]], background: [f64; 3]) -> Vec<f64> {
     let mut sums = vec![0.0; MOMENTS];
-    for (c, t) in c.iter().zip(t) {
+    let interior = |c: &[f64; 4], t: &[f64; 4]| c[3].min(t[3]) >= INTERIOR as f64;
+    for (c, t) in c.iter().zip(t).filter(|(c, t)| interior(c, t)) {
         let z = subject(*c, background);
         let y: [f64; 3] = std::array::from_fn(|k| t[k] - (1.0 - c[3]) * background[k]);
         let mut m = 0;

@@ -1,7 +1,7 @@
 //! The reconstruction pipeline's configuration: one TOML file, every key optional with a
 //! documented default (`tagsplat train --print-config`), errors naming the file and key.
 
-pub use crate::dataset::MaskRefinement;
+pub use crate::dataset::CaptureStep;
 use crate::train::config::{
     check_appearance, check_ranges, load_toml, value_error, ConfigError, LearningRateConfig,
     LossWeights,
@@ -38,11 +38,29 @@ pub struct TrainConfig {
     /// Whether the training views' masks are refined along their outline from the images
     /// against each camera's background plate (`dataset::matte`): `auto` (the default) where
     /// the images carry a background, `always`, or `never`.
-    pub refine_masks: MaskRefinement,
+    pub refine_masks: CaptureStep,
+    /// Each training camera's own exposure and white balance, learned on frame 0.
+    pub camera_colour: CameraColourConfig,
     /// The initial mesh built from the masks when none is given.
     pub init: InitMeshConfig,
     /// How often losses are read back.
     pub report: PipelineReportConfig,
+}
+
+/// Each training camera's colour response (`loss::colour_map`): frame 0's renders are scored
+/// as each camera sees them, through a gain and offset per channel refitted from the renders
+/// at the end of every statistics interval; later frames keep frame 0's maps.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraColourConfig {
+    /// `auto` (the default) where the images carry a background (a studio's cameras; renders
+    /// over black share one virtual camera), `always`, or `never`.
+    pub learn: CaptureStep,
+    /// Frame 0's first iteration whose interval refits the maps (before it, the colours are
+    /// still far from any camera's, and a fit would explain the mismatch as a camera's).
+    pub from_iteration: u32,
+    /// Pull of each fit toward the identity, × the subject's summed coverage.
+    pub ridge: f32,
 }
 
 /// Frame 0: the Gaussians on the initial mesh, topology-preserving densification and pruning.
@@ -251,10 +269,17 @@ impl Default for TrainConfig {
             loss: PipelineWeights::default(),
             learning_rates: LearningRateConfig::default(),
             position_lr_scale: 10.0,
-            refine_masks: MaskRefinement::Auto,
+            refine_masks: CaptureStep::Auto,
+            camera_colour: CameraColourConfig::default(),
             init: InitMeshConfig::default(),
             report: PipelineReportConfig::default(),
         }
+    }
+}
+
+impl Default for CameraColourConfig {
+    fn default() -> Self {
+        Self { learn: CaptureStep::Auto, from_iteration: 200, ridge: 0.01 }
     }
 }
 
@@ -409,6 +434,7 @@ impl TrainConfig {
             ("loss.rotation", l.rotation),
             ("loss.lambda_w", l.lambda_w),
             ("loss.huber", l.huber),
+            ("camera_colour.ridge", self.camera_colour.ridge),
             ("temporal.tolerance", self.temporal.tolerance),
             ("temporal.silhouette", self.temporal.silhouette),
             ("temporal.coverage", self.temporal.coverage),

@@ -3,6 +3,7 @@
 //! rendered and scored for colour and mask, the regularizers (temporal ones against the
 //! previous frame) — then Adam. Frame 0 also densifies and prunes through the topology.
 
+use super::camera_colour::{learned_maps, trainer_for, CameraMaps, ColourUse};
 use super::config::{TemporalConfig, TrainConfig};
 use super::correspondences::{correspondences, Correspondences, SeenPose, VertexTracks};
 use super::graph_stage::{solve_graph, GraphInput, GraphReport, ImageWeights};
@@ -23,7 +24,7 @@ use crate::topology::{
 use crate::train::fit::{self, learning_rates, scene_extent};
 use crate::train::in_flight::StepTerms;
 use crate::train::mesh_term::MeshTerm;
-use crate::train::optimize::{optimize, LoopOutcome, Schedule, Stage};
+use crate::train::optimize::{optimize, ColourRefit, LoopOutcome, Schedule, Stage};
 use crate::train::plateau::{Plateau, StopReason};
 use crate::train::schedule::DensifyWindow;
 use crate::train::{TrainError, Trainer, ViewTarget};
@@ -93,6 +94,10 @@ pub struct FrameReport {
     /// Per-vertex iterations whose intersections outgrew the splatter's buffers (rendered without
     /// the excess; see [`Trainer::finish_step`](crate::train::Trainer::finish_step)).
     pub truncated_steps: u32,
+    /// The training cameras' colour maps frame 0 learned, by name (`[camera_colour]`; each
+    /// row `(A_k0, A_k1, A_k2, b_k)`: the camera sees `A p + b α` of the subject's colour `p`).
+    #[serde(default, skip_serializing_if = "CameraMaps::is_empty")]
+    pub camera_colour: CameraMaps,
 }
 
 /// What a later frame's correspondence terms found in its images.
@@ -127,6 +132,8 @@ pub struct FrameTask<'a> {
     /// What the flow and anchor terms match frame t's images against (nothing on frame 0 or
     /// with the terms off).
     pub sources: MatchSources<'a>,
+    /// How the renders meet the cameras' colour responses: learned on frame 0, applied later.
+    pub colour: ColourUse<'a>,
 }
 
 /// What the correspondence terms match a later frame's images against.
@@ -176,10 +183,11 @@ pub fn optimize_frame(
         (start, report.graph, graph_s) = (moved, Some(graph), t0.elapsed().as_secs_f64());
     }
 
-    let mut trainer = Trainer::new(ctx, &start, task.train)?.with_second_render()?;
+    let mut trainer = trainer_for(ctx, &start, task.train, task.colour, settings.background)?;
     task.mesh.positions = start.positions.clone();
     let terms = frame_terms(ctx, &task, &start, &first.camera, t, (silhouette, matches))?;
-    let (schedule, plateau) = frame_schedule(config, canonical, weights, task.train.len());
+    let learn = matches!(task.colour, ColourUse::Learn);
+    let (schedule, plateau) = frame_schedule(config, (canonical, learn), weights, task.train.len());
     let budget = match config.canonical.budget {
         0 => covered_pixels(task.train),
         b => b as usize,
@@ -214,6 +222,9 @@ pub fn optimize_frame(
     report.stop_reason = run.stop_reason;
     report.truncated_steps = run.truncated_steps;
     report.colour_iterations = colour_iterations;
+    if learn {
+        report.camera_colour = learned_maps(&trainer, task.train)?;
+    }
     (report.iterations, report.wall_s, report.gaussians, report.passes_ms) =
         (run.iterations, graph_s + run.train_s + colour_s, scene.len(), run.passes_ms);
     let held_out = evaluate(&mut trainer, &terms.mesh_term, task.eval, &settings)?;
@@ -373,6 +384,7 @@ fn deform_start(
         neighbourhoods: &neighbourhoods,
         silhouette,
         matches: run.matches,
+        colour: task.colour,
     };
     solve_graph(ctx, &input, config, run.weights, run.settings, rng)
 }
@@ -410,7 +422,7 @@ fn frame_terms(
 /// its plateau, tested once per pass through its `views`.
 fn frame_schedule(
     config: &TrainConfig,
-    canonical: bool,
+    (canonical, learn_colour): (bool, bool),
     weights: ImageWeights,
     views: usize,
 ) -> (Schedule, Plateau) {
@@ -426,6 +438,10 @@ fn frame_schedule(
         }),
         splat_weights: weights.gaussians,
         checkpoint: false,
+        colour_refit: learn_colour.then_some(ColourRefit {
+            from_iteration: config.camera_colour.from_iteration,
+            ridge: config.camera_colour.ridge as f64,
+        }),
     };
     let plateau = if canonical {
         Plateau::new(iterations, iterations, config.report.stats_every as usize, 0.0)
@@ -640,6 +656,7 @@ fn empty_report(frame: usize) -> FrameReport {
         passes_ms: BTreeMap::new(),
         topology_steps: Vec::new(),
         truncated_steps: 0,
+        camera_colour: CameraMaps::new(),
     }
 }
 

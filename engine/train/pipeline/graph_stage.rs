@@ -4,6 +4,7 @@
 //! to fine when configured, so a limb that moved many pixels is within reach of the loss);
 //! every level stops at its plateau.
 
+use super::camera_colour::{trainer_for, ColourUse};
 use super::config::{ReferencePose, TrainConfig};
 use super::frame::MatchTerms;
 use crate::deform::{build_graph, fit_nodes, GraphDeformer};
@@ -62,6 +63,8 @@ pub struct GraphInput<'a> {
     pub silhouette: &'a SilhouetteTerm,
     /// The flow and anchor terms (empty when off).
     pub matches: &'a MatchTerms,
+    /// The cameras' colour maps the renders are scored through.
+    pub colour: ColourUse<'a>,
 }
 
 /// The loss weights of a step: λ per rgba channel of the Gaussian and mesh renders.
@@ -99,7 +102,7 @@ pub fn solve_graph(
         let (_, deformer) = built.as_mut().expect("a graph was built just above");
         report.nodes = deformer.nodes();
         let views: Vec<ViewTarget> = input.train.iter().map(|v| v.downsampled(factor)).collect();
-        let mut trainer = Trainer::new(ctx, &moved, &views)?.with_second_render()?;
+        let mut trainer = trainer_for(ctx, &moved, &views, input.colour, settings.background)?;
         let (width, height) = (views[0].camera.width, views[0].camera.height);
         let mesh_term = MeshTerm::new(ctx, &moved.positions, input.faces, width, height)?;
         let coverage = CoverageTerm::new(

@@ -4,6 +4,7 @@
 //! moves that mesh through every later frame with its topology frozen: a deformation graph
 //! solved first, then every vertex refined, each stage until its loss stops improving.
 
+mod camera_colour;
 pub mod config;
 mod correspondences;
 mod frame;
@@ -13,7 +14,8 @@ mod run;
 mod run_log;
 
 pub use crate::train::plateau::StopReason;
-pub use config::{MaskRefinement, ReferencePose, TrainConfig};
+pub use camera_colour::{CameraMaps, ColourUse};
+pub use config::{CaptureStep, ReferencePose, TrainConfig};
 pub use frame::{optimize_frame, FrameReport, FrameTask};
 pub use graph_stage::{GraphReport, LevelReport};
 pub use html_report::write_html_report;

@@ -2,7 +2,8 @@
 //! frame, then every later frame from its predecessor; each frame written as it finishes, so
 //! running the same job again resumes after the last complete frame.
 
-use super::config::{MaskRefinement, TrainConfig};
+use super::camera_colour::{CameraMaps, ColourUse};
+use super::config::{CaptureStep, TrainConfig};
 use super::correspondences::{SeenPose, VertexTracks};
 use super::frame::{optimize_frame, FrameReport, FrameTask, MatchSources};
 use super::html_report::write_html_report;
@@ -180,7 +181,7 @@ pub fn run_train(
 /// `frame` carry a background) and logs it; `done(cameras done, cameras)` after each plate.
 fn refine_masks(
     dataset: &mut Dataset,
-    when: MaskRefinement,
+    when: CaptureStep,
     frame: usize,
     log: &RunLog,
     done: &mut dyn FnMut(usize, usize),
@@ -225,6 +226,7 @@ fn run_logged(
         progress(TrainProgress { stage, frame, frames_end, iteration, iterations })
     };
     refine_masks(&mut dataset, job.config.refine_masks, frames.start, log, &mut plates)?;
+    let learn_colour = job.config.camera_colour.learn.applies(&dataset, frames.start)?;
     let out = SequenceOutput::create(&job.out)?;
     // A range that starts later continues frames already on disk.
     if let Some(missing) = [0, frames.start.saturating_sub(1)]
@@ -259,8 +261,16 @@ fn run_logged(
     if !report.resumed_frames.is_empty() {
         log.line(&format!("resuming: frames {:?} are complete on disk", report.resumed_frames))?;
     }
-    let (mut mesh, mut previous) =
-        canonical_start(ctx, (&dataset, job), (&out, log), (&mut report, started), progress)?;
+    let colour = if learn_colour { ColourUse::Learn } else { ColourUse::Off };
+    let (mut mesh, mut previous) = canonical_start(
+        ctx,
+        (&dataset, job, colour),
+        (&out, log),
+        (&mut report, started),
+        progress,
+    )?;
+    let maps = frame0_maps(&report, learn_colour, log)?;
+    let colour = if maps.is_empty() { ColourUse::Off } else { ColourUse::Apply(&maps) };
     if let Some(first) =
         report.frames.iter().find(|f| f.frame == 0 && !report.resumed_frames.contains(&0))
     {
@@ -316,6 +326,7 @@ fn run_logged(
                 previous: Some(&previous),
                 frame0: Some(&frame0),
                 sources: MatchSources { previous: &previous_views, tracks: tracks.as_ref() },
+                colour,
             };
             let (scene, report) =
                 optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
@@ -438,7 +449,7 @@ fn earlier_frame_reports(out: &Path, complete: &[usize]) -> Vec<FrameReport> {
 /// Frame 0: read back when complete, else optimised from the initial mesh and written.
 fn canonical_start(
     ctx: &Arc<GpuContext>,
-    (dataset, job): (&Dataset, &TrainJob),
+    (dataset, job, colour): (&Dataset, &TrainJob, ColourUse),
     (out, log): (&SequenceOutput, &RunLog),
     (report, started): (&mut TrainReport, Instant),
     progress: &mut dyn FnMut(TrainProgress),
@@ -475,6 +486,7 @@ fn canonical_start(
         previous: None,
         frame0: None,
         sources: MatchSources::default(),
+        colour,
     };
     let first_iteration = &mut report.startup.first_iteration_s;
     let (scene, frame_report) =
@@ -499,6 +511,30 @@ fn canonical_start(
     // regularizers sum in that order), so resuming gives the same bits as running through.
     let mesh = ManifoldMesh::new(scene.positions.clone(), mesh.live_faces())?;
     Ok((mesh, scene))
+}
+
+/// The colour maps frame 0 learned (from its report, also when resumed), logged; none when
+/// camera colour is not learned on this capture.
+fn frame0_maps(report: &TrainReport, learn: bool, log: &RunLog) -> Result<CameraMaps, TrainError> {
+    let frame0 = report.frames.iter().find(|f| f.frame == 0);
+    let maps = frame0.filter(|_| learn).map(|f| f.camera_colour.clone()).unwrap_or_default();
+    if !maps.is_empty() {
+        let gains = |k: usize| {
+            let g = maps.values().map(|m| m[k][k]);
+            (g.clone().fold(f32::INFINITY, f32::min), g.fold(f32::NEG_INFINITY, f32::max))
+        };
+        let ranges: Vec<String> = (0..3)
+            .map(gains)
+            .zip(["red", "green", "blue"])
+            .map(|((lo, hi), name)| format!("{name} {lo:.3}–{hi:.3}"))
+            .collect();
+        log.line(&format!(
+            "camera colour: {} training cameras' maps learned on frame 0, gains {}",
+            maps.len(),
+            ranges.join(", ")
+        ))?;
+    }
+    Ok(maps)
 }
 
 /// The frame-0 mesh, imported as a manifold (welded, oriented; errors name the file), with
