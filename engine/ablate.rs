@@ -215,8 +215,9 @@ pub fn run_temporal_ablations(
     Ok(rows)
 }
 
-/// Frame 0 of the train output `from` into the train output `to` (Gaussians first: the mesh
-/// marks the frame complete), unless `to` has it already; a run into `to` then continues it.
+/// Frame 0 of the train output `from` into the train output `to` (its camera colour maps
+/// and Gaussians first: the mesh marks the frame complete), unless `to` has it already; a run
+/// into `to` then continues it.
 pub fn copy_frame0(from: &Path, to: &Path) -> Result<(), AblateError> {
     let (source, target) = (SequenceOutput::create(from)?, SequenceOutput::create(to)?);
     if target.is_complete(0) {
@@ -225,10 +226,12 @@ pub fn copy_frame0(from: &Path, to: &Path) -> Result<(), AblateError> {
     if !source.is_complete(0) {
         return Err(AblateError::NoFrame0(from.to_owned()));
     }
-    for (a, b) in [
+    let maps = (source.camera_colour_path(), target.camera_colour_path());
+    let maps = maps.0.is_file().then_some(maps);
+    for (a, b) in maps.into_iter().chain([
         (source.gaussians_path(0), target.gaussians_path(0)),
         (source.mesh_path(0), target.mesh_path(0)),
-    ] {
+    ]) {
         crate::io::write_atomically(&b, |w| {
             std::io::copy(&mut std::fs::File::open(&a)?, w).map(drop)
         })

@@ -559,8 +559,9 @@ fn each_cameras_exposure_is_learned_on_frame_0() {
     config.camera_colour.learn = tagsplat::train::pipeline::CaptureStep::Always;
     config.camera_colour.from_iteration = 0;
     config.canonical.iterations = 400;
+    let (out, continued) = (dir.join("out"), dir.join("continued"));
     let report =
-        run_train(g.ctx(), &job(&data, &dir.join("out"), config, Some(0..2)), &mut |_| {}).unwrap();
+        run_train(g.ctx(), &job(&data, &out, config.clone(), Some(0..2)), &mut |_| {}).unwrap();
     let learned = &report.frames[0].camera_colour;
     assert!(report.frames[1].camera_colour.is_empty(), "frame 0 holds the maps");
     let train: Vec<_> = applied.iter().filter(|(name, ..)| learned.contains_key(name)).collect();
@@ -580,5 +581,10 @@ fn each_cameras_exposure_is_learned_on_frame_0() {
             assert!((got - seen[k]).abs() < 0.03, "{message} (map {map:?})");
         }
     }
+    // Frame 1 continued from a copy of frame 0 scores through the same maps.
+    copy_frame0(&out, &continued).unwrap();
+    run_train(g.ctx(), &job(&data, &continued, config, Some(0..2)), &mut |_| {}).unwrap();
+    let mesh = |out: &Path| TriMesh::read_ply(&out.join("meshes/000001.ply")).unwrap();
+    assert_eq!(mesh(&out).positions, mesh(&continued).positions);
     let _ = std::fs::remove_dir_all(&dir);
 }

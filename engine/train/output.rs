@@ -51,6 +51,12 @@ impl SequenceOutput {
         self.root.join("gaussians").join(format!("{}.ply", frame_name(t)))
     }
 
+    /// `root/camera_colour.json`: each training camera's colour map frame 0 learned, by name
+    /// (written before frame 0's files, when learned; later frames and a resumed run read it).
+    pub fn camera_colour_path(&self) -> PathBuf {
+        self.root.join("camera_colour.json")
+    }
+
     /// Whether frame `t` was finished (its mesh, written last, exists).
     pub fn is_complete(&self, t: usize) -> bool {
         self.mesh_path(t).is_file() && self.gaussians_path(t).is_file()

@@ -3,11 +3,13 @@
 //! renders through frame 0's maps, found by camera name.
 
 use crate::gpu::GpuContext;
+use crate::io::write_atomically;
 use crate::loss::colour_map::affine::IDENTITY;
 use crate::loss::colour_map::ColourMap;
 use crate::splat::GaussianScene;
 use crate::train::{TrainError, Trainer, ViewTarget};
 use std::collections::BTreeMap;
+use std::path::Path;
 use std::sync::Arc;
 
 /// The maps frame 0 learned, by camera name.
@@ -51,4 +53,53 @@ pub fn trainer_for(
 pub fn learned_maps(trainer: &Trainer, views: &[ViewTarget]) -> Result<CameraMaps, TrainError> {
     let maps = trainer.camera_colour()?.unwrap_or_default();
     Ok(views.iter().map(|v| v.name.clone()).zip(maps).collect())
+}
+
+/// Writes `maps` to `path` (JSON, atomically).
+pub fn write_maps(path: &Path, maps: &CameraMaps) -> Result<(), TrainError> {
+    write_atomically(path, |w| serde_json::to_writer_pretty(w, maps).map_err(std::io::Error::other))
+        .map_err(|error| TrainError::Io { path: path.to_owned(), error })
+}
+
+/// The maps at `path`; none when there is no such file (frame 0 learned none).
+pub fn read_maps(path: &Path) -> Result<CameraMaps, TrainError> {
+    let text = match std::fs::read_to_string(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(CameraMaps::new()),
+        read => read.map_err(|error| TrainError::Read { path: path.to_owned(), error })?,
+    };
+    let maps: CameraMaps = serde_json::from_str(&text).map_err(|e| TrainError::Invalid {
+        path: path.to_owned(),
+        problem: format!("not camera colour maps by camera name: {e}"),
+    })?;
+    match maps.iter().find(|(_, m)| !m.iter().flatten().all(|v| v.is_finite())) {
+        Some((name, _)) => Err(TrainError::Invalid {
+            path: path.to_owned(),
+            problem: format!("camera {name}'s map is not finite"),
+        }),
+        None => Ok(maps),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn maps_round_trip_and_a_bad_file_is_named() {
+        let dir = std::env::temp_dir().join(format!("tagsplat-maps-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("camera_colour.json");
+        assert!(read_maps(&path).unwrap().is_empty(), "no file: no maps");
+        let mut maps = CameraMaps::new();
+        maps.insert("c03".into(), [[1.1, 0.0, 0.0, 0.0], [0.0, 0.9, 0.0, 0.0], IDENTITY[2]]);
+        write_maps(&path, &maps).unwrap();
+        assert_eq!(read_maps(&path).unwrap(), maps);
+        std::fs::write(&path, "{\"c03\": [[1, 0, 0]]}").unwrap();
+        let error = read_maps(&path).unwrap_err().to_string();
+        assert!(
+            error.contains("camera_colour.json") && error.contains("camera colour maps"),
+            "{error}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

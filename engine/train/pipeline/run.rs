@@ -2,7 +2,7 @@
 //! frame, then every later frame from its predecessor; each frame written as it finishes, so
 //! running the same job again resumes after the last complete frame.
 
-use super::camera_colour::{CameraMaps, ColourUse};
+use super::camera_colour::{read_maps, write_maps, CameraMaps, ColourUse};
 use super::config::{CaptureStep, TrainConfig};
 use super::correspondences::{SeenPose, VertexTracks};
 use super::frame::{optimize_frame, FrameReport, FrameTask, MatchSources};
@@ -269,7 +269,7 @@ fn run_logged(
         (&mut report, started),
         progress,
     )?;
-    let maps = frame0_maps(&report, learn_colour, log)?;
+    let maps = frame0_maps(&out, learn_colour, log)?;
     let colour = if maps.is_empty() { ColourUse::Off } else { ColourUse::Apply(&maps) };
     if let Some(first) =
         report.frames.iter().find(|f| f.frame == 0 && !report.resumed_frames.contains(&0))
@@ -504,6 +504,9 @@ fn canonical_start(
     if let Some(s) = report.startup.first_iteration_s {
         log.line(&format!("frame 0: first iteration done {s:.1} s after the start"))?;
     }
+    if !frame_report.camera_colour.is_empty() {
+        write_maps(&out.camera_colour_path(), &frame_report.camera_colour)?;
+    }
     write_frame(out, 0, &mesh, &scene)?;
     report.frames.push(frame_report);
     // Later frames start from the topology as written, exactly as a resumed run reads it back
@@ -513,11 +516,10 @@ fn canonical_start(
     Ok((mesh, scene))
 }
 
-/// The colour maps frame 0 learned (from its report, also when resumed), logged; none when
-/// camera colour is not learned on this capture.
-fn frame0_maps(report: &TrainReport, learn: bool, log: &RunLog) -> Result<CameraMaps, TrainError> {
-    let frame0 = report.frames.iter().find(|f| f.frame == 0);
-    let maps = frame0.filter(|_| learn).map(|f| f.camera_colour.clone()).unwrap_or_default();
+/// The colour maps frame 0 learned (read back from `out`, also when resumed), logged; none
+/// when camera colour is not learned on this capture.
+fn frame0_maps(out: &SequenceOutput, learn: bool, log: &RunLog) -> Result<CameraMaps, TrainError> {
+    let maps = if learn { read_maps(&out.camera_colour_path())? } else { CameraMaps::new() };
     if !maps.is_empty() {
         let gains = |k: usize| {
             let g = maps.values().map(|m| m[k][k]);
