@@ -531,5 +531,23 @@ fn masks_a_ring_off_are_refined_against_the_background_plate() {
     // difference; refining only the rings beside the given outline (before 29 November) left
     // 0.65 of it.
     assert!(refined < 0.3 * given, "refined {refined} against given {given}");
+
+    // A mask a ring off is no problem; one that cuts half the subject away is, named by
+    // frame and camera: there the pixels well outside it are not the camera's plate.
+    assert!(Dataset::load(&dir).unwrap().check().is_empty());
+    let path = own::mask_path(&dir, &names[1], 2);
+    let mut mask = read_image(&path).unwrap();
+    let width = mask.width as usize;
+    mask.data
+        .iter_mut()
+        .enumerate()
+        .filter(|(i, _)| i % width < width / 2)
+        .for_each(|(_, m)| *m = 0.0);
+    write_png(&path, &mask).unwrap();
+    let problems: Vec<String> =
+        Dataset::load(&dir).unwrap().check().iter().map(ToString::to_string).collect();
+    assert_eq!(problems.len(), 1, "{problems:?}");
+    let said = format!("frame 2, camera {}", names[1]);
+    assert!(problems[0].contains(&said) && problems[0].contains("leaves out"), "{problems:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,7 +1,8 @@
 //! Whether a capture's images show something behind the subject (a studio's background plate)
 //! or were composited over black (a render): `dataset info` says which, so a user knows the
 //! masks, not the colours, say what is subject. Over black, lit pixels outside a mask are
-//! subject the mask left out: [`Dataset::check`] names the views where that is much of it.
+//! subject the mask left out (over a background, pixels that are not the camera's plate,
+//! `matte::off_plate`): [`Dataset::check`] names the views where that is much of it.
 
 use super::{Dataset, DatasetError};
 

@@ -35,6 +35,9 @@ const WINDOW: i64 = 3;
 /// The least distance (RGB, values in [0, 1]) between the plate's and the subject's colour for
 /// a pixel's blend to say anything: below it, noise and JPEG decide.
 const MIN_CONTRAST: f32 = 0.1;
+/// The least distance (RGB, values in [0, 1]) from the plate at which a pixel well outside a
+/// mask shows something else than the background ([`off_plate`]): past noise and JPEG.
+const OFF_PLATE: f32 = 0.15;
 /// How far [`depths`] counts: enough for the rings [`refine`] reads.
 const MAX_STEPS: u32 = 5;
 
@@ -48,9 +51,12 @@ pub struct Plate {
 
 impl Plate {
     /// The plate of one camera from its `views` (image and mask of a frame each, all of one
-    /// size, masks one value per pixel with > 0.5 subject). None when no pixel is seen clear
-    /// of the masks (or there is no view). Deterministic: a median and a fill in pixel order.
-    pub fn from_frames(views: &[(&Image, &[f32])]) -> Option<Plate> {
+    /// size, masks one value per pixel with > 0.5 subject); a pixel seen clear of the masks
+    /// in fewer than `min_seen` frames takes the nearest such pixel's colour. None when no
+    /// pixel is seen so (or there is no view). Deterministic: a median and a fill in pixel
+    /// order. (Checking a frame's mask against the plate needs `min_seen` 2: where only that
+    /// frame's mask leaves a pixel clear, the plate would be what the mask left out.)
+    pub fn from_frames(views: &[(&Image, &[f32])], min_seen: usize) -> Option<Plate> {
         let (first, _) = views.first()?;
         let (width, height) = (first.width, first.height);
         let (w, h) = (width as usize, height as usize);
@@ -73,8 +79,8 @@ impl Plate {
                 }
                 n += 1;
             }
-            *seen = n > 0;
-            for (out, channel) in colour.iter_mut().zip(&mut values).filter(|_| n > 0) {
+            *seen = n >= min_seen.max(1);
+            for (out, channel) in colour.iter_mut().zip(&mut values).filter(|_| *seen) {
                 // The lower median: one value of the set, the same whatever the order.
                 *out = *channel[..n].select_nth_unstable((n - 1) / 2).1;
             }
@@ -173,6 +179,24 @@ impl Blend<'_> {
 }
 
 /// Pixel `p`'s colour (a grey image's one value three times).
+/// (pixels `mask` calls subject, pixels more than [`PLATE_MARGIN`] outside it whose colour
+/// is not `plate`'s): over a background, a mask that cuts the subject off leaves the second
+/// count large against the first. `(0, 0)` when the sizes differ.
+pub fn off_plate(image: &Image, mask: &[f32], plate: &Plate) -> (u64, u64) {
+    let (w, h) = (image.width as usize, image.height as usize);
+    if mask.len() != w * h || (plate.width, plate.height) != (image.width, image.height) {
+        return (0, 0);
+    }
+    let inside = subject(mask);
+    let steps = steps_from(&inside, w, h, PLATE_MARGIN + 1);
+    let differs = |p: usize| {
+        let (a, b) = (rgb(image, p), plate.at(p));
+        (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f32>().sqrt() > OFF_PLATE
+    };
+    let off = (0..w * h).filter(|&p| steps[p] > PLATE_MARGIN && differs(p)).count();
+    (inside.iter().filter(|&&s| s).count() as u64, off as u64)
+}
+
 fn rgb(image: &Image, p: usize) -> [f32; 3] {
     let channels = image.channels.max(1) as usize;
     std::array::from_fn(|c| image.data[p * channels + c.min(channels - 1)])
@@ -263,7 +287,7 @@ mod tests {
         let frames: Vec<(Image, Vec<f32>)> =
             [4.0, 6.0, 12.4, 12.6].iter().map(|&e| edge_image(24, e, back, front)).collect();
         let views: Vec<(&Image, &[f32])> = frames.iter().map(|(i, m)| (i, m.as_slice())).collect();
-        let plate = Plate::from_frames(&views).unwrap();
+        let plate = Plate::from_frames(&views, 1).unwrap();
         for p in [30, 24 * 24 - 1] {
             assert_eq!(plate.at(p).map(|v| (v * 255.0).round()), back.map(|v| (v * 255.0).round()));
         }
@@ -291,7 +315,7 @@ mod tests {
         let frames: Vec<(Image, Vec<f32>)> =
             [4.0, 12.0].iter().map(|&e| edge_image(16, e, back, front)).collect();
         let views: Vec<(&Image, &[f32])> = frames.iter().map(|(i, m)| (i, m.as_slice())).collect();
-        let plate = Plate::from_frames(&views).unwrap();
+        let plate = Plate::from_frames(&views, 1).unwrap();
         let mask: Vec<f32> = (0..16 * 16).map(|p| ((p % 16) < 13) as u8 as f32).collect();
         assert_eq!(refine(&frames[1].0, &mask, &plate), mask);
     }
@@ -300,8 +324,8 @@ mod tests {
     fn no_plate_without_a_pixel_clear_of_the_masks() {
         let (image, _) = edge_image(8, 8.0, [0.0; 3], [1.0; 3]);
         let all = vec![1.0; 64];
-        assert_eq!(Plate::from_frames(&[(&image, all.as_slice())]), None);
-        assert_eq!(Plate::from_frames(&[]), None);
+        assert_eq!(Plate::from_frames(&[(&image, all.as_slice())], 1), None);
+        assert_eq!(Plate::from_frames(&[], 1), None);
     }
 
     #[test]

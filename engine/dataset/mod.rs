@@ -449,11 +449,26 @@ impl Dataset {
         &mut self,
         done: &mut dyn FnMut(usize, usize),
     ) -> Result<usize, DatasetError> {
+        let train = self.train.clone();
+        self.plates = self.plates_of(&train, 1, done)?;
+        Ok(self.plates.iter().flatten().count())
+    }
+
+    /// The background plate of each camera of `cameras` (None for the others, and for one
+    /// seen in fewer than [`MIN_PLATE_FRAMES`] frames or whose masks leave no pixel clear),
+    /// indexed by camera, each pixel from at least `min_seen` frames ([`Plate::from_frames`]);
+    /// `done(cameras done, cameras)` after each.
+    fn plates_of(
+        &self,
+        cameras: &[usize],
+        min_seen: usize,
+        done: &mut dyn FnMut(usize, usize),
+    ) -> Result<Vec<Option<Plate>>, DatasetError> {
         let count = self.frames.len().min(PLATE_FRAMES);
         let picked: Vec<usize> = (0..count).map(|i| i * self.frames.len() / count).collect();
         let mut plates = vec![None; self.cameras.len()];
-        for (i, &camera) in self.train.iter().enumerate() {
-            done(i, self.train.len());
+        for (i, &camera) in cameras.iter().enumerate() {
+            done(i, cameras.len());
             let views: Vec<(usize, usize)> = picked
                 .iter()
                 .filter_map(|&t| {
@@ -469,11 +484,10 @@ impl Dataset {
             })?;
             let pairs: Vec<(&Image, &[f32])> =
                 decoded.iter().map(|(i, m)| (i.as_ref(), m.as_slice())).collect();
-            plates[camera] = Plate::from_frames(&pairs);
+            plates[camera] = Plate::from_frames(&pairs, min_seen);
         }
-        done(self.train.len(), self.train.len());
-        self.plates = plates;
-        Ok(self.plates.iter().flatten().count())
+        done(cameras.len(), cameras.len());
+        Ok(plates)
     }
 
     fn load_checked(&self, path: &Path, camera: usize) -> Result<Arc<Image>, DatasetError> {
@@ -549,36 +563,51 @@ impl Dataset {
                 problems.push(DatasetError::EmptyMasks { frame: t });
             }
         }
-        problems.extend(self.masks_cutting_the_subject(&counts));
+        match self.masks_cutting_the_subject(&counts) {
+            Ok(cut) => problems.extend(cut),
+            Err(e) => problems.push(e),
+        }
         problems
     }
 
     /// The views of `counts` (frame, view, counts) whose mask leaves out over 10 % of the
-    /// subject, when the images are composited over black; none over a background plate,
-    /// where a lit pixel outside the mask says nothing.
+    /// subject: over black, the lit pixels outside the mask; over a background, the pixels
+    /// well outside it whose colour is not the camera's plate ([`matte::off_plate`]).
     fn masks_cutting_the_subject(
         &self,
         counts: &[(usize, usize, MaskCounts)],
-    ) -> Vec<DatasetError> {
+    ) -> Result<Vec<DatasetError>, DatasetError> {
         let (outside, lit) =
             counts.iter().fold((0, 0), |(o, l), (_, _, c)| (o + c.outside, l + c.lit_outside));
-        if lit as f64 > BACKGROUND_SHARE * outside as f64 {
-            return Vec::new();
-        }
-        let cut = |c: &MaskCounts| 100.0 * c.lit_outside as f64 / c.inside.max(1) as f64;
-        counts
-            .iter()
-            .filter(|(_, _, c)| cut(c) > 10.0)
-            .map(|&(frame, k, ref c)| {
+        let cut: Vec<(usize, usize, u64, u64)> = if lit as f64 > BACKGROUND_SHARE * outside as f64 {
+            let cameras: Vec<usize> = (0..self.cameras.len()).collect();
+            let plates = self.plates_of(&cameras, 2, &mut |_, _| {})?;
+            let mut cut = Vec::new();
+            for &(frame, k, _) in counts {
+                if let Some(plate) = &plates[self.view(frame, k).camera] {
+                    let (image, mask) = (self.image(frame, k)?, self.given_mask(frame, k)?);
+                    let (inside, off) = matte::off_plate(&image, &mask, plate);
+                    cut.push((frame, k, inside, off));
+                }
+            }
+            cut
+        } else {
+            counts.iter().map(|&(t, k, c)| (t, k, c.inside, c.lit_outside)).collect()
+        };
+        let percent = |inside: u64, off: u64| 100.0 * off as f64 / inside.max(1) as f64;
+        Ok(cut
+            .into_iter()
+            .filter(|&(_, _, inside, off)| percent(inside, off) > 10.0)
+            .map(|(frame, k, inside, off)| {
                 let v = self.view(frame, k);
                 let mask = match &v.mask {
                     MaskSource::File(path) => path.clone(),
                     MaskSource::Alpha => v.image.clone(),
                 };
                 let camera = self.camera_names[v.camera].clone();
-                DatasetError::MaskCutsSubject { frame, camera, mask, percent: cut(c) }
+                DatasetError::MaskCutsSubject { frame, camera, mask, percent: percent(inside, off) }
             })
-            .collect()
+            .collect())
     }
 }
 
