@@ -17,8 +17,10 @@ use crate::gpu::DeviceLimits;
 use crate::init::InitOptions;
 
 /// Device bytes per pixel of the largest view held by the working buffers (splatting, the
-/// image loss and its SSIM moments, the mesh rasterizers of training and evaluation).
-const WORKING_BYTES_PER_PIXEL: u64 = 640;
+/// image loss and its SSIM moments, the mesh rasterizers of training and evaluation: 640
+/// measured, docs/log/2026-11-28-capture-memory.md), and the camera colour maps' renders as
+/// seen and their gradients (two of each, 64).
+const WORKING_BYTES_PER_PIXEL: u64 = 640 + 64;
 /// Device bytes that do not grow with the capture's pixels (Gaussians, their gradients and
 /// moments, the mesh, the sort's buffers), rounded up.
 const FIXED_DEVICE_BYTES: u64 = 256 << 20;
