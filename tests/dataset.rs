@@ -8,7 +8,7 @@ use std::process::Command;
 use tagsplat::dataset::{
     own, CaptureStep, Dataset, DatasetError, Format, LoadOptions, PixelCenters,
 };
-use tagsplat::io::image::{write_png, Image};
+use tagsplat::io::image::{read_image, write_png, Image};
 
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("tagsplat-dataset-{name}-{}", std::process::id()));
@@ -410,7 +410,6 @@ fn scaled_views_keep_images_masks_and_cameras_together() {
 
 #[test]
 fn a_mask_that_cuts_off_the_subject_is_named_by_view_and_frame() {
-    use tagsplat::io::image::{read_image, write_png};
     use tagsplat::synth::{generate, SubjectSource, SynthOptions};
     let dir = temp("cut");
     let o = SynthOptions {
@@ -426,20 +425,25 @@ fn a_mask_that_cuts_off_the_subject_is_named_by_view_and_frame() {
     assert!(Dataset::load(&dir).unwrap().check().is_empty());
     // The left half of camera 1's mask of frame 1 cut away, as a matting tool that lost an arm.
     let path = own::mask_path(&dir, "cam001", 1);
-    let mut mask = read_image(&path).unwrap();
+    let problems = check_with_half_cut_away(&dir, &path);
+    assert_eq!(problems.len(), 1, "{problems:?}");
+    let said = &problems[0];
+    assert!(said.contains("frame 1, camera cam001") && said.contains("leaves out"), "{said}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The problems `check` finds in the dataset at `dir` once the left half of the mask at
+/// `path` is cut away, as a matting tool that lost an arm.
+fn check_with_half_cut_away(dir: &Path, path: &Path) -> Vec<String> {
+    let mut mask = read_image(path).unwrap();
     let width = mask.width as usize;
     mask.data
         .iter_mut()
         .enumerate()
         .filter(|(i, _)| i % width < width / 2)
         .for_each(|(_, m)| *m = 0.0);
-    write_png(&path, &mask).unwrap();
-    let problems: Vec<String> =
-        Dataset::load(&dir).unwrap().check().iter().map(ToString::to_string).collect();
-    assert_eq!(problems.len(), 1, "{problems:?}");
-    let said = &problems[0];
-    assert!(said.contains("frame 1, camera cam001") && said.contains("leaves out"), "{said}");
-    std::fs::remove_dir_all(&dir).unwrap();
+    write_png(path, &mask).unwrap();
+    Dataset::load(dir).unwrap().check().iter().map(ToString::to_string).collect()
 }
 
 /// `image` (RGB over black) composited over a gradient plate by its coverage `alpha`; the
@@ -474,7 +478,6 @@ fn thresholded_and_eroded(alpha: &[f32], w: usize, h: usize) -> Vec<f32> {
 /// toward the coverage; the held-out camera keeps its mask as given.
 #[test]
 fn masks_a_ring_off_are_refined_against_the_background_plate() {
-    use tagsplat::io::image::read_image;
     use tagsplat::synth::{generate, SubjectSource, SynthOptions};
     let dir = temp("matte");
     let (views, frames, size) = (9, 4, 64u32);
@@ -536,16 +539,7 @@ fn masks_a_ring_off_are_refined_against_the_background_plate() {
     // frame and camera: there the pixels well outside it are not the camera's plate.
     assert!(Dataset::load(&dir).unwrap().check().is_empty());
     let path = own::mask_path(&dir, &names[1], 2);
-    let mut mask = read_image(&path).unwrap();
-    let width = mask.width as usize;
-    mask.data
-        .iter_mut()
-        .enumerate()
-        .filter(|(i, _)| i % width < width / 2)
-        .for_each(|(_, m)| *m = 0.0);
-    write_png(&path, &mask).unwrap();
-    let problems: Vec<String> =
-        Dataset::load(&dir).unwrap().check().iter().map(ToString::to_string).collect();
+    let problems = check_with_half_cut_away(&dir, &path);
     assert_eq!(problems.len(), 1, "{problems:?}");
     let said = format!("frame 2, camera {}", names[1]);
     assert!(problems[0].contains(&said) && problems[0].contains("leaves out"), "{problems:?}");
