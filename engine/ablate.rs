@@ -259,10 +259,7 @@ fn write_tables(out: &Path, rows: &[TemporalRow]) -> Result<(), AblateError> {
     crate::io::write_atomically(&md, |w| std::io::Write::write_all(w, table.as_bytes()))
         .map_err(io(md.clone()))?;
     let json = out.join("ablation.json");
-    crate::io::write_atomically(&json, |w| {
-        serde_json::to_writer_pretty(w, rows).map_err(std::io::Error::other)
-    })
-    .map_err(io(json.clone()))
+    crate::io::write_json_atomically(&json, rows).map_err(io(json.clone()))
 }
 
 #[cfg(test)]

@@ -268,8 +268,6 @@ pub fn run_ablations(
 }
 
 fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), DemoError> {
-    crate::io::write_atomically(path, |w| {
-        serde_json::to_writer_pretty(w, value).map_err(std::io::Error::other)
-    })
-    .map_err(|error| crate::train::TrainError::Io { path: path.to_owned(), error }.into())
+    crate::io::write_json_atomically(path, value)
+        .map_err(|error| crate::train::TrainError::Io { path: path.to_owned(), error }.into())
 }

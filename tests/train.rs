@@ -14,6 +14,7 @@ use tagsplat::io::image::{write_png, Image};
 use tagsplat::splat::GaussianScene;
 use tagsplat::synth::{generate, SubjectSource, SynthOptions};
 use tagsplat::synth::{render, Texture};
+use tagsplat::train::memory::device_bytes;
 use tagsplat::train::{
     fit, initial_gaussians, load_targets, run_fit_job, write_fit_outputs, FitConfig, FitJob,
 };
@@ -90,9 +91,11 @@ fn a_short_fit_raises_held_out_psnr() {
 }
 
 /// The same fit (densification, SH ramp, checkpoints, evaluations: every point where the loop
-/// finishes the steps in flight) with one step on the queue at a time and with three.
+/// finishes the steps in flight) with one step on the queue at a time, with three, and with
+/// three while the device's memory is capped to hold only two of the seven training targets
+/// (the rest streamed: `train::targets`).
 #[test]
-fn steps_in_flight_give_the_same_gaussians() {
+fn steps_in_flight_and_streamed_targets_give_the_same_gaussians() {
     let dir = temp("in-flight");
     small_dataset(&dir);
     let dataset = tagsplat::dataset::Dataset::load(&dir).unwrap();
@@ -100,8 +103,10 @@ fn steps_in_flight_give_the_same_gaussians() {
     let held_out = load_targets(&dataset, 0, &dataset.test, [0.0; 3], true).unwrap();
     let config = FitConfig { iterations: 200, ..short_config() };
     let initial = initial_gaussians(&train, None, &config).unwrap();
-    let run = |depth| {
-        let g = gpu_with(ContextOptions { steps_in_flight: Some(depth), ..Default::default() });
+    let run = |depth, device_memory| {
+        let options =
+            ContextOptions { steps_in_flight: Some(depth), device_memory, ..Default::default() };
+        let g = gpu_with(options);
         assert_eq!(g.ctx().steps_in_flight(), depth);
         let outcome =
             fit(g.ctx(), &train, &held_out, true, initial.clone(), &config, &mut |_| {}).unwrap();
@@ -109,11 +114,19 @@ fn steps_in_flight_give_the_same_gaussians() {
         assert_eq!(outcome.report.truncated_steps, 0, "at depth {depth}");
         outcome
     };
-    let (one, three) = (run(1), run(3));
+    let (one, three) = (run(1, None), run(3, None));
     assert_eq!(one.report.iterations, 200);
     assert!(!one.report.densify.is_empty(), "densification ran");
+    assert_eq!((one.report.targets_on_device, one.report.target_uploads), (7, 0));
     assert_eq!(one.scene, three.scene, "three steps in flight changed the Gaussians");
     assert_eq!(one.report.loss, three.report.loss);
+    let sizes: Vec<(u32, u32)> = train.iter().map(|v| (v.camera.width, v.camera.height)).collect();
+    let streamed = run(3, Some(device_bytes(&sizes, 64 * 64, 2)));
+    assert_eq!(streamed.report.targets_on_device, 2);
+    // Each epoch visits all seven views: at least five uploads in every one.
+    assert!(streamed.report.target_uploads >= 5 * (200 / 7), "{}", streamed.report.target_uploads);
+    assert_eq!(one.scene, streamed.scene, "streaming the targets changed the Gaussians");
+    assert_eq!(one.report.loss, streamed.report.loss);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -53,8 +53,8 @@ pub fn run(command: DatasetCommand, ctx: &GpuContext) -> Result<()> {
     let d = Dataset::load_with(&data, &options)
         .with_context(|| format!("cannot load the dataset in {}", data.display()))?;
     let host_shared = ctx.info().shares_host_memory();
-    let memory = CaptureMemory::of_dataset(&d, host_shared, scale);
-    let at = |s| CaptureMemory::of_dataset(&d, host_shared, s);
+    let memory = CaptureMemory::of_dataset(&d, ctx.limits(), host_shared, scale);
+    let at = |s| CaptureMemory::of_dataset(&d, ctx.limits(), host_shared, s);
     let refused = refusal(at, scale, ctx.limits(), total_memory_bytes());
     let background = background_share(&d, 0)
         .with_context(|| format!("cannot read frame 0 of {}", data.display()))?;
@@ -114,8 +114,10 @@ pub fn run(command: DatasetCommand, ctx: &GpuContext) -> Result<()> {
         ctx.info().name,
         if host_shared { ", whose memory is the host's" } else { "" }
     );
-    if let Some(why) = &refused {
-        println!("          refused there: {why}");
+    match (&refused, memory.streaming()) {
+        (Some(why), _) => println!("          refused there: {why}"),
+        (None, Some(streaming)) => println!("          streamed: {streaming}"),
+        (None, None) => {}
     }
     let said = if background > BACKGROUND_SHARE {
         "a background behind the subject: the masks say what is subject; train refines them along the outline against each camera's plate"

@@ -194,11 +194,12 @@ fn train_figure(v: &Value) -> Result<String> {
 fn train_value(v: &Value) -> Result<String> {
     Ok(format!(
         "{:.1} ms ({:.1} it/s), the host {:.1} % of it; image loss, two renders against one \
-         view: {:.2} ms",
+         view: {:.2} ms; two targets on the device, the rest streamed: {:.1} ms",
         num(v, "s_per_iter")? * 1e3,
         num(v, "iters_per_s")?,
         num(v, "host_fraction")? * 100.0,
-        num(v, "loss_ms.1")?
+        num(v, "loss_ms.1")?,
+        num(v, "streamed_s_per_iter")? * 1e3
     ))
 }
 

@@ -35,7 +35,9 @@ use tagsplat::bench::{
     MeshBenchReport, RenderBenchReport, SortBenchReport, SplatBenchConfig, SplatBenchReport,
     TrainBenchConfig, TrainBenchReport,
 };
-use tagsplat::gpu::{choose_device, ContextOptions, GpuContext, ValidationLog, DEVICE_ENV};
+use tagsplat::gpu::{
+    choose_device, parse_bytes, ContextOptions, GpuContext, ValidationLog, DEVICE_ENV,
+};
 use tagsplat::sort::RadixVariant;
 
 #[derive(Parser)]
@@ -52,6 +54,10 @@ struct Cli {
     /// Turn on the Khronos validation layer (also TAGSPLAT_VALIDATION=1).
     #[arg(long, global = true)]
     validation: bool,
+    /// The device memory a run may plan for (6GiB, 512MiB, bytes), when less than the device
+    /// has: training targets that do not fit are streamed. Overrides TAGSPLAT_DEVICE_MEMORY.
+    #[arg(long, global = true, value_name = "SIZE", value_parser = parse_size)]
+    device_memory: Option<u64>,
     #[command(subcommand)]
     command: Command,
 }
@@ -211,10 +217,15 @@ fn print_or_exit(text: std::fmt::Arguments) {
     }
 }
 
+fn parse_size(text: &str) -> std::result::Result<u64, String> {
+    parse_bytes(text).ok_or_else(|| "expected a size: 6GiB, 512MiB, 1000000 (bytes)".into())
+}
+
 fn run(cli: Cli) -> Result<()> {
     let gpu = Contexts::new(ContextOptions {
         device: cli.device.clone(),
         validation: cli.validation.then_some(true),
+        device_memory: cli.device_memory,
         ..Default::default()
     });
     let outcome = run_command(cli.command, &gpu);

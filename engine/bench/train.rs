@@ -7,7 +7,7 @@ use crate::gpu::{ClockReading, GpuBuffer, GpuContext, Recorder};
 use crate::loss::{ImageLoss, LossTarget, LossTerms, ScoredRender};
 use crate::optim::{AdamParams, LearningRates};
 use crate::splat::{GaussianBuffers, RenderSettings, Splatter};
-use crate::train::in_flight::{StepRing, StepTerms};
+use crate::train::in_flight::{Finished, StepRing, StepTerms};
 use crate::train::{TrainError, Trainer, ViewTarget};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -65,6 +65,12 @@ pub struct TrainBenchReport {
     pub host_ms_per_iter: f64,
     /// That time's share of the iterations' wall time (None where submissions go untimed).
     pub host_fraction: Option<f64>,
+    /// Views whose targets the timed trainer kept on the device (all unless the device's
+    /// memory, or `--device-memory`, could not hold them).
+    pub targets_on_device: usize,
+    /// Wall seconds of one iteration, the same steps, with only two targets on the device
+    /// (`train::targets`): every step uploads its view's target first.
+    pub streamed_s_per_iter: f64,
 }
 
 /// Learning rates of the fit's defaults (their values do not change the work).
@@ -97,24 +103,12 @@ pub fn bench_train(
         views.push(ViewTarget { name: format!("ring{i}"), camera, target: splatter.read_rgba()? });
     }
     drop(splatter);
-    let mut trainer = Trainer::new(ctx, &scene, &views)?;
-    let mut ring = StepRing::new(&mut trainer, config.in_flight)?;
-    let step = |ring: &mut StepRing, trainer: &mut Trainer, it: usize| {
-        let adam = AdamParams::new(&RATES, it as u32 + 1, trainer.gaussians(), trainer.sh_degree());
-        ring.step(trainer, (&BenchStage, WEIGHTS), it % c.views, &settings, &adam)
-    };
-    for it in 0..c.views {
-        step(&mut ring, &mut trainer, it)?;
-    }
-    ring.drain(&mut trainer)?;
-    let (start, before) = (Instant::now(), ctx.clock());
-    let mut finished = Vec::new();
-    for it in c.views..c.views + config.iterations {
-        finished.extend(step(&mut ring, &mut trainer, it)?);
-    }
-    finished.extend(ring.drain(&mut trainer)?);
-    let wall_s = start.elapsed().as_secs_f64();
-    let clock = ctx.clock().since(&before);
+    let trainer = Trainer::new(ctx, &scene, &views)?;
+    let targets_on_device = trainer.targets_on_device().0;
+    let (wall_s, clock, finished) = time_steps(trainer, &views, config, &settings)?;
+    // Two targets on the device: the views come round in order, so every step uploads one.
+    let streamed = Trainer::with_targets_on_device(ctx, &scene, &views, STREAMED_ON_DEVICE)?;
+    let streamed_wall_s = time_steps(streamed, &views, config, &settings)?.0;
     let iterations = config.iterations.max(1) as f64;
     let host_ms_per_iter = (wall_s - clock.device_s) * 1e3 / iterations;
     let host_fraction = clock.host_share(wall_s);
@@ -124,8 +118,6 @@ pub fn bench_train(
         .collect();
     let passes_ms = super::median_per_pass(&passes);
     let s_per_iter = wall_s / iterations;
-    drop(ring);
-    drop(trainer);
     // A loss run is about a tenth of an iteration: four per iteration steadies the median.
     let loss_ms = [
         bench_loss(ctx, &views, 1, 4 * config.iterations)?,
@@ -144,7 +136,39 @@ pub fn bench_train(
         clock,
         host_ms_per_iter,
         host_fraction,
+        targets_on_device,
+        streamed_s_per_iter: streamed_wall_s / iterations,
     })
+}
+
+/// Targets on the device in the streamed run of [`bench_train`].
+const STREAMED_ON_DEVICE: usize = 2;
+
+/// Runs `trainer` over `views` (one warm-up round, then `config.iterations` timed steps, the
+/// views in turn) and returns the timed steps' wall seconds, clock and finished steps.
+fn time_steps(
+    mut trainer: Trainer,
+    views: &[ViewTarget],
+    config: &TrainBenchConfig,
+    settings: &RenderSettings,
+) -> Result<(f64, ClockReading, Vec<Finished>), TrainError> {
+    let ctx = trainer.context().clone();
+    let mut ring = StepRing::new(&mut trainer, config.in_flight)?;
+    let step = |ring: &mut StepRing, trainer: &mut Trainer, it: usize| {
+        let adam = AdamParams::new(&RATES, it as u32 + 1, trainer.gaussians(), trainer.sh_degree());
+        ring.step(trainer, (&BenchStage, WEIGHTS), it % views.len(), settings, &adam)
+    };
+    for it in 0..views.len() {
+        step(&mut ring, &mut trainer, it)?;
+    }
+    ring.drain(&mut trainer)?;
+    let (start, before) = (Instant::now(), ctx.clock());
+    let mut finished = Vec::new();
+    for it in views.len()..views.len() + config.iterations {
+        finished.extend(step(&mut ring, &mut trainer, it)?);
+    }
+    finished.extend(ring.drain(&mut trainer)?);
+    Ok((start.elapsed().as_secs_f64(), ctx.clock().since(&before), finished))
 }
 
 /// The channel weights of the fit's defaults.

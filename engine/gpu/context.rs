@@ -15,8 +15,9 @@ use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 /// How to create a context. `None` fields fall back to the environment (`TAGSPLAT_DEVICE`,
-/// `TAGSPLAT_VALIDATION=1`, `TAGSPLAT_FORCE_STAGING=1`, `TAGSPLAT_IN_FLIGHT=N`) and then to
-/// the defaults (policy, off, off, by device). Forced staging sends every upload and readback through staging buffers even where the
+/// `TAGSPLAT_VALIDATION=1`, `TAGSPLAT_FORCE_STAGING=1`, `TAGSPLAT_IN_FLIGHT=N`,
+/// `TAGSPLAT_DEVICE_MEMORY=SIZE`) and then to the defaults (policy, off, off, by device, the
+/// device's own). Forced staging sends every upload and readback through staging buffers even where the
 /// device's memory is host-visible (lavapipe), so CI runs a discrete GPU's path.
 #[derive(Clone, Debug, Default)]
 pub struct ContextOptions {
@@ -31,6 +32,46 @@ pub struct ContextOptions {
     /// bytes run to run; depths differ from one another only where a step's intersections
     /// outgrew the splatter's buffers.
     pub steps_in_flight: Option<usize>,
+    /// The device memory a run may plan for, bytes, when less than the device has (a GPU
+    /// shared with other work; on a CPU device, a cap on what the device side may hold). A
+    /// training run keeps its views' targets on the device only as far as they fit in it, and
+    /// streams the rest ([`crate::train::memory`]).
+    pub device_memory: Option<u64>,
+}
+
+/// Set to a size (`6GiB`, `512MiB`, `1000000`): [`ContextOptions::device_memory`].
+pub const DEVICE_MEMORY_ENV: &str = "TAGSPLAT_DEVICE_MEMORY";
+
+/// The device-memory cap `options` ask for, else [`DEVICE_MEMORY_ENV`]'s.
+fn device_memory(options: &ContextOptions) -> GpuResult<Option<u64>> {
+    match (options.device_memory, std::env::var(DEVICE_MEMORY_ENV)) {
+        (Some(bytes), _) => Ok(Some(bytes)),
+        (None, Ok(value)) => parse_bytes(&value).map(Some).ok_or(GpuError::InvalidSetting {
+            variable: DEVICE_MEMORY_ENV,
+            value,
+            expected: "a size in bytes, KiB, MiB or GiB (6GiB, 512MiB, 1000000)",
+        }),
+        (None, Err(_)) => Ok(None),
+    }
+}
+
+/// A size: a whole number of bytes, or a number followed by KiB, MiB or GiB (case-insensitive,
+/// spaces allowed); None for anything else, zero included.
+pub fn parse_bytes(text: &str) -> Option<u64> {
+    let text = text.trim().to_ascii_lowercase();
+    let units = [("kib", 1u64 << 10), ("mib", 1 << 20), ("gib", 1 << 30)];
+    let (number, unit) = units
+        .iter()
+        .find_map(|&(suffix, unit)| Some((text.strip_suffix(suffix)?.trim_end(), unit)))
+        .unwrap_or((text.as_str(), 1));
+    let bytes = match number.parse::<u64>() {
+        Ok(n) => n.checked_mul(unit)?,
+        Err(_) => {
+            let bytes = number.parse::<f64>().ok()? * unit as f64;
+            (bytes < u64::MAX as f64).then_some(bytes as u64)?
+        }
+    };
+    (bytes > 0).then_some(bytes)
 }
 
 /// Set to a number from 1 to [`MAX_STEPS_IN_FLIGHT`]: [`ContextOptions::steps_in_flight`].
@@ -61,6 +102,8 @@ pub struct DeviceLimits {
     pub max_memory_allocation_size: u64,
     /// The size of the largest device-local memory heap, bytes (on a CPU device: host memory).
     pub device_memory_bytes: u64,
+    /// The cap [`ContextOptions::device_memory`] put on it, if any.
+    pub device_memory_cap: Option<u64>,
     /// `maxComputeWorkGroupCount`: workgroups per dispatch along x, y and z.
     pub max_workgroup_count: [u32; 3],
     /// `maxComputeWorkGroupInvocations`: invocations in one workgroup.
@@ -85,6 +128,18 @@ impl DeviceLimits {
     /// and `maxMemoryAllocationSize`.
     pub fn max_buffer_bytes(&self) -> u64 {
         self.max_storage_buffer_range.min(self.max_memory_allocation_size)
+    }
+
+    /// The device memory a run may plan for: the device's own, under any cap. None on a device
+    /// that is the CPU (`device_is_host`) without a cap: its heap is the host's memory, which
+    /// the host's own check covers.
+    pub fn device_budget(&self, device_is_host: bool) -> Option<u64> {
+        match (device_is_host, self.device_memory_cap) {
+            (true, cap) => cap,
+            (false, cap) => {
+                Some(cap.map_or(self.device_memory_bytes, |c| c.min(self.device_memory_bytes)))
+            }
+        }
     }
 }
 
@@ -124,6 +179,7 @@ impl GpuContext {
             .validation
             .unwrap_or_else(|| std::env::var(VALIDATION_ENV).is_ok_and(|v| v == "1"));
         let wanted = options.device.clone().or_else(|| std::env::var(DEVICE_ENV).ok());
+        let device_memory_cap = device_memory(options)?;
         let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loading(e.to_string()))?;
         let validation_log = Arc::<ValidationLog>::default();
         let instance = create_instance(&entry, validation, &validation_log)?;
@@ -162,8 +218,10 @@ impl GpuContext {
                 return Err(e);
             }
         };
-        let limits =
-            unsafe { read_limits(&instance, physical_device, queue_family, &info.capabilities) };
+        let limits = DeviceLimits {
+            device_memory_cap,
+            ..unsafe { read_limits(&instance, physical_device, queue_family, &info.capabilities) }
+        };
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
         let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
         let allocator = Allocator::new(&AllocatorCreateDesc {
@@ -528,6 +586,7 @@ unsafe fn read_limits(
         max_storage_buffer_range: limits.max_storage_buffer_range as u64,
         max_memory_allocation_size: maintenance3.max_memory_allocation_size,
         device_memory_bytes: largest_device_heap(instance, physical_device),
+        device_memory_cap: None,
         max_workgroup_count: limits.max_compute_work_group_count,
         max_workgroup_invocations: limits.max_compute_work_group_invocations,
         max_shared_memory_bytes: limits.max_compute_shared_memory_size,
@@ -537,5 +596,22 @@ unsafe fn read_limits(
         timestamp_valid_bits: family.timestamp_valid_bits,
         full_subgroups: capabilities.full_subgroups,
         max_subgroup_size: capabilities.max_subgroup_size,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_bytes;
+
+    #[test]
+    fn sizes_parse_with_and_without_units() {
+        assert_eq!(parse_bytes("1000000"), Some(1_000_000));
+        assert_eq!(parse_bytes(" 6GiB "), Some(6 << 30));
+        assert_eq!(parse_bytes("512 mib"), Some(512 << 20));
+        assert_eq!(parse_bytes("1.5GiB"), Some(3 << 29));
+        assert_eq!(parse_bytes("4KiB"), Some(4096));
+        for bad in ["", "0", "GiB", "-1GiB", "6GB", "lots", "99999999999999999999GiB"] {
+            assert_eq!(parse_bytes(bad), None, "{bad:?}");
+        }
     }
 }

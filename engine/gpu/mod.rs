@@ -20,7 +20,8 @@ mod validation;
 
 pub use buffer::{BufferBinding, GpuBuffer};
 pub use context::{
-    ContextOptions, DeviceLimits, GpuContext, FORCE_STAGING_ENV, IN_FLIGHT_ENV, MAX_STEPS_IN_FLIGHT,
+    parse_bytes, ContextOptions, DeviceLimits, GpuContext, DEVICE_MEMORY_ENV, FORCE_STAGING_ENV,
+    IN_FLIGHT_ENV, MAX_STEPS_IN_FLIGHT,
 };
 pub use error::{GpuError, GpuResult};
 pub use features::DeviceCapabilities;

@@ -39,6 +39,17 @@ pub fn write_atomically(
     result
 }
 
+/// Writes `value` to `path` as pretty JSON and a newline, atomically ([`write_atomically`]).
+pub fn write_json_atomically<T: serde::Serialize + ?Sized>(
+    path: &Path,
+    value: &T,
+) -> std::io::Result<()> {
+    write_atomically(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, value)?;
+        writeln!(w)
+    })
+}
+
 /// `dir/.name.tmp-<pid>`: same directory (so the rename is atomic), hidden, unique per process.
 fn temporary_name(path: &Path) -> PathBuf {
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();

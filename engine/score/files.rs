@@ -4,7 +4,7 @@
 
 use super::{FrameScores, SequenceEval, SequenceEvalError};
 use crate::io::plot::{svg, Panel, Series};
-use crate::io::write_atomically;
+use crate::io::{write_atomically, write_json_atomically};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -23,11 +23,7 @@ pub fn write_sequence_eval(
     std::fs::create_dir_all(dir).map_err(io(dir))?;
     let (csv, json, plot) = (dir.join("eval.csv"), dir.join("eval.json"), dir.join("eval.svg"));
     write_atomically(&csv, |w| write_csv(w, &eval.frames)).map_err(io(&csv))?;
-    write_atomically(&json, |w| {
-        serde_json::to_writer_pretty(&mut *w, eval)?;
-        writeln!(w)
-    })
-    .map_err(io(&json))?;
+    write_json_atomically(&json, eval).map_err(io(&json))?;
     let text = svg(&[score_panel(&eval.frames)]);
     write_atomically(&plot, |w| w.write_all(text.as_bytes())).map_err(io(&plot))?;
     Ok(vec![csv, json, plot])

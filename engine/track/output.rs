@@ -5,7 +5,7 @@ use super::bind::Binding;
 use super::project::ImagePoint;
 use super::TrackError;
 use crate::io::trajectories::{write_trajectories_csv, TrackPoint};
-use crate::io::write_atomically;
+use crate::io::{write_atomically, write_json_atomically};
 use serde::Serialize;
 use std::io::Write;
 use std::path::Path;
@@ -105,9 +105,6 @@ pub fn write_image_tracks_csv(path: &Path, rows: &[ImagePoint]) -> Result<(), Tr
 
 /// Writes the report as pretty JSON, atomically.
 pub fn write_report_json(path: &Path, report: &TrackReport) -> Result<(), TrackError> {
-    write_atomically(path, |w| {
-        serde_json::to_writer_pretty(&mut *w, report)?;
-        writeln!(w)
-    })
-    .map_err(|error| TrackError::Io { path: path.to_owned(), error })
+    write_json_atomically(path, report)
+        .map_err(|error| TrackError::Io { path: path.to_owned(), error })
 }

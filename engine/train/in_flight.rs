@@ -2,7 +2,7 @@
 //!
 //! A step is two recorded command buffers submitted together: the view's (forward, loss, the
 //! stage's terms, backward; recorded once per view and reused until a buffer it names is
-//! replaced or its frame changes) and the slot's tail (Adam with the parameters the host wrote
+//! replaced, its frame changes or, streamed (`train::targets`), its target leaves the device) and the slot's tail (Adam with the parameters the host wrote
 //! into the slot, then the intersection count copied out into the slot). What changes from one
 //! iteration to the next, the learning rates and the iteration's bias corrections, is written
 //! into the slot before the submit; nothing is recorded.
@@ -122,10 +122,14 @@ impl StepRing {
         let slot = self.next;
         let mut finished =
             self.finish_until(trainer, |ring| !ring.slots[slot].batch.is_pending())?;
+        if let Some(evicted) = trainer.target_evicts(view) {
+            // Its recorded step names the buffer the upload overwrites.
+            finished.extend(self.finish_until(trainer, |ring| !ring.pending(evicted))?);
+            self.views[evicted] = None;
+        }
+        trainer.make_target_resident(view)?;
         let frame = trainer.prepare_step(view, settings)?;
-        let view_pending =
-            |ring: &Self| ring.views[view].as_ref().is_some_and(|v| v.replay.is_pending());
-        finished.extend(self.finish_until(trainer, |ring| !view_pending(ring))?);
+        finished.extend(self.finish_until(trainer, |ring| !ring.pending(view))?);
         let stale = |v: &ViewStep| !v.replay.is_current() || !same_frame(&v.frame, &frame);
         if self.views[view].as_ref().is_none_or(stale) {
             self.views[view] = None;
@@ -155,6 +159,11 @@ impl StepRing {
     /// the trainer's buffers.
     pub fn drain(&mut self, trainer: &mut Trainer) -> Result<Vec<Finished>, TrainError> {
         self.finish_until(trainer, |ring| ring.queued.is_empty())
+    }
+
+    /// Whether a step on `view` is on the queue.
+    fn pending(&self, view: usize) -> bool {
+        self.views[view].as_ref().is_some_and(|v| v.replay.is_pending())
     }
 
     /// Finishes the oldest step on the queue until `done` holds.

@@ -2,10 +2,13 @@
 //! cannot fit, naming the memory and the `--scale` that would fit, and `dataset info` prints it.
 //!
 //! The model counts what grows with the capture. On the device: every training view's target
-//! (16 bytes a pixel) and mask distance field (4), the per-pixel working buffers of the
+//! (16 bytes a pixel; when they do not all fit in the device's memory, only as many as do, of
+//! the largest view's size, the rest streamed from the host: `train::targets`) and mask
+//! distance field (4), the per-pixel working buffers of the
 //! renders, losses and rasterizers (several copies, sized by the largest view), and a fixed
 //! part for the Gaussians, the mesh and the sort. On the host: the views' targets again, the
-//! decoded-image cache, the images being decoded, the first mesh's hull grid, the background
+//! decoded-image cache, the images being decoded, the trainer's copies of streamed targets,
+//! the first mesh's hull grid, the background
 //! plates of a capture whose masks are refined, and, on a device that is the CPU, the device's
 //! memory too. The per-pixel and fixed parts were measured
 //! (docs/log/2026-11-28-capture-memory.md) and rounded up, so the figure is a bound, not a
@@ -26,9 +29,11 @@ const WORKING_BYTES_PER_PIXEL: u64 = 640 + 64;
 const FIXED_DEVICE_BYTES: u64 = 256 << 20;
 /// Host bytes of the program itself and of what does not grow with the capture.
 const FIXED_HOST_BYTES: u64 = 768 << 20;
-/// Bytes of a training view's pixel on the device: the target (rgba as f32) and the mask's
-/// distance field (f32).
-const VIEW_BYTES_PER_PIXEL: u64 = 16 + 4;
+/// Device bytes of a training view's target pixel (rgba as f32), while it is on the device.
+const TARGET_BYTES_PER_PIXEL: u64 = 16;
+/// Device bytes of a training view's mask distance field pixel (f32): every view's field stays
+/// on the device, since every step scores every view's silhouette.
+const FIELD_BYTES_PER_PIXEL: u64 = 4;
 /// Bytes of a decoded pixel: colour (3 f32) and mask (1 f32).
 const DECODED_BYTES_PER_PIXEL: u64 = 16;
 
@@ -43,6 +48,11 @@ pub struct CaptureMemory {
     pub largest_buffer_bytes: u64,
     /// Whether the device's memory is the host's (then counted in `host_bytes`).
     pub device_is_host: bool,
+    /// Training views whose targets stay on the device ([`targets_on_device`]); fewer than
+    /// `training_views` when the rest are streamed.
+    pub targets_on_device: usize,
+    /// Training views.
+    pub training_views: usize,
 }
 
 /// The views of one frame as the run will hold them.
@@ -55,6 +65,38 @@ pub struct CaptureViews<'a> {
     pub largest_file_pixels: u64,
     /// Whether the device's memory is the host's (a CPU device such as lavapipe).
     pub device_is_host: bool,
+    /// The device memory the run may plan for ([`DeviceLimits::device_budget`]); None: no
+    /// limit but the host's.
+    pub device_budget: Option<u64>,
+}
+
+fn area(&(w, h): &(u32, u32)) -> u64 {
+    w as u64 * h as u64
+}
+
+/// Device bytes of a run over training views of sizes `train`, its working buffers sized for
+/// `working_pixels`, with `on_device` of the training targets on the device: each view's own
+/// when all are, else `on_device` buffers of the largest training view's size.
+pub fn device_bytes(train: &[(u32, u32)], working_pixels: u64, on_device: usize) -> u64 {
+    let pixels: u64 = train.iter().map(area).sum();
+    let largest = train.iter().map(area).max().unwrap_or(0);
+    let targets = if on_device >= train.len() { pixels } else { on_device as u64 * largest };
+    FIXED_DEVICE_BYTES
+        + FIELD_BYTES_PER_PIXEL * pixels
+        + WORKING_BYTES_PER_PIXEL * working_pixels
+        + TARGET_BYTES_PER_PIXEL * targets
+}
+
+/// How many training views' targets a trainer keeps on the device (`train::targets`): all of
+/// them when [`device_bytes`] with all fits in `budget` (None: no limit), else the most that
+/// fit, and at least one (a run that cannot fit one is refused by [`CaptureMemory::problem`]).
+/// The trainer sizes its working buffers for its largest training view, so that is what the
+/// working part is counted at here.
+pub fn targets_on_device(budget: Option<u64>, train: &[(u32, u32)]) -> usize {
+    let all = train.len();
+    let largest = train.iter().map(area).max().unwrap_or(0);
+    let fits = |k: usize| budget.is_none_or(|b| device_bytes(train, largest, k) <= b);
+    (1..=all).rev().find(|&k| fits(k)).unwrap_or(all.min(1))
 }
 
 /// What refining the masks from the images holds, counted whether or not a run refines them:
@@ -66,8 +108,14 @@ fn plate_bytes(train_pixels: u64, largest_view_pixels: u64) -> u64 {
 
 impl CaptureMemory {
     /// The estimate for a run over `dataset` with its files scaled by `scale` (1: the files'
-    /// size), whatever scale it was loaded at.
-    pub fn of_dataset(dataset: &Dataset, device_is_host: bool, scale: f64) -> Self {
+    /// size), whatever scale it was loaded at, on a device of `limits` (`device_is_host`: a
+    /// CPU device).
+    pub fn of_dataset(
+        dataset: &Dataset,
+        limits: &DeviceLimits,
+        device_is_host: bool,
+        scale: f64,
+    ) -> Self {
         let sizes = |cameras: &[usize]| -> Vec<(u32, u32)> {
             cameras.iter().map(|&c| scaled_size(dataset.file_size(c), scale)).collect()
         };
@@ -81,17 +129,19 @@ impl CaptureMemory {
             held_out: &sizes(&dataset.test),
             largest_file_pixels,
             device_is_host,
+            device_budget: limits.device_budget(device_is_host),
         })
     }
 
     /// The estimate for `views`.
     pub fn estimate(views: &CaptureViews) -> Self {
-        let area = |&(w, h): &(u32, u32)| w as u64 * h as u64;
         let train: u64 = views.train.iter().map(area).sum();
         let held_out: u64 = views.held_out.iter().map(area).sum();
         let largest = views.train.iter().chain(views.held_out).map(area).max().unwrap_or(0);
-        let device_bytes =
-            FIXED_DEVICE_BYTES + VIEW_BYTES_PER_PIXEL * train + WORKING_BYTES_PER_PIXEL * largest;
+        let on_device = targets_on_device(views.device_budget, views.train);
+        let device_bytes = device_bytes(views.train, largest, on_device);
+        // Streamed targets are uploaded from the trainer's own copies.
+        let streamed = on_device < views.train.len();
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
         let cache = (DECODED_BYTES_PER_PIXEL * (train + held_out)).min(DEFAULT_CACHE_BYTES as u64);
         let host_bytes = FIXED_HOST_BYTES
@@ -100,10 +150,34 @@ impl CaptureMemory {
             + plate_bytes(train, largest)
             + cache
             + threads * DECODED_BYTES_PER_PIXEL * views.largest_file_pixels
+            + if streamed { TARGET_BYTES_PER_PIXEL * train } else { 0 }
             + if views.device_is_host { device_bytes } else { 0 };
-        // The widest per-pixel buffers hold 32 bytes a pixel (the anti-aliasing crossings).
-        let device_is_host = views.device_is_host;
-        Self { device_bytes, host_bytes, largest_buffer_bytes: 32 * largest, device_is_host }
+        Self {
+            device_bytes,
+            host_bytes,
+            // The widest per-pixel buffers hold 32 bytes a pixel (the anti-aliasing crossings).
+            largest_buffer_bytes: 32 * largest,
+            device_is_host: views.device_is_host,
+            targets_on_device: on_device,
+            training_views: views.train.len(),
+        }
+    }
+
+    /// Whether some training views' targets are streamed: uploaded when a step needs them.
+    pub fn streamed(&self) -> bool {
+        self.targets_on_device < self.training_views
+    }
+
+    /// What a run does with the training targets when they do not all fit on the device
+    /// (None when they do).
+    pub fn streaming(&self) -> Option<String> {
+        self.streamed().then(|| {
+            format!(
+                "{} of {} training views' targets on the device at once, the rest uploaded when \
+                 a step needs them",
+                self.targets_on_device, self.training_views
+            )
+        })
     }
 
     /// The limit it breaks (None when it fits). `host_memory`: the host's physical memory,
@@ -118,12 +192,15 @@ impl CaptureMemory {
                 mib(buffer_limit)
             ));
         }
-        // On a device that is the CPU the device's memory is the host's (its heap size is not
-        // a limit there), and the host check below covers it.
-        let memory = limits.device_memory_bytes;
-        if !self.device_is_host && self.device_bytes > memory {
+        // On a device that is the CPU without a cap the device's memory is the host's (its
+        // heap size is not a limit there), and the host check below covers it.
+        let budget = limits.device_budget(self.device_is_host);
+        if let Some(memory) = budget.filter(|&memory| self.device_bytes > memory) {
+            let streamed =
+                if self.streamed() { " with one training view on it at a time" } else { "" };
+            let capped = if limits.device_memory_cap.is_some() { " (capped)" } else { "" };
             return Some(format!(
-                "it needs about {} of device memory, over this device's {}",
+                "it needs about {} of device memory{streamed}, over this device's {}{capped}",
                 mib(self.device_bytes),
                 mib(memory)
             ));
@@ -174,6 +251,7 @@ mod tests {
             max_storage_buffer_range: buffer,
             max_memory_allocation_size: u64::MAX,
             device_memory_bytes: memory,
+            device_memory_cap: None,
             max_workgroup_count: [65535; 3],
             max_workgroup_invocations: 1024,
             max_shared_memory_bytes: 32768,
@@ -185,8 +263,8 @@ mod tests {
         }
     }
 
-    /// 30 views (27 training) of 3000 × 4000 files scaled by `s`.
-    fn capture(s: f64, device_is_host: bool) -> CaptureMemory {
+    /// 30 views (27 training) of 3000 × 4000 files scaled by `s`, on a device of `limits`.
+    fn capture_on(s: f64, device_is_host: bool, limits: &DeviceLimits) -> CaptureMemory {
         let size = scaled_size((3000, 4000), s);
         let (train, held_out) = (vec![size; 27], vec![size; 3]);
         let largest_file_pixels = 12_000_000;
@@ -195,6 +273,7 @@ mod tests {
             held_out: &held_out,
             largest_file_pixels,
             device_is_host,
+            device_budget: limits.device_budget(device_is_host),
         })
     }
 
@@ -207,7 +286,7 @@ mod tests {
     #[test]
     fn a_refused_capture_names_a_scale_that_fits() {
         let refused = |s, host, limits: &DeviceLimits, memory| {
-            refusal(|s| capture(s, host), s, limits, memory)
+            refusal(|s| capture_on(s, host, limits), s, limits, memory)
         };
         // The buffer limit of lavapipe: a 3000 × 4000 view's widest buffer is 366 MiB.
         let lavapipe = limits(128 << 20, 2 << 30);
@@ -220,8 +299,19 @@ mod tests {
         // not, the host's memory is.
         let small_gpu = limits(4 << 30, 4 << 30);
         let why = refused(1.0, false, &small_gpu, None).expect("refused");
-        assert!(why.contains("device memory"), "{why}");
-        assert_eq!(refused(scale_in(&why), false, &small_gpu, None), None);
+        assert!(why.contains("device memory with one training view on it at a time"), "{why}");
+        let s = scale_in(&why);
+        assert_eq!(refused(s, false, &small_gpu, None), None);
+        // The largest scale that fits streams its targets: a larger one would fit a target
+        // only if the working buffers shrank.
+        assert!(capture_on(s, false, &small_gpu).streamed(), "{s}");
+        // A 12 GiB GPU runs the capture at full scale with 14 of its 27 targets on it; all 27
+        // would need 15.2 GB.
+        let gpu_12 = limits(4 << 30, 12 << 30);
+        let full = capture_on(1.0, false, &gpu_12);
+        assert_eq!((full.targets_on_device, full.problem(&gpu_12, None)), (14, None));
+        let all = device_bytes(&[(3000, 4000); 27], 12_000_000, 27);
+        assert_eq!(all / 100_000_000, 151, "{all}");
         let why = refused(0.5, true, &small_gpu, Some(4 << 30)).expect("refused");
         assert!(why.contains("host memory"), "{why}");
         let s = scale_in(&why);
@@ -230,5 +320,48 @@ mod tests {
         // Nothing fits a host without memory for the program itself.
         let why = refused(0.5, true, &small_gpu, Some(1 << 20)).expect("refused");
         assert!(why.contains("no --scale"), "{why}");
+    }
+
+    #[test]
+    fn targets_that_do_not_fit_are_streamed_down_to_one() {
+        let train = vec![(1000, 1000); 10];
+        let working = 1_000_000;
+        let all = device_bytes(&train, working, 10);
+        assert_eq!(targets_on_device(None, &train), 10);
+        assert_eq!(targets_on_device(Some(all), &train), 10);
+        // One byte short of all: the streamed buffers are of the largest view's size, so the
+        // most that fit is one fewer.
+        assert_eq!(targets_on_device(Some(all - 1), &train), 9);
+        let three = device_bytes(&train, working, 3);
+        assert_eq!(three + 16 * 1_000_000, device_bytes(&train, working, 4));
+        assert_eq!(targets_on_device(Some(three), &train), 3);
+        assert_eq!(targets_on_device(Some(three + 16 * 999_999), &train), 3);
+        // Below one target the trainer still keeps one; the run is refused before it starts.
+        assert_eq!(targets_on_device(Some(1), &train), 1);
+        assert_eq!(targets_on_device(Some(1), &[]), 0);
+        // Views of different sizes: streamed buffers take the largest.
+        let mixed = [(1000, 1000), (10, 10), (10, 10)];
+        let bytes = device_bytes(&mixed, working, 3);
+        assert_eq!(bytes - device_bytes(&mixed, working, 1), 16 * 200);
+        assert_eq!(targets_on_device(Some(bytes - 1), &mixed), 1);
+    }
+
+    #[test]
+    fn a_capped_cpu_device_streams_and_counts_the_host_copies() {
+        let cap =
+            |bytes| DeviceLimits { device_memory_cap: Some(bytes), ..limits(1 << 40, 64 << 30) };
+        let free = capture_on(0.25, true, &limits(1 << 40, 64 << 30));
+        assert!(!free.streamed() && free.streaming().is_none());
+        let capped = capture_on(0.25, true, &cap(free.device_bytes - 1));
+        assert!(capped.streamed(), "{capped:?}");
+        assert_eq!(capped.targets_on_device, 26);
+        assert!(capped.device_bytes < free.device_bytes);
+        // The trainer's copies of the 27 targets, less the device's 26 to 1 fewer.
+        let pixels = 27 * 750 * 1000;
+        let device_saved = free.device_bytes - capped.device_bytes;
+        assert_eq!(capped.host_bytes + device_saved, free.host_bytes + 16 * pixels);
+        assert!(capped.streaming().unwrap().starts_with("26 of 27 training views"));
+        let why = capped.problem(&cap(free.device_bytes - 1), None);
+        assert_eq!(why, None);
     }
 }

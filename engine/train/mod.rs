@@ -18,6 +18,7 @@ pub(crate) mod plateau;
 pub mod report;
 pub mod schedule;
 mod step;
+mod targets;
 pub mod temporal;
 mod views;
 

@@ -4,7 +4,7 @@
 use super::densify::DensifyCounts;
 use super::TrainError;
 use crate::io::plot::{write_svg, Panel, Series};
-use crate::io::write_atomically;
+use crate::io::{write_atomically, write_json_atomically};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -76,6 +76,11 @@ pub struct FitReport {
     /// Steps whose intersections outgrew the splatter's buffers (rendered without the excess;
     /// the buffers then grew).
     pub truncated_steps: u32,
+    /// Training views whose targets were on the device at once: all of them unless the
+    /// device's memory could not hold them (`train::targets`).
+    pub targets_on_device: usize,
+    /// Targets uploaded for a step because they were streamed (0 when all were on the device).
+    pub target_uploads: u64,
     /// Why the run stopped before its last iteration (a non-finite loss), if it did.
     pub stopped: Option<String>,
 }
@@ -83,11 +88,8 @@ pub struct FitReport {
 impl FitReport {
     /// Writes the report as pretty JSON to `path`, atomically; fails with [`TrainError::Io`].
     pub fn write_json(&self, path: &Path) -> Result<(), TrainError> {
-        write_atomically(path, |w| {
-            serde_json::to_writer_pretty(&mut *w, self).map_err(std::io::Error::other)?;
-            writeln!(w)
-        })
-        .map_err(|error| TrainError::Io { path: path.to_owned(), error })
+        write_json_atomically(path, self)
+            .map_err(|error| TrainError::Io { path: path.to_owned(), error })
     }
 }
 

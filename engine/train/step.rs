@@ -2,6 +2,8 @@
 //! backward and Adam in one submission. After it, one counter is read (the intersections, which
 //! size the next step's buffers); nothing else unless the caller asks.
 
+use super::memory::targets_on_device;
+use super::targets::Targets;
 use super::views::ViewTarget;
 use super::TrainError;
 use crate::camera::Camera;
@@ -47,7 +49,7 @@ pub struct Trainer {
     /// [`Trainer::with_second_render`].
     pair_loss: Option<ImageLoss>,
     cameras: Vec<Camera>,
-    targets: Vec<GpuBuffer<[f32; 4]>>,
+    targets: Targets,
     grad_rgba: GpuBuffer<[f32; 4]>,
     /// Zero: no depth loss.
     grad_depth: GpuBuffer<f32>,
@@ -68,11 +70,27 @@ struct Colour {
 }
 
 impl Trainer {
-    /// Uploads `scene` and the views' targets; the optimizer starts at zero moments.
+    /// Uploads `scene` and the views' targets, all of them when the device's memory holds them
+    /// beside the working buffers, else as many as fit, the rest streamed (`train::targets`);
+    /// the optimizer starts at zero moments.
     pub fn new(
         ctx: &Arc<GpuContext>,
         scene: &GaussianScene,
         views: &[ViewTarget],
+    ) -> Result<Self, TrainError> {
+        let sizes: Vec<(u32, u32)> =
+            views.iter().map(|v| (v.camera.width, v.camera.height)).collect();
+        let budget = ctx.limits().device_budget(ctx.info().shares_host_memory());
+        Self::with_targets_on_device(ctx, scene, views, targets_on_device(budget, &sizes))
+    }
+
+    /// [`Self::new`] with `on_device` of the views' targets on the device at once: all when it
+    /// covers them, else the rest streamed (at least one on the device).
+    pub fn with_targets_on_device(
+        ctx: &Arc<GpuContext>,
+        scene: &GaussianScene,
+        views: &[ViewTarget],
+        on_device: usize,
     ) -> Result<Self, TrainError> {
         scene.check().map_err(crate::splat::SplatError::from)?;
         let max_pixels = views.iter().map(|v| v.target.len()).max().unwrap_or(0);
@@ -85,10 +103,7 @@ impl Trainer {
             loss,
             pair_loss: None,
             cameras: views.iter().map(|v| v.camera).collect(),
-            targets: views
-                .iter()
-                .map(|v| GpuBuffer::from_slice(ctx, &format!("target {}", v.name), &v.target))
-                .collect::<Result<_, _>>()?,
+            targets: Targets::new(ctx, views, on_device)?,
             grad_rgba: GpuBuffer::new(ctx, "loss gradient", max_pixels)?,
             grad_depth: GpuBuffer::new(ctx, "depth gradient (unused)", max_pixels)?,
             terms: LossTerms::sums(ctx, "loss terms")?,
@@ -208,7 +223,7 @@ impl Trainer {
         let target = LossTarget {
             width: camera.width,
             height: camera.height,
-            image: &self.targets[view],
+            image: self.targets.get(view),
             weight: None,
         };
         let render = ScoredRender {
@@ -287,7 +302,7 @@ impl Trainer {
             camera: view,
             render,
             slot,
-            fit_against: (colour.learn && slot == 0).then_some(&self.targets[view]),
+            fit_against: (colour.learn && slot == 0).then_some(self.targets.get(view)),
             pixels: camera.width as usize * camera.height as usize,
             background: colour.background,
         }
@@ -358,9 +373,29 @@ impl Trainer {
         self.splatter.rgba()
     }
 
-    /// Training view `view`'s target (rgb over the background, mask), on the GPU.
+    /// Training view `view`'s target (rgb over the background, mask), on the GPU: its first
+    /// width × height elements. Panics unless the view is on the device
+    /// ([`Self::make_target_resident`]; every view is, unless streamed).
     pub fn target(&self, view: usize) -> &GpuBuffer<[f32; 4]> {
-        &self.targets[view]
+        self.targets.get(view)
+    }
+
+    /// The view whose target [`Self::make_target_resident`]`(view)` would take off the device
+    /// (streamed targets only): its recorded steps must be finished and recorded again.
+    pub fn target_evicts(&self, view: usize) -> Option<usize> {
+        self.targets.evicts(view)
+    }
+
+    /// Puts `view`'s target on the device if it is not there (streamed targets only), waiting
+    /// for the queue to be idle first.
+    pub fn make_target_resident(&mut self, view: usize) -> Result<(), TrainError> {
+        Ok(self.targets.make_resident(view)?)
+    }
+
+    /// Training views whose targets are on the device at once (all of them unless streamed),
+    /// and the uploads streaming has made so far.
+    pub fn targets_on_device(&self) -> (usize, u64) {
+        (self.targets.on_device(), self.targets.uploads())
     }
 
     /// Training view `view`'s camera.

@@ -3,7 +3,7 @@
 //! renders through frame 0's maps, found by camera name.
 
 use crate::gpu::GpuContext;
-use crate::io::write_atomically;
+use crate::io::write_json_atomically;
 use crate::loss::colour_map::affine::IDENTITY;
 use crate::loss::colour_map::ColourMap;
 use crate::splat::GaussianScene;
@@ -57,7 +57,7 @@ pub fn learned_maps(trainer: &Trainer, views: &[ViewTarget]) -> Result<CameraMap
 
 /// Writes `maps` to `path` (JSON, atomically).
 pub fn write_maps(path: &Path, maps: &CameraMaps) -> Result<(), TrainError> {
-    write_atomically(path, |w| serde_json::to_writer_pretty(w, maps).map_err(std::io::Error::other))
+    write_json_atomically(path, maps)
         .map_err(|error| TrainError::Io { path: path.to_owned(), error })
 }
 

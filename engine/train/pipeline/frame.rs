@@ -94,6 +94,10 @@ pub struct FrameReport {
     /// Per-vertex iterations whose intersections outgrew the splatter's buffers (rendered without
     /// the excess; see [`Trainer::finish_step`](crate::train::Trainer::finish_step)).
     pub truncated_steps: u32,
+    /// Targets uploaded for a step when the device's memory could not hold every training
+    /// view's (`train::targets`); None when it could.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_uploads: Option<u64>,
     /// The training cameras' colour maps frame 0 learned, by name (`[camera_colour]`; each
     /// row `(A_k0, A_k1, A_k2, b_k)`: the camera sees `A p + b α` of the subject's colour `p`).
     #[serde(default, skip_serializing_if = "CameraMaps::is_empty")]
@@ -221,6 +225,8 @@ pub fn optimize_frame(
     mesh.positions = scene.positions.clone();
     report.stop_reason = run.stop_reason;
     report.truncated_steps = run.truncated_steps;
+    let (on_device, uploads) = trainer.targets_on_device();
+    report.target_uploads = (on_device < trainer.views()).then_some(uploads);
     report.colour_iterations = colour_iterations;
     if learn {
         report.camera_colour = learned_maps(&trainer, task.train)?;
@@ -656,6 +662,7 @@ fn empty_report(frame: usize) -> FrameReport {
         passes_ms: BTreeMap::new(),
         topology_steps: Vec::new(),
         truncated_steps: 0,
+        target_uploads: None,
         camera_colour: CameraMaps::new(),
     }
 }

@@ -13,7 +13,7 @@ use crate::dataset::{Dataset, LoadOptions, PixelCenters};
 use crate::gpu::GpuContext;
 use crate::init::{init_mesh, InitOptions};
 use crate::io::host::{peak_resident_bytes, total_memory_bytes};
-use crate::io::write_atomically;
+use crate::io::write_json_atomically;
 use crate::mesh::TriMesh;
 use crate::sequence::orient::{SignedAxis, UpAxis};
 use crate::splat::GaussianScene;
@@ -205,8 +205,8 @@ fn run_logged(
     let started = Instant::now();
     let mut dataset = Dataset::load_with(&job.data, &job.load)?;
     let (host_shared, scale) = (ctx.info().shares_host_memory(), job.load.scale.unwrap_or(1.0));
-    let memory = CaptureMemory::of_dataset(&dataset, host_shared, scale);
-    let at = |s| CaptureMemory::of_dataset(&dataset, host_shared, s);
+    let memory = CaptureMemory::of_dataset(&dataset, ctx.limits(), host_shared, scale);
+    let at = |s| CaptureMemory::of_dataset(&dataset, ctx.limits(), host_shared, s);
     if let Some(problem) = refusal(at, scale, ctx.limits(), total_memory_bytes()) {
         return Err(TrainError::TooLarge { data: job.data.clone(), problem });
     }
@@ -215,6 +215,9 @@ fn run_logged(
         mib(memory.device_bytes),
         mib(memory.host_bytes)
     ))?;
+    if let Some(streaming) = memory.streaming() {
+        log.line(&format!("device memory: {streaming}"))?;
+    }
     let frames = job.frames.clone().unwrap_or(0..dataset.frames.len());
     if frames.is_empty() || frames.end > dataset.frames.len() {
         let (data, available) = (job.data.clone(), dataset.frames.len());
@@ -706,10 +709,7 @@ fn finish_report(
     report.vertices = mesh.positions.len();
     report.faces = mesh.live_faces().len();
     let path = out.join("report.json");
-    write_atomically(&path, |w| {
-        serde_json::to_writer_pretty(w, report).map_err(std::io::Error::other)
-    })
-    .map_err(|error| TrainError::Io { path, error })
+    write_json_atomically(&path, report).map_err(|error| TrainError::Io { path, error })
 }
 
 /// The signed axis nearest the cameras' mean up vector, and a sentence saying so.
