@@ -141,7 +141,7 @@ fn a_non_finite_loss_stops_and_keeps_the_last_good_gaussians() {
     let config = FitConfig { iterations: 40, ..short_config() };
     let initial = initial_gaussians(&train, None, &config).unwrap();
     // A corrupt pixel in one training image (a NaN in a float EXR, say).
-    train[2].target[100][1] = f32::NAN;
+    std::sync::Arc::make_mut(&mut train[2].target)[100][1] = f32::NAN;
     let outcome =
         fit(g.ctx(), &train, &held_out, true, initial.clone(), &config, &mut |_| {}).unwrap();
     let stopped = outcome.report.stopped.as_deref().expect("the run stops");
@@ -174,10 +174,11 @@ fn masks_that_do_not_intersect_are_reported() {
     let mut views = load_targets(&dataset, 0, &dataset.train, [0.0; 3], true).unwrap();
     // Two views whose masks cover disjoint halves of the image cannot agree on any point.
     for (i, v) in views.iter_mut().enumerate() {
-        for (p, px) in v.target.iter_mut().enumerate() {
+        let target = std::sync::Arc::make_mut(&mut v.target);
+        for (p, px) in target.iter_mut().enumerate() {
             px[3] = if (p % 64 < 32) == (i % 2 == 0) { 1.0 } else { 0.0 };
         }
-        v.target.iter_mut().for_each(|px| {
+        target.iter_mut().for_each(|px| {
             if i >= 2 {
                 px[3] = 0.0
             }

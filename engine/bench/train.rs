@@ -100,7 +100,8 @@ pub fn bench_train(
     let mut views = Vec::new();
     for (i, camera) in ring_cameras(c.views, c.width, c.height).into_iter().enumerate() {
         splatter.forward(&other, &camera, &settings)?;
-        views.push(ViewTarget { name: format!("ring{i}"), camera, target: splatter.read_rgba()? });
+        let target = Arc::new(splatter.read_rgba()?);
+        views.push(ViewTarget { name: format!("ring{i}"), camera, target });
     }
     drop(splatter);
     let trainer = Trainer::new(ctx, &scene, &views)?;

@@ -7,8 +7,7 @@
 //! distance field (4), the per-pixel working buffers of the
 //! renders, losses and rasterizers (several copies, sized by the largest view), and a fixed
 //! part for the Gaussians, the mesh and the sort. On the host: the views' targets again, the
-//! decoded-image cache, the images being decoded, the trainer's copies of streamed targets,
-//! the first mesh's hull grid, the background
+//! decoded-image cache, the images being decoded, the first mesh's hull grid, the background
 //! plates of a capture whose masks are refined, and, on a device that is the CPU, the device's
 //! memory too. The per-pixel and fixed parts were measured
 //! (docs/log/2026-11-28-capture-memory.md) and rounded up, so the figure is a bound, not a
@@ -140,8 +139,6 @@ impl CaptureMemory {
         let largest = views.train.iter().chain(views.held_out).map(area).max().unwrap_or(0);
         let on_device = targets_on_device(views.device_budget, views.train);
         let device_bytes = device_bytes(views.train, largest, on_device);
-        // Streamed targets are uploaded from the trainer's own copies.
-        let streamed = on_device < views.train.len();
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
         let cache = (DECODED_BYTES_PER_PIXEL * (train + held_out)).min(DEFAULT_CACHE_BYTES as u64);
         let host_bytes = FIXED_HOST_BYTES
@@ -150,7 +147,6 @@ impl CaptureMemory {
             + plate_bytes(train, largest)
             + cache
             + threads * DECODED_BYTES_PER_PIXEL * views.largest_file_pixels
-            + if streamed { TARGET_BYTES_PER_PIXEL * train } else { 0 }
             + if views.device_is_host { device_bytes } else { 0 };
         Self {
             device_bytes,
@@ -347,7 +343,7 @@ mod tests {
     }
 
     #[test]
-    fn a_capped_cpu_device_streams_and_counts_the_host_copies() {
+    fn a_capped_cpu_device_streams_and_holds_less() {
         let cap =
             |bytes| DeviceLimits { device_memory_cap: Some(bytes), ..limits(1 << 40, 64 << 30) };
         let free = capture_on(0.25, true, &limits(1 << 40, 64 << 30));
@@ -356,10 +352,9 @@ mod tests {
         assert!(capped.streamed(), "{capped:?}");
         assert_eq!(capped.targets_on_device, 26);
         assert!(capped.device_bytes < free.device_bytes);
-        // The trainer's copies of the 27 targets, less the device's 26 to 1 fewer.
-        let pixels = 27 * 750 * 1000;
-        let device_saved = free.device_bytes - capped.device_bytes;
-        assert_eq!(capped.host_bytes + device_saved, free.host_bytes + 16 * pixels);
+        // The device's memory is the host's: one target fewer on it is one fewer on the host.
+        assert_eq!(free.device_bytes - capped.device_bytes, 16 * 750 * 1000);
+        assert_eq!(free.host_bytes - capped.host_bytes, 16 * 750 * 1000);
         assert!(capped.streaming().unwrap().starts_with("26 of 27 training views"));
         let why = capped.problem(&cap(free.device_bytes - 1), None);
         assert_eq!(why, None);

@@ -1,8 +1,8 @@
 //! The training views' targets on the device, all of them or, when the device's memory cannot
 //! hold them all (`memory::targets_on_device`), the ones used last.
 //!
-//! Streamed, the store keeps a host copy of every target and a few device buffers sized for the
-//! largest view; a step on a view whose target is not on the device first uploads it into the
+//! Streamed, the store shares the caller's host copy of every target and holds a few device
+//! buffers sized for the largest view; a step on a view whose target is not on the device first uploads it into the
 //! buffer used longest ago. A step reads the same bytes either way, so streaming changes a
 //! run's time, never its result. An upload waits for the steps on the queue (the buffer it
 //! overwrites may be one of theirs), and a step recorded against a buffer now holding another
@@ -25,8 +25,8 @@ pub struct Targets {
     held: Vec<Held>,
     /// Per view, its buffer in `held` while its target is on the device.
     slot_of: Vec<Option<usize>>,
-    /// Every view's target, kept only when streamed.
-    host: Vec<Vec<[f32; 4]>>,
+    /// Every view's target, shared with the caller's views, kept only when streamed.
+    host: Vec<Arc<Vec<[f32; 4]>>>,
     clock: u64,
     uploads: u64,
 }

@@ -6,6 +6,7 @@ use crate::camera::Camera;
 use crate::dataset::Dataset;
 use crate::io::host::parallel_map_counted;
 use crate::io::image::Image;
+use std::sync::Arc;
 
 /// One view of one frame as a training target (see the module docs).
 #[derive(Clone)]
@@ -14,8 +15,9 @@ pub struct ViewTarget {
     pub name: String,
     /// The view's camera; `target` is its width × height.
     pub camera: Camera,
-    /// Per pixel, row-major: rgb · mask + background · (1 − mask), mask.
-    pub target: Vec<[f32; 4]>,
+    /// Per pixel, row-major: rgb · mask + background · (1 − mask), mask. Shared: a trainer
+    /// that streams its targets uploads from it (`train::targets`) without a copy of its own.
+    pub target: Arc<Vec<[f32; 4]>>,
 }
 
 impl ViewTarget {
@@ -62,7 +64,7 @@ impl ViewTarget {
             cy: c.cy * s,
             world_to_camera: c.world_to_camera,
         };
-        Self { name: self.name.clone(), camera, target }
+        Self { name: self.name.clone(), camera, target: Arc::new(target) }
     }
 }
 
@@ -106,7 +108,7 @@ pub fn load_targets_counted(
             Ok(ViewTarget {
                 name: dataset.camera_names[view.camera].clone(),
                 camera: dataset.cameras[view.camera],
-                target: composite(&image, mask.as_deref(), background),
+                target: Arc::new(composite(&image, mask.as_deref(), background)),
             })
         },
         decoded,

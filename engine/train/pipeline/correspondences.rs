@@ -242,6 +242,7 @@ mod tests {
     use super::*;
     use crate::camera::Camera;
     use glam::DVec2;
+    use std::sync::Arc;
 
     /// A grid of `n × n` vertices over the square |x|, |y| ≤ `half` at height `z`.
     fn grid(n: u32, half: f32, z: f32, first: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
@@ -276,7 +277,7 @@ mod tests {
                 }
             })
             .collect();
-        ViewTarget { name: "top".into(), camera, target }
+        ViewTarget { name: "top".into(), camera, target: Arc::new(target) }
     }
 
     /// An 11 × 11 plane over a hidden 3 × 3 one, its vertices, faces and the hidden range.
@@ -372,7 +373,7 @@ mod tests {
         // A dark view (a lost light): nothing to follow, and the view is named.
         let (positions, faces, _) = planes();
         let mut dark = view(top_camera(), [0.0; 2]);
-        dark.target.iter_mut().for_each(|p| *p = [0.0, 0.0, 0.0, p[3]]);
+        Arc::make_mut(&mut dark.target).iter_mut().for_each(|p| *p = [0.0, 0.0, 0.0, p[3]]);
         let source = SeenPose { positions: &positions, views: std::slice::from_ref(&dark) };
         let found = correspondences(source, &positions, &faces, std::slice::from_ref(&dark));
         assert!(found.targets.iter().all(|t| t.weight == 0.0));
