@@ -107,17 +107,40 @@ pub struct LossTarget<'a> {
     pub weight: Option<&'a GpuBuffer<f32>>,
 }
 
-/// The fused loss kernels for a fixed number of renders per run (1, or 2: a view's Gaussian
-/// and mesh renders, which then share the target's loads and moments) and their per-pixel
-/// scratch (filtered moments and derivatives, one plane per render), grown to the largest
-/// image seen.
-pub struct ImageLoss {
-    ctx: Arc<GpuContext>,
-    renders: usize,
+/// The four passes of the loss, specialized for a number of renders per run.
+struct LossPasses {
     blur_moments: ComputePipeline,
     ssim_forward: ComputePipeline,
     blur_gradients: ComputePipeline,
     ssim_backward: ComputePipeline,
+}
+
+impl LossPasses {
+    fn new(ctx: &Arc<GpuContext>, renders: usize) -> GpuResult<Self> {
+        let specialization = [WORKGROUP, renders as u32];
+        let pipeline = |name, shader| {
+            ComputePipeline::new(
+                ctx,
+                &PipelineDesc { name, shader, specialization: &specialization },
+            )
+        };
+        Ok(Self {
+            blur_moments: pipeline("loss blur moments", &shaders::LOSS_BLUR_MOMENTS)?,
+            ssim_forward: pipeline("loss ssim forward", &shaders::LOSS_SSIM_FORWARD)?,
+            blur_gradients: pipeline("loss blur gradients", &shaders::LOSS_BLUR_GRADIENTS)?,
+            ssim_backward: pipeline("loss ssim backward", &shaders::LOSS_SSIM_BACKWARD)?,
+        })
+    }
+}
+
+/// The fused loss kernels for runs of one render or, built for two, of one or two (a view's
+/// Gaussian and mesh renders, which then share the target's loads and moments), and their
+/// per-pixel scratch (filtered moments and derivatives, one plane per render of the largest
+/// run), grown to the largest image seen. Runs of either size share the scratch.
+pub struct ImageLoss {
+    ctx: Arc<GpuContext>,
+    /// `passes[n - 1]`: the passes of a run of `n` renders.
+    passes: Vec<LossPasses>,
     /// Horizontal filter of the target's y and y².
     target_moments: [GpuBuffer<[f32; 4]>; 2],
     /// Horizontal filter of each render's x, x², xy; once the second pass has read them, the
@@ -142,7 +165,7 @@ fn scratch<const N: usize>(
 }
 
 impl ImageLoss {
-    /// Builds the four pipelines for `renders` renders per run (1 or 2, else
+    /// Builds the pipelines for runs of up to `renders` renders (1 or 2, else
     /// [`GpuError::LengthMismatch`]) with empty scratch (see [`Self::reserve`]); fails when a
     /// pipeline or buffer cannot be created.
     pub fn new(ctx: &Arc<GpuContext>, renders: usize) -> GpuResult<Self> {
@@ -154,20 +177,9 @@ impl ImageLoss {
                 capacity: 2,
             });
         }
-        let specialization = [WORKGROUP, renders as u32];
-        let pipeline = |name, shader| {
-            ComputePipeline::new(
-                ctx,
-                &PipelineDesc { name, shader, specialization: &specialization },
-            )
-        };
         Ok(Self {
             ctx: ctx.clone(),
-            renders,
-            blur_moments: pipeline("loss blur moments", &shaders::LOSS_BLUR_MOMENTS)?,
-            ssim_forward: pipeline("loss ssim forward", &shaders::LOSS_SSIM_FORWARD)?,
-            blur_gradients: pipeline("loss blur gradients", &shaders::LOSS_BLUR_GRADIENTS)?,
-            ssim_backward: pipeline("loss ssim backward", &shaders::LOSS_SSIM_BACKWARD)?,
+            passes: (1..=renders).map(|n| LossPasses::new(ctx, n)).collect::<GpuResult<_>>()?,
             target_moments: scratch(ctx, "loss target moments", 0)?,
             moments: scratch(ctx, "loss moments", 0)?,
             derivatives: scratch(ctx, "loss moment derivatives", 0)?,
@@ -175,11 +187,16 @@ impl ImageLoss {
         })
     }
 
+    /// The most renders a run may score.
+    pub fn max_renders(&self) -> usize {
+        self.passes.len()
+    }
+
     /// Makes room for images of `pixels`; call before recording (recording borrows the scratch,
     /// and fails naming it when it is too small).
     pub fn reserve(&mut self, pixels: usize) -> GpuResult<()> {
         if self.target_moments[0].len() < pixels {
-            let planes = self.renders * pixels;
+            let planes = self.passes.len() * pixels;
             self.target_moments = scratch(&self.ctx, "loss target moments", pixels)?;
             self.moments = scratch(&self.ctx, "loss moments", planes)?;
             self.derivatives = scratch(&self.ctx, "loss moment derivatives", planes)?;
@@ -187,26 +204,28 @@ impl ImageLoss {
         Ok(())
     }
 
-    /// Records the loss of each of `renders` (as many as [`Self::new`] was built for) against
-    /// `target`: per render, ADDS its terms to its sums and WRITES dL/drender to its gradient.
+    /// Records the loss of each of `renders` (one, or two when [`Self::new`] was built for
+    /// two) against `target`: per render, ADDS its terms to its sums and WRITES dL/drender to
+    /// its gradient.
     pub fn record<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
         target: &LossTarget<'a>,
         renders: &[ScoredRender<'a>],
     ) -> GpuResult<()> {
-        let [first, second] = match *renders {
-            [a] if self.renders == 1 => [a, a],
-            [a, b] if self.renders == 2 => [a, b],
-            _ => {
-                return Err(GpuError::LengthMismatch {
-                    what: "image loss renders per run",
-                    name: "ImageLoss::record".into(),
-                    len: renders.len(),
-                    capacity: self.renders,
-                })
-            }
-        };
+        let (passes, [first, second]) =
+            match (self.passes.get(renders.len().wrapping_sub(1)), renders) {
+                (Some(passes), &[a]) => (passes, [a, a]),
+                (Some(passes), &[a, b]) => (passes, [a, b]),
+                _ => {
+                    return Err(GpuError::LengthMismatch {
+                        what: "image loss renders per run",
+                        name: "ImageLoss::record".into(),
+                        len: renders.len(),
+                        capacity: self.passes.len(),
+                    })
+                }
+            };
         let params = LossParams::new(
             target.width,
             target.height,
@@ -232,14 +251,15 @@ impl ImageLoss {
         let terms =
             [("term_sums_a", first.terms.binding()), ("term_sums_b", second.terms.binding())];
         let pass_1 = [&images[..], &target_moments, &moments, &[weight], &terms].concat();
-        rec.dispatch_1d(&self.blur_moments, &pass_1, &params, rows)?;
+        rec.dispatch_1d(&passes.blur_moments, &pass_1, &params, rows)?;
         let pass_2 = [&[weight][..], &target_moments, &moments, &derivatives, &terms].concat();
-        rec.dispatch_1d(&self.ssim_forward, &pass_2, &params, columns)?;
-        rec.dispatch_1d(&self.blur_gradients, &[derivatives, filtered].concat(), &params, rows)?;
+        rec.dispatch_1d(&passes.ssim_forward, &pass_2, &params, columns)?;
+        let pass_3 = [derivatives, filtered].concat();
+        rec.dispatch_1d(&passes.blur_gradients, &pass_3, &params, rows)?;
         let gradients =
             [("gradient_a", first.gradient.binding()), ("gradient_b", second.gradient.binding())];
         let pass_4 = [&images[..], &[weight], &filtered, &gradients].concat();
-        rec.dispatch_1d(&self.ssim_backward, &pass_4, &params, columns)
+        rec.dispatch_1d(&passes.ssim_backward, &pass_4, &params, columns)
     }
 
     /// Refuses a run whose images, weight, scratch or sums are smaller than it needs, naming

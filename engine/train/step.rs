@@ -44,10 +44,9 @@ impl GaussianState {
 pub struct Trainer {
     ctx: Arc<GpuContext>,
     splatter: Splatter,
+    /// Scores the Gaussian render, and with [`Trainer::with_second_render`] another render of
+    /// the same view in the same run.
     loss: ImageLoss,
-    /// Scores the Gaussian render and another render of the same view in one run; built by
-    /// [`Trainer::with_second_render`].
-    pair_loss: Option<ImageLoss>,
     cameras: Vec<Camera>,
     targets: Targets,
     grad_rgba: GpuBuffer<[f32; 4]>,
@@ -101,7 +100,6 @@ impl Trainer {
             ctx: ctx.clone(),
             splatter: Splatter::new(ctx)?,
             loss,
-            pair_loss: None,
             cameras: views.iter().map(|v| v.camera).collect(),
             targets: Targets::new(ctx, views, on_device)?,
             grad_rgba: GpuBuffer::new(ctx, "loss gradient", max_pixels)?,
@@ -122,9 +120,9 @@ impl Trainer {
     /// Builds the loss that scores the Gaussian render beside another render of the same view
     /// in one run ([`Self::record_splat`] with another render).
     pub fn with_second_render(mut self) -> Result<Self, TrainError> {
-        let mut pair = ImageLoss::new(&self.ctx, 2)?;
-        pair.reserve(self.grad_rgba.len())?;
-        self.pair_loss = Some(pair);
+        // The one-render loss goes before the new one's scratch is made.
+        self.loss = ImageLoss::new(&self.ctx, 2)?;
+        self.loss.reserve(self.grad_rgba.len())?;
         Ok(self)
     }
 
@@ -233,14 +231,11 @@ impl Trainer {
             gradient: &self.grad_rgba,
         };
         let renders: Vec<ScoredRender> = [Some(render), other].into_iter().flatten().collect();
-        let seen = self.record_seen(rec, view, &renders)?;
-        match *seen.as_slice() {
-            [render] => self.loss.record(rec, &target, &[render])?,
-            _ => {
-                let pair = self.pair_loss.as_ref().ok_or(TrainError::NoSecondRender)?;
-                pair.record(rec, &target, &seen)?
-            }
+        if renders.len() > self.loss.max_renders() {
+            return Err(TrainError::NoSecondRender);
         }
+        let seen = self.record_seen(rec, view, &renders)?;
+        self.loss.record(rec, &target, &seen)?;
         self.record_seen_backward(rec, view, &renders)?;
         rec.end_pass();
         splatter.record_backward_of(
