@@ -17,8 +17,8 @@ use std::sync::{Arc, Mutex, MutexGuard};
 /// How to create a context. `None` fields fall back to the environment (`TAGSPLAT_DEVICE`,
 /// `TAGSPLAT_VALIDATION=1`, `TAGSPLAT_FORCE_STAGING=1`, `TAGSPLAT_IN_FLIGHT=N`,
 /// `TAGSPLAT_DEVICE_MEMORY=SIZE`) and then to the defaults (policy, off, off, by device, the
-/// device's own). Forced staging sends every upload and readback through staging buffers even where the
-/// device's memory is host-visible (lavapipe), so CI runs a discrete GPU's path.
+/// device's own). Forced staging sends every upload and readback through staging buffers even
+/// where the device's memory is host-visible (lavapipe), so CI runs a discrete GPU's path.
 #[derive(Clone, Debug, Default)]
 pub struct ContextOptions {
     /// The device: an index or a case-insensitive piece of its name (see [`choose_device`]).

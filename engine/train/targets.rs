@@ -2,11 +2,12 @@
 //! hold them all (`memory::targets_on_device`), the ones used last.
 //!
 //! Streamed, the store shares the caller's host copy of every target and holds a few device
-//! buffers sized for the largest view; a step on a view whose target is not on the device first uploads it into the
-//! buffer used longest ago. A step reads the same bytes either way, so streaming changes a
-//! run's time, never its result. An upload waits for the steps on the queue (the buffer it
-//! overwrites may be one of theirs), and a step recorded against a buffer now holding another
-//! view must be recorded again: [`Targets::evicts`] names that view before the upload.
+//! buffers sized for the largest view; a step on a view whose target is not on the device
+//! first uploads it into the buffer used longest ago. A step reads the same bytes either way,
+//! so streaming changes a run's time, never its result. An upload waits for the steps on the
+//! queue (the buffer it overwrites may be one of theirs), and a step recorded against a buffer
+//! now holding another view must be recorded again: [`Targets::evicts`] names that view
+//! before the upload.
 
 use super::views::ViewTarget;
 use crate::gpu::{GpuBuffer, GpuContext, GpuResult};
