@@ -368,6 +368,44 @@ fn dataset_info_into_a_closed_pipe_ends_quietly() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `--device-memory`: a cap just under what the training targets need streams them (`dataset
+/// info` says how many stay on the device), one under a single target's need is refused with
+/// the scale that would fit, and a size the command line cannot read is refused by it.
+#[test]
+fn a_device_memory_cap_streams_the_targets_or_refuses() {
+    let dir = temp("device-memory");
+    let eyes: Vec<DVec3> =
+        (0..4).map(|i| DVec3::new(4.0 * (i as f64).sin(), 1.0, 4.0 * (i as f64).cos())).collect();
+    nerfstudio(&dir, "transforms_train.json", &[0.0], &eyes, "train");
+    let info = |cap: Option<String>| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_tagsplat"));
+        command.args(["dataset", "info", "--json", "--data"]).arg(&dir);
+        command.args(cap.iter().flat_map(|c| ["--device-memory", c.as_str()]));
+        let output = command.output().unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+        (serde_json::from_slice::<serde_json::Value>(&output.stdout).ok(), stderr)
+    };
+    let free = info(None).0.expect("dataset info prints JSON");
+    let memory = &free["memory"];
+    assert_eq!(
+        (memory["targets_on_device"].as_u64(), memory["training_views"].as_u64()),
+        (Some(4), Some(4))
+    );
+    let needed = memory["device_bytes"].as_u64().unwrap();
+    let capped = info(Some((needed - 1).to_string())).0.expect("dataset info prints JSON");
+    assert_eq!(capped["memory"]["targets_on_device"].as_u64(), Some(3), "{capped}");
+    assert!(capped["refused"].is_null(), "{capped}");
+    let tiny = info(Some("1KiB".into())).0.expect("dataset info prints JSON");
+    let why = tiny["refused"].as_str().expect("refused");
+    assert!(
+        why.contains("with one training view on it at a time") && why.contains("--scale"),
+        "{why}"
+    );
+    let (unread, stderr) = info(Some("lots".into()));
+    assert!(unread.is_none() && stderr.contains("expected a size"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `LoadOptions::scale` scales images, masks and intrinsics together: a point lands on the
 /// same place of the picture, the pixels are area means of the files', and a scale outside
 /// (0, 1] is refused naming the folder.
