@@ -123,8 +123,11 @@ fn steps_in_flight_and_streamed_targets_give_the_same_gaussians() {
     let sizes: Vec<(u32, u32)> = train.iter().map(|v| (v.camera.width, v.camera.height)).collect();
     let streamed = run(3, Some(device_bytes(&sizes, 64 * 64, 2)));
     assert_eq!(streamed.report.targets_on_device, 2);
-    // Each epoch visits all seven views: at least five uploads in every one.
-    assert!(streamed.report.target_uploads >= 5 * (200 / 7), "{}", streamed.report.target_uploads);
+    // Each pass visits all seven views: at least five uploads in every one, and, with the view
+    // used last evicted, a hit on a view kept from the pass before in most (186 uploads
+    // evicting the least recently used, 162 now).
+    let uploads = streamed.report.target_uploads;
+    assert!(uploads >= 5 * (200 / 7) && uploads <= 6 * 200 / 7, "{uploads}");
     assert_eq!(one.scene, streamed.scene, "streaming the targets changed the Gaussians");
     assert_eq!(one.report.loss, streamed.report.loss);
     let _ = std::fs::remove_dir_all(&dir);

@@ -3,7 +3,8 @@
 //!
 //! Streamed, the store shares the caller's host copy of every target and holds a few device
 //! buffers sized for the largest view; a step on a view whose target is not on the device
-//! first uploads it into the buffer used longest ago. A step reads the same bytes either way,
+//! first uploads it into the buffer of the view used last: a pass visits every view once, so
+//! that view is the one needed furthest ahead. A step reads the same bytes either way,
 //! so streaming changes a run's time, never its result. An upload waits for the steps on the
 //! queue (the buffer it overwrites may be one of theirs), and a step recorded against a buffer
 //! now holding another view must be recorded again: [`Targets::evicts`] names that view
@@ -69,18 +70,18 @@ impl Targets {
         if self.slot_of[view].is_some() {
             return None;
         }
-        self.held[self.least_recently_used()].view
+        self.held[self.victim()].view
     }
 
-    /// Makes `view`'s target the content of a device buffer, uploading it into the buffer used
-    /// longest ago when it is not there. The upload waits for the queue to be idle.
+    /// Makes `view`'s target the content of a device buffer, uploading it into the buffer of
+    /// the view used last when it is not there. The upload waits for the queue to be idle.
     pub fn make_resident(&mut self, view: usize) -> GpuResult<()> {
         self.clock += 1;
         if let Some(slot) = self.slot_of[view] {
             self.held[slot].used = self.clock;
             return Ok(());
         }
-        let slot = self.least_recently_used();
+        let slot = self.victim();
         let held = &mut self.held[slot];
         held.buffer.write(&self.host[view])?;
         if let Some(old) = held.view.replace(view) {
@@ -99,8 +100,11 @@ impl Targets {
         &self.held[slot].buffer
     }
 
-    /// The buffer used longest ago (the first of equals).
-    fn least_recently_used(&self) -> usize {
-        (0..self.held.len()).min_by_key(|&slot| self.held[slot].used).unwrap_or(0)
+    /// The buffer to upload into: the one used last (the last of equals). A training loop
+    /// visits every view once per pass in a fresh order (`schedule::ViewCycle`), so the view
+    /// just used is not needed again before the next pass, while one not yet used in this pass
+    /// is; least recently used would evict exactly the views still to come.
+    fn victim(&self) -> usize {
+        (0..self.held.len()).max_by_key(|&slot| self.held[slot].used).unwrap_or(0)
     }
 }
