@@ -127,7 +127,7 @@ fn steps_in_flight_and_streamed_targets_give_the_same_gaussians() {
     // used last evicted, a hit on a view kept from the pass before in most (186 uploads
     // evicting the least recently used, 162 now).
     let uploads = streamed.report.target_uploads;
-    assert!(uploads >= 5 * (200 / 7) && uploads <= 6 * 200 / 7, "{uploads}");
+    assert!((5 * (200 / 7)..=6 * 200 / 7).contains(&uploads), "{uploads}");
     assert_eq!(one.scene, streamed.scene, "streaming the targets changed the Gaussians");
     assert_eq!(one.report.loss, streamed.report.loss);
     let _ = std::fs::remove_dir_all(&dir);
