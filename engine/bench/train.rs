@@ -105,7 +105,7 @@ pub fn bench_train(
     }
     drop(splatter);
     let trainer = Trainer::new(ctx, &scene, &views)?;
-    let targets_on_device = trainer.targets_on_device().0;
+    let targets_on_device = trainer.targets_on_device();
     let (wall_s, clock, finished) = time_steps(trainer, &views, config, &settings)?;
     // Two targets on the device: the views come round in order, so seven steps of eight upload
     // one (the view kept gets one hit a round).

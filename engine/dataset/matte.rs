@@ -178,10 +178,10 @@ impl Blend<'_> {
     }
 }
 
-/// Pixel `p`'s colour (a grey image's one value three times).
-/// (pixels `mask` calls subject, pixels more than [`PLATE_MARGIN`] outside it whose colour
-/// is not `plate`'s): over a background, a mask that cuts the subject off leaves the second
-/// count large against the first. `(0, 0)` when the sizes differ.
+/// Two counts of `image` against its `mask` and its camera's `plate`: (pixels `mask` calls
+/// subject, pixels more than [`PLATE_MARGIN`] outside it whose colour is not `plate`'s): over
+/// a background, a mask that cuts the subject off leaves the second count large against the
+/// first. `(0, 0)` when the sizes differ.
 pub fn off_plate(image: &Image, mask: &[f32], plate: &Plate) -> (u64, u64) {
     let (w, h) = (image.width as usize, image.height as usize);
     if mask.len() != w * h || (plate.width, plate.height) != (image.width, image.height) {
@@ -197,6 +197,7 @@ pub fn off_plate(image: &Image, mask: &[f32], plate: &Plate) -> (u64, u64) {
     (inside.iter().filter(|&&s| s).count() as u64, off as u64)
 }
 
+/// Pixel `p`'s colour (a grey image's one value three times).
 fn rgb(image: &Image, p: usize) -> [f32; 3] {
     let channels = image.channels.max(1) as usize;
     std::array::from_fn(|c| image.data[p * channels + c.min(channels - 1)])

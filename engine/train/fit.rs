@@ -109,7 +109,8 @@ pub fn fit(
     let FitStage { loss_log, curve, densify_log, .. } = stage;
     let (done, train_s, passes, truncated_steps) =
         (run.iterations, run.train_s, run.passes_ms, run.truncated_steps);
-    let (targets_on_device, target_uploads) = trainer.targets_on_device();
+    let (targets_on_device, target_uploads) =
+        (trainer.targets_on_device(), trainer.target_uploads());
     let (psnr, ssim, renders) = evaluate(&mut trainer, eval, &settings, stopped.is_some())?;
     let scene = if stopped.is_some() { trainer.last_good_scene()? } else { trainer.scene()? };
     let report = FitReport {

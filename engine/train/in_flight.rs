@@ -4,16 +4,17 @@
 //! stage's terms, backward; recorded once per view and reused until a buffer it names is
 //! replaced, its frame changes or, streamed (`train::targets`), its target leaves the device)
 //! and the slot's tail (Adam with the parameters the host wrote into the slot, then the
-//! intersection count copied out into the slot). What changes from one
-//! iteration to the next, the learning rates and the iteration's bias corrections, is written
-//! into the slot before the submit; nothing is recorded.
+//! intersection count copied out into the slot). What changes from one iteration to the next,
+//! the learning rates and the iteration's bias corrections, is written into the slot before
+//! the submit; nothing is recorded.
 //!
 //! With `depth` slots, the host prepares step `i` while steps `i - depth + 1 .. i` may still
 //! run, and learns a step's intersection count (which sizes the splatter) when its slot comes
 //! round again. Steps finish in submission order, so the result does not depend on timing: a
 //! given depth (`GpuContext::steps_in_flight`) gives the same bytes every run. Depth 1 is the
-//! plain loop (each step finished before the next is prepared); a larger depth differs from it only where a step's
-//! intersections outgrew the buffers (its successors in flight were sized without knowing).
+//! plain loop (each step finished before the next is prepared); a larger depth differs from it
+//! only where a step's intersections outgrew the buffers (its successors in flight were sized
+//! without knowing).
 
 use super::{TrainError, Trainer};
 use crate::gpu::MAX_STEPS_IN_FLIGHT;

@@ -4,9 +4,9 @@
 //! The model counts what grows with the capture. On the device: every training view's target
 //! (16 bytes a pixel; when they do not all fit in the device's memory, only as many as do, of
 //! the largest view's size, the rest streamed from the host: `train::targets`) and mask
-//! distance field (4), the per-pixel working buffers of the
-//! renders, losses and rasterizers (several copies, sized by the largest view), and a fixed
-//! part for the Gaussians, the mesh and the sort. On the host: the views' targets again, the
+//! distance field (4), the per-pixel working buffers of the renders, losses and rasterizers
+//! (several copies, sized by the largest view), and a fixed part for the Gaussians, the mesh
+//! and the sort. On the host: the views' targets again, the
 //! decoded-image cache, the images being decoded, the first mesh's hull grid, the background
 //! plates of a capture whose masks are refined, and, on a device that is the CPU, the device's
 //! memory too. The per-pixel and fixed parts were measured

@@ -387,10 +387,14 @@ impl Trainer {
         Ok(self.targets.make_resident(view)?)
     }
 
-    /// Training views whose targets are on the device at once (all of them unless streamed),
-    /// and the uploads streaming has made so far.
-    pub fn targets_on_device(&self) -> (usize, u64) {
-        (self.targets.on_device(), self.targets.uploads())
+    /// Training views whose targets are on the device at once (all of them unless streamed).
+    pub fn targets_on_device(&self) -> usize {
+        self.targets.on_device()
+    }
+
+    /// Targets uploaded so far because they were streamed (0 when all are on the device).
+    pub fn target_uploads(&self) -> u64 {
+        self.targets.uploads()
     }
 
     /// Training view `view`'s camera.

@@ -4,8 +4,8 @@
 //! Streamed, the store shares the caller's host copy of every target and holds a few device
 //! buffers sized for the largest view; a step on a view whose target is not on the device
 //! first uploads it into the buffer of the view used last: a pass visits every view once, so
-//! that view is the one needed furthest ahead. A step reads the same bytes either way,
-//! so streaming changes a run's time, never its result. An upload waits for the steps on the
+//! that view is the one needed furthest ahead. A step reads the same bytes either way, so
+//! streaming changes a run's time, never its result. An upload waits for the steps on the
 //! queue (the buffer it overwrites may be one of theirs), and a step recorded against a buffer
 //! now holding another view must be recorded again: [`Targets::evicts`] names that view
 //! before the upload.

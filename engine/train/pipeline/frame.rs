@@ -225,8 +225,8 @@ pub fn optimize_frame(
     mesh.positions = scene.positions.clone();
     report.stop_reason = run.stop_reason;
     report.truncated_steps = run.truncated_steps;
-    let (on_device, uploads) = trainer.targets_on_device();
-    report.target_uploads = (on_device < trainer.views()).then_some(uploads);
+    let streamed = trainer.targets_on_device() < trainer.views();
+    report.target_uploads = streamed.then_some(trainer.target_uploads());
     report.colour_iterations = colour_iterations;
     if learn {
         report.camera_colour = learned_maps(&trainer, task.train)?;
