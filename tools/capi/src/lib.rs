@@ -1,0 +1,1 @@
+//! The tagsplat C ABI (skeleton: being written).

@@ -1,0 +1,1 @@
+//! The tagsplat Python package (skeleton: being written).
