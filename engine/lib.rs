@@ -26,7 +26,8 @@
 //! - whole jobs: [`score`]: a reconstruction's output folder scored against a benchmark's
 //!   ground truth; [`bench`](mod@bench): benchmarks measured against bounds from the same run;
 //!   [`ablate`]: the temporal stage's ablations on a benchmark with ground truth; [`demo`]: the
-//!   whole job on generated data, scored against its ground truth.
+//!   whole job on generated data, scored against its ground truth; [`embed`]: what the Python
+//!   and C fronts call (jobs on a thread of their own, errors classified once, dataset info).
 //!
 //! Internal, with no stability promise: `rng`, `geometry`, `sort`, `loss`, `optim`,
 //! `regularize`, `deform`, `topology` and `shaders` (public but hidden, for the tests and
@@ -57,6 +58,7 @@ pub mod train;
 pub mod ablate;
 pub mod bench;
 pub mod demo;
+pub mod embed;
 pub mod score;
 
 // Internal stages: public only so that the integration tests and the benchmarks can reach them
@@ -98,7 +100,9 @@ pub use sequence::{FrameFormat, MeshSequence, SequenceError};
 pub use splat::{GaussianBuffers, GaussianScene, RenderSettings, SplatError, Splatter};
 pub use track::queries::read_points;
 pub use track::{track, Queries, TrackError, TrackReport};
-pub use train::pipeline::{run_train, TrainConfig, TrainJob, TrainProgress, TrainReport};
+pub use train::pipeline::{
+    run_train, run_train_with, TrainConfig, TrainJob, TrainProgress, TrainReport,
+};
 pub use train::TrainError;
 
 /// SPIR-V of every compute shader, compiled from `shaders/` by `build.rs`. Internal like the

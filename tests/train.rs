@@ -5,6 +5,7 @@ mod common;
 
 use common::{file_names, gpu, gpu_with, without_run_specifics};
 use glam::DVec3;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use tagsplat::camera::Camera;
@@ -62,7 +63,11 @@ fn a_short_fit_raises_held_out_psnr() {
     let (data, config) = (dir.join("data"), short_config());
     let job = FitJob { data, frame: 0, init: None, config, load: Default::default() };
     let mut calls = 0;
-    let outcome = run_fit_job(g.ctx(), &job, &mut |_| calls += 1).unwrap();
+    let outcome = run_fit_job(g.ctx(), &job, &mut |_| {
+        calls += 1;
+        ControlFlow::Continue(())
+    })
+    .unwrap();
     let r = &outcome.report;
     // Measured on lavapipe: 23.4 dB at the start, 29.4 dB after 300 iterations (7.3k
     // Gaussians); the bounds leave 2 dB of margin.
@@ -108,8 +113,10 @@ fn steps_in_flight_and_streamed_targets_give_the_same_gaussians() {
             ContextOptions { steps_in_flight: Some(depth), device_memory, ..Default::default() };
         let g = gpu_with(options);
         assert_eq!(g.ctx().steps_in_flight(), depth);
-        let outcome =
-            fit(g.ctx(), &train, &held_out, true, initial.clone(), &config, &mut |_| {}).unwrap();
+        let outcome = fit(g.ctx(), &train, &held_out, true, initial.clone(), &config, &mut |_| {
+            ControlFlow::Continue(())
+        })
+        .unwrap();
         // Depths may differ where a step outgrew the splatter's buffers: none may here.
         assert_eq!(outcome.report.truncated_steps, 0, "at depth {depth}");
         outcome
@@ -145,8 +152,10 @@ fn a_non_finite_loss_stops_and_keeps_the_last_good_gaussians() {
     let initial = initial_gaussians(&train, None, &config).unwrap();
     // A corrupt pixel in one training image (a NaN in a float EXR, say).
     std::sync::Arc::make_mut(&mut train[2].target)[100][1] = f32::NAN;
-    let outcome =
-        fit(g.ctx(), &train, &held_out, true, initial.clone(), &config, &mut |_| {}).unwrap();
+    let outcome = fit(g.ctx(), &train, &held_out, true, initial.clone(), &config, &mut |_| {
+        ControlFlow::Continue(())
+    })
+    .unwrap();
     let stopped = outcome.report.stopped.as_deref().expect("the run stops");
     assert!(stopped.contains("non-finite between iterations 1 and 25"), "{stopped}");
     assert!(stopped.contains("non-finite parameters:"), "{stopped}");

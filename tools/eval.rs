@@ -6,12 +6,10 @@ use anyhow::{Context, Result};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use tagsplat::eval::{evaluate_folders, FolderOptions};
+use tagsplat::embed::{evaluate, EvalOptions, Evaluation};
+use tagsplat::eval::FolderReport;
 use tagsplat::gpu::GpuContext;
-use tagsplat::score::{
-    evaluate_sequence, find_ground_truth, write_sequence_eval, FrameScores, FrameValue,
-    GroundTruth, SequenceEvalOptions, SequenceSummary,
-};
+use tagsplat::score::{write_sequence_eval, FrameScores, FrameValue, SequenceSummary};
 use tagsplat::train::pipeline::write_html_report;
 
 #[derive(clap::Args)]
@@ -44,30 +42,31 @@ pub struct EvalArgs {
 }
 
 pub fn run(gpu: impl FnOnce() -> Result<Arc<GpuContext>>, a: EvalArgs) -> Result<()> {
-    let context = || format!("eval --pred {} --gt {}", a.pred.display(), a.gt.display());
-    if let Some(root) = find_ground_truth(&a.gt) {
-        let gt = GroundTruth::read(&root).with_context(context)?;
-        let options = SequenceEvalOptions {
-            chamfer_samples: a.chamfer_samples.unwrap_or(5000),
-            seed: a.seed,
-            frames: a.frames.clone(),
-        };
-        let eval = evaluate_sequence(&a.pred, &gt, &options).with_context(context)?;
-        let dir = a.out.as_deref().unwrap_or(&a.pred);
-        let mut files = write_sequence_eval(dir, &eval).with_context(context)?;
-        if dir.join("report.json").is_file() {
-            files.extend(rebuild_report(gpu, dir));
+    let options = EvalOptions {
+        chamfer_samples: a.chamfer_samples,
+        emd_samples: Some(a.emd_samples),
+        seed: a.seed,
+        frames: a.frames.clone(),
+    };
+    match evaluate(&a.pred, &a.gt, &options)? {
+        Evaluation::Sequence(eval) => {
+            let context = || format!("eval --pred {} --gt {}", a.pred.display(), a.gt.display());
+            let dir = a.out.as_deref().unwrap_or(&a.pred);
+            let mut files = write_sequence_eval(dir, &eval).with_context(context)?;
+            if dir.join("report.json").is_file() {
+                files.extend(rebuild_report(gpu, dir));
+            }
+            if a.json {
+                crate::figures::print_result(&eval, None)?;
+            } else {
+                println!("{} against {}", eval.pred.display(), eval.ground_truth.display());
+                print_scores(&eval.pred, &eval.summary, &eval.frames);
+                files.iter().for_each(|f| println!("wrote {}", f.display()));
+            }
+            Ok(())
         }
-        if a.json {
-            crate::figures::print_result(&eval, None)?;
-        } else {
-            println!("{} against {}", eval.pred.display(), eval.ground_truth.display());
-            print_scores(&eval.pred, &eval.summary, &eval.frames);
-            files.iter().for_each(|f| println!("wrote {}", f.display()));
-        }
-        return Ok(());
+        Evaluation::Folders(report) => print_folders(&report, a.json),
     }
-    folders(&a).with_context(context)
 }
 
 /// Rebuilds the report.html of the training run in `dir` so it shows the scores just written
@@ -80,15 +79,9 @@ fn rebuild_report(gpu: impl FnOnce() -> Result<Arc<GpuContext>>, dir: &Path) -> 
 }
 
 /// The file-by-file comparison of two folders in the same layout.
-fn folders(a: &EvalArgs) -> Result<()> {
-    let options = FolderOptions {
-        chamfer_samples: a.chamfer_samples.unwrap_or(30_000),
-        emd_samples: a.emd_samples,
-        seed: a.seed,
-    };
-    let r = evaluate_folders(&a.pred, &a.gt, &options)?;
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&r)?);
+fn print_folders(r: &FolderReport, json: bool) -> Result<()> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(r)?);
         return Ok(());
     }
     if let (Some(sq), Some(m), Some(e)) = (r.chamfer_squared_mean, r.chamfer_mean, r.emd_mean) {

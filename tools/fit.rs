@@ -65,6 +65,7 @@ pub fn fit(context: impl FnOnce() -> Result<Arc<GpuContext>>, args: FitArgs) -> 
         if let Some(loss) = p.loss {
             bar.set_message(format!("loss {loss:.4}  {} Gaussians", p.gaussians));
         }
+        std::ops::ControlFlow::Continue(())
     };
     let load = LoadOptions { pixel_centers: args.pixel_centers.map(Into::into), scale: None };
     let job = FitJob { data: data.clone(), frame: args.frame, init: args.init, config, load };

@@ -9,6 +9,7 @@
 
 pub mod host;
 pub mod image;
+pub mod lock;
 pub mod pc2;
 pub mod plot;
 pub mod ply;

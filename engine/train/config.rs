@@ -204,6 +204,15 @@ pub enum ConfigError {
         /// The parser's error.
         error: Box<toml::de::Error>,
     },
+    /// JSON text (a front's dictionary) that is not a config: an unknown key, a value of the
+    /// wrong type.
+    #[error("config {path}: {error}")]
+    Json {
+        /// What the text came as.
+        path: PathBuf,
+        /// The parser's error.
+        error: serde_json::Error,
+    },
     /// A value is out of its range, or inconsistent with another key's.
     #[error("config{}: `{key}` {problem}", .path.as_ref().map(|p| format!(" {}", p.display())).unwrap_or_default())]
     Value {
@@ -220,6 +229,11 @@ impl FitConfig {
     /// Reads and checks a TOML config; missing keys take their defaults.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         load_toml(path, Self::check)
+    }
+
+    /// Parses and checks a config given as text, TOML or JSON; `origin` names it in errors.
+    pub fn parse(text: &str, origin: &Path, language: ConfigText) -> Result<Self, ConfigError> {
+        parse_config(text, origin, language, Self::check)
     }
 
     /// The defaults as TOML, for `--print-config`.
@@ -319,11 +333,38 @@ pub(crate) fn load_toml<T: serde::de::DeserializeOwned>(
 ) -> Result<T, ConfigError> {
     let text = std::fs::read_to_string(path)
         .map_err(|error| ConfigError::Read { path: path.to_owned(), error })?;
-    let config: T = toml::from_str(&text)
-        .map_err(|error| ConfigError::Parse { path: path.to_owned(), error: Box::new(error) })?;
+    parse_config(&text, path, ConfigText::Toml, check)
+}
+
+/// The languages a config's text may be in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ConfigText {
+    /// TOML, as config files are.
+    Toml,
+    /// JSON, as a front's dictionary arrives (`json.dumps`): the same keys and values.
+    Json,
+}
+
+/// Parses a config's `text` and checks it; `origin` (a file, or a name such as
+/// `the config argument`) names it in errors. Missing keys take their defaults; an unknown key
+/// is refused.
+pub(crate) fn parse_config<T: serde::de::DeserializeOwned>(
+    text: &str,
+    origin: &Path,
+    language: ConfigText,
+    check: impl FnOnce(&T) -> Result<(), ConfigError>,
+) -> Result<T, ConfigError> {
+    let path = origin.to_owned();
+    let config: T = match language {
+        ConfigText::Toml => toml::from_str(text)
+            .map_err(|error| ConfigError::Parse { path, error: Box::new(error) })?,
+        ConfigText::Json => {
+            serde_json::from_str(text).map_err(|error| ConfigError::Json { path, error })?
+        }
+    };
     check(&config).map_err(|e| match e {
         ConfigError::Value { key, problem, .. } => {
-            ConfigError::Value { path: Some(path.to_owned()), key, problem }
+            ConfigError::Value { path: Some(origin.to_owned()), key, problem }
         }
         other => other,
     })?;

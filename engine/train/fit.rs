@@ -18,6 +18,7 @@ use crate::io::image::Image;
 use crate::optim::{exponential_decay, LearningRates};
 use crate::rng::SplitMix64;
 use crate::splat::{GaussianScene, RenderSettings};
+use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -32,6 +33,8 @@ pub struct Progress {
     pub loss: Option<f32>,
     /// Gaussians after the iteration (densification changes the count).
     pub gaussians: usize,
+    /// Seconds of optimisation so far (densification included).
+    pub elapsed_s: f64,
 }
 
 /// What [`fit`] returns.
@@ -45,7 +48,8 @@ pub struct FitOutcome {
 }
 
 /// Fits `initial` to the `train` views of one frame, evaluating on `eval` (held-out views, or
-/// the training views when the dataset has none: `eval_is_held_out` says which).
+/// the training views when the dataset has none: `eval_is_held_out` says which). `progress`
+/// sees every iteration; answering `Break` ends the fit there with [`TrainError::Cancelled`].
 pub fn fit(
     ctx: &Arc<GpuContext>,
     train: &[ViewTarget],
@@ -53,7 +57,7 @@ pub fn fit(
     eval_is_held_out: bool,
     initial: GaussianScene,
     config: &FitConfig,
-    progress: &mut dyn FnMut(Progress),
+    progress: &mut dyn FnMut(Progress) -> ControlFlow<()>,
 ) -> Result<FitOutcome, TrainError> {
     config.check()?;
     if train.is_empty() {
@@ -148,7 +152,7 @@ struct FitStage<'a> {
     loss_log: Vec<(u32, f32)>,
     curve: Vec<CurvePoint>,
     densify_log: Vec<DensifyEvent>,
-    progress: &'a mut dyn FnMut(Progress),
+    progress: &'a mut dyn FnMut(Progress) -> ControlFlow<()>,
 }
 
 impl StepTerms for FitStage<'_> {}
@@ -201,13 +205,17 @@ impl Stage for FitStage<'_> {
             let gaussians = trainer.gaussians();
             self.curve.push(CurvePoint { iteration: it, wall_s: train_s, psnr, ssim, gaussians });
         }
-        (self.progress)(Progress {
+        let report = Progress {
             iteration: it,
             iterations,
             loss: self.last_loss,
             gaussians: trainer.gaussians(),
-        });
-        Ok(())
+            elapsed_s: train_s,
+        };
+        match (self.progress)(report) {
+            ControlFlow::Continue(()) => Ok(()),
+            ControlFlow::Break(()) => Err(TrainError::Cancelled),
+        }
     }
 }
 

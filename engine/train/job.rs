@@ -13,6 +13,7 @@ use crate::io::image::write_png;
 use crate::io::ply::Ply;
 use crate::mesh::TriMesh;
 use crate::splat::GaussianScene;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -31,11 +32,12 @@ pub struct FitJob {
     pub load: LoadOptions,
 }
 
-/// Loads the dataset, initialises, fits. The report's `frame` is the job's.
+/// Loads the dataset, initialises, fits. The report's `frame` is the job's. `progress` sees every
+/// iteration and may cancel the fit ([`fit`]).
 pub fn run_fit_job(
     ctx: &Arc<GpuContext>,
     job: &FitJob,
-    progress: &mut dyn FnMut(Progress),
+    progress: &mut dyn FnMut(Progress) -> ControlFlow<()>,
 ) -> Result<FitOutcome, TrainError> {
     job.config.check()?;
     let mut dataset = Dataset::load_with(&job.data, &job.load)?;

@@ -22,7 +22,7 @@ mod targets;
 pub mod temporal;
 mod views;
 
-pub use config::{ConfigError, FitConfig};
+pub use config::{ConfigError, ConfigText, FitConfig};
 pub use fit::{fit, FitOutcome, Progress};
 pub use job::{initial_gaussians, run_fit_job, write_fit_outputs, FitJob};
 pub use report::{write_curve_csv, write_curve_plot, CurvePoint, FitReport};
@@ -168,4 +168,11 @@ pub enum TrainError {
         /// The I/O error.
         error: std::io::Error,
     },
+    /// The caller cancelled the run (its progress callback answered `Break`); the frames
+    /// finished before are kept, and the next run on the same output resumes after them.
+    #[error("cancelled")]
+    Cancelled,
+    /// Another run, in this process or another, is writing into the same output folder.
+    #[error(transparent)]
+    OutputInUse(#[from] crate::io::lock::LockError),
 }

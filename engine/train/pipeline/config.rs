@@ -3,8 +3,8 @@
 
 pub use crate::dataset::CaptureStep;
 use crate::train::config::{
-    check_appearance, check_ranges, load_toml, value_error, ConfigError, LearningRateConfig,
-    LossWeights,
+    check_appearance, check_ranges, load_toml, parse_config, value_error, ConfigError, ConfigText,
+    LearningRateConfig, LossWeights,
 };
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -397,6 +397,12 @@ impl TrainConfig {
     /// the key.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         load_toml(path, Self::check)
+    }
+
+    /// Parses and checks a config given as text: TOML as in a file, or JSON (a front's
+    /// dictionary); `origin` names it in errors.
+    pub fn parse(text: &str, origin: &Path, language: ConfigText) -> Result<Self, ConfigError> {
+        parse_config(text, origin, language, Self::check)
     }
 
     /// The defaults as TOML, for `--print-config`.

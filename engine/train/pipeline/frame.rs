@@ -29,6 +29,7 @@ use crate::train::plateau::{Plateau, StopReason};
 use crate::train::schedule::DensifyWindow;
 use crate::train::{TrainError, Trainer, ViewTarget};
 use std::collections::BTreeMap;
+use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -156,7 +157,7 @@ pub fn optimize_frame(
     ctx: &Arc<GpuContext>,
     mut task: FrameTask,
     config: &TrainConfig,
-    progress: &mut dyn FnMut(u32, u32),
+    progress: &mut FrameProgress<'_>,
 ) -> Result<(GaussianScene, FrameReport), TrainError> {
     let (started, clock) = (Instant::now(), ctx.clock());
     let canonical = task.previous.is_none();
@@ -209,6 +210,7 @@ pub fn optimize_frame(
         densify_camera: (first.camera, budget),
         report: &mut report,
         progress,
+        loss: None,
     };
     let run = optimize(&mut trainer, &mut stage, &schedule, plateau, &mut settings, &mut rng)?;
     let run = finite(run, task.frame)?;
@@ -503,8 +505,14 @@ struct FrameStage<'a, 'm> {
     /// Gaussians densification may reach.
     densify_camera: (Camera, usize),
     report: &'a mut FrameReport,
-    progress: &'a mut dyn FnMut(u32, u32),
+    progress: &'a mut FrameProgress<'a>,
+    /// The mean loss of the last statistics interval, for `progress`.
+    loss: Option<f64>,
 }
+
+/// After every iteration of a frame: (iteration, of iterations) and the last statistics
+/// interval's mean loss; `Break` cancels the frame ([`TrainError::Cancelled`]).
+pub type FrameProgress<'a> = dyn FnMut((u32, u32), Option<f64>) -> ControlFlow<()> + 'a;
 
 impl StepTerms for FrameStage<'_, '_> {
     fn record_step<'a>(
@@ -567,7 +575,9 @@ impl Stage for FrameStage<'_, '_> {
         first: u32,
         last: u32,
     ) -> Result<Result<f64, String>, TrainError> {
-        read_losses(trainer, &self.terms, self.weights, (first, last), self.report)
+        let mean = read_losses(trainer, &self.terms, self.weights, (first, last), self.report)?;
+        self.loss = mean.as_ref().ok().copied().or(self.loss);
+        Ok(mean)
     }
 
     fn densify(
@@ -590,8 +600,10 @@ impl Stage for FrameStage<'_, '_> {
         (it, iterations): (u32, u32),
         _train_s: f64,
     ) -> Result<(), TrainError> {
-        (self.progress)(it, iterations);
-        Ok(())
+        match (self.progress)((it, iterations), self.loss) {
+            ControlFlow::Continue(()) => Ok(()),
+            ControlFlow::Break(()) => Err(TrainError::Cancelled),
+        }
     }
 }
 

@@ -19,4 +19,4 @@ pub use config::{CaptureStep, ReferencePose, TrainConfig};
 pub use frame::{optimize_frame, FrameReport, FrameTask};
 pub use graph_stage::{GraphReport, LevelReport};
 pub use html_report::write_html_report;
-pub use run::{run_train, Stage, TrainJob, TrainProgress, TrainReport};
+pub use run::{run_train, run_train_with, Stage, TrainJob, TrainProgress, TrainReport};

@@ -13,6 +13,7 @@ use crate::dataset::{Dataset, LoadOptions, PixelCenters};
 use crate::gpu::GpuContext;
 use crate::init::{init_mesh, InitOptions};
 use crate::io::host::{peak_resident_bytes, total_memory_bytes};
+use crate::io::lock::OutputLock;
 use crate::io::write_json_atomically;
 use crate::mesh::TriMesh;
 use crate::sequence::orient::{SignedAxis, UpAxis};
@@ -22,7 +23,7 @@ use crate::train::memory::{mib, refusal, CaptureMemory};
 use crate::train::output::{dc_vertex_colors, SequenceOutput};
 use crate::train::temporal::extrapolate;
 use crate::train::{load_targets, load_targets_counted, TrainError, ViewTarget};
-use std::ops::Range;
+use std::ops::{ControlFlow, Range};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -81,7 +82,29 @@ pub struct TrainProgress {
     pub iteration: u32,
     /// The frame's iteration cap (a later frame may stop before it), or the training cameras.
     pub iterations: u32,
+    /// The frame's mean loss over its last statistics interval (`report.stats_every`
+    /// iterations); None before the first interval ends and outside `Stage::Frame`.
+    pub loss: Option<f64>,
+    /// Seconds since [`run_train`] started.
+    pub elapsed_s: f64,
 }
+
+impl TrainProgress {
+    /// `iteration` of `iterations` of `stage` on `frame`, without a loss; [`run_train`] fills in
+    /// the time when it passes the report on.
+    fn at(
+        stage: Stage,
+        frame: usize,
+        frames_end: usize,
+        (iteration, iterations): (u32, u32),
+    ) -> Self {
+        Self { stage, frame, frames_end, iteration, iterations, loss: None, elapsed_s: 0.0 }
+    }
+}
+
+/// What a run's progress callback sees and answers: `Break` cancels the run
+/// ([`TrainError::Cancelled`]) at its next report.
+type Progress<'a> = &'a mut dyn FnMut(TrainProgress) -> ControlFlow<()>;
 
 /// The stage a [`TrainProgress`] counts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -156,14 +179,38 @@ pub struct Startup {
 
 /// Runs (or resumes) `job`; `OUT/report.json` is rewritten after every frame, `OUT/report.html`
 /// written at the end, and `OUT/run.log` gains what the run did (its end or its error included).
+/// `progress` sees every iteration; [`run_train_with`] lets it cancel.
 pub fn run_train(
     ctx: &Arc<GpuContext>,
     job: &TrainJob,
     progress: &mut dyn FnMut(TrainProgress),
 ) -> Result<TrainReport, TrainError> {
+    run_train_with(ctx, job, &mut |p| {
+        progress(*p);
+        ControlFlow::Continue(())
+    })
+}
+
+/// [`run_train`] whose `progress` may cancel the run by answering `Break`. The run then ends at
+/// its next report (the next iteration, decoded frame or built plate) with
+/// [`TrainError::Cancelled`], leaving what a killed run leaves: the frames finished before,
+/// which the next run on the same output resumes after. While it runs it holds `OUT`'s lock
+/// (`OUT/.lock`): a second run into the same folder, from this process or another, is refused
+/// with [`TrainError::OutputInUse`].
+pub fn run_train_with(
+    ctx: &Arc<GpuContext>,
+    job: &TrainJob,
+    progress: &mut dyn FnMut(&TrainProgress) -> ControlFlow<()>,
+) -> Result<TrainReport, TrainError> {
+    let _lock = OutputLock::take(&job.out)?;
     let log = RunLog::open(&job.out)?;
     log.line(&start_line(ctx, job))?;
-    match run_logged(ctx, job, progress, &log) {
+    let started = Instant::now();
+    let mut timed = |mut p: TrainProgress| {
+        p.elapsed_s = started.elapsed().as_secs_f64();
+        progress(&p)
+    };
+    match run_logged(ctx, job, &mut timed, &log) {
         Ok(report) => {
             let frames = report.frames.len();
             log.line(&format!("run finished: {frames} frames, {:.1} s", report.total_wall_s))?;
@@ -198,7 +245,7 @@ fn refine_masks(
 fn run_logged(
     ctx: &Arc<GpuContext>,
     job: &TrainJob,
-    progress: &mut dyn FnMut(TrainProgress),
+    progress: Progress,
     log: &RunLog,
 ) -> Result<TrainReport, TrainError> {
     job.config.check()?;
@@ -223,12 +270,16 @@ fn run_logged(
         let (data, available) = (job.data.clone(), dataset.frames.len());
         return Err(TrainError::FrameRange { frames, data, available });
     }
+    let mut cancelled = false;
     let mut plates = |done: usize, cameras: usize| {
-        let (iteration, iterations) = (done as u32, cameras as u32);
-        let (stage, frame, frames_end) = (Stage::Plates, frames.start, frames.end);
-        progress(TrainProgress { stage, frame, frames_end, iteration, iterations })
+        let counts = (done as u32, cameras as u32);
+        let report = TrainProgress::at(Stage::Plates, frames.start, frames.end, counts);
+        cancelled |= progress(report).is_break();
     };
     refine_masks(&mut dataset, job.config.refine_masks, frames.start, log, &mut plates)?;
+    if cancelled {
+        return Err(TrainError::Cancelled);
+    }
     let learn_colour = job.config.camera_colour.learn.applies(&dataset, frames.start)?;
     let out = SequenceOutput::create(&job.out)?;
     // A range that starts later continues frames already on disk.
@@ -331,16 +382,10 @@ fn run_logged(
                 sources: MatchSources { previous: &previous_views, tracks: tracks.as_ref() },
                 colour,
             };
-            let (scene, report) =
-                optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
-                    progress(TrainProgress {
-                        stage: Stage::Frame,
-                        frame: t,
-                        frames_end: frames.end,
-                        iteration,
-                        iterations,
-                    })
-                })?;
+            let (scene, report) = optimize_frame(ctx, task, &job.config, &mut |counts, loss| {
+                let report = TrainProgress::at(Stage::Frame, t, frames.end, counts);
+                progress(TrainProgress { loss, ..report })
+            })?;
             (scene, FrameReport { lost_views, wall_s: report.wall_s + tracks_s, ..report })
         };
         write_frame(&out, t, &mesh, &scene)?;
@@ -455,7 +500,7 @@ fn canonical_start(
     (dataset, job, colour): (&Dataset, &TrainJob, ColourUse),
     (out, log): (&SequenceOutput, &RunLog),
     (report, started): (&mut TrainReport, Instant),
-    progress: &mut dyn FnMut(TrainProgress),
+    progress: Progress,
 ) -> Result<(ManifoldMesh, GaussianScene), TrainError> {
     if out.is_complete(0) {
         let (mesh, scene) = out.read_frame(0)?;
@@ -492,18 +537,11 @@ fn canonical_start(
         colour,
     };
     let first_iteration = &mut report.startup.first_iteration_s;
-    let (scene, frame_report) =
-        optimize_frame(ctx, task, &job.config, &mut |iteration, iterations| {
-            first_iteration.get_or_insert_with(|| started.elapsed().as_secs_f64());
-            let stage = Stage::Frame;
-            progress(TrainProgress {
-                stage,
-                frame: 0,
-                frames_end: frames.end,
-                iteration,
-                iterations,
-            })
-        })?;
+    let (scene, frame_report) = optimize_frame(ctx, task, &job.config, &mut |counts, loss| {
+        first_iteration.get_or_insert_with(|| started.elapsed().as_secs_f64());
+        let report = TrainProgress::at(Stage::Frame, 0, frames.end, counts);
+        progress(TrainProgress { loss, ..report })
+    })?;
     if let Some(s) = report.startup.first_iteration_s {
         log.line(&format!("frame 0: first iteration done {s:.1} s after the start"))?;
     }
@@ -604,19 +642,22 @@ fn with_subject(views: Vec<ViewTarget>) -> (Vec<ViewTarget>, Vec<String>) {
 
 /// Training and evaluation targets of frame `t`: evaluation on the held-out cameras, None
 /// when there are none (the training views serve, without a second copy). Progress counts
-/// the views decoded (`Stage::Views`; `frames_end` as the run's).
+/// the views decoded (`Stage::Views`; `frames_end` as the run's); a cancel takes effect once
+/// the views being decoded are done.
 fn views(
     dataset: &Dataset,
     t: usize,
     config: &TrainConfig,
-    (frames_end, progress): (usize, &mut dyn FnMut(TrainProgress)),
+    (frames_end, progress): (usize, Progress),
 ) -> Result<(Vec<ViewTarget>, Option<Vec<ViewTarget>>), TrainError> {
     let all = (dataset.train.len() + dataset.test.len()) as u32;
     // The held-out views count on from the training views.
     let offset = std::cell::Cell::new(0);
+    let cancelled = std::cell::Cell::new(false);
     let mut decoded = |done: usize| {
-        let (stage, iteration, iterations) = (Stage::Views, (offset.get() + done) as u32, all);
-        progress(TrainProgress { stage, frame: t, frames_end, iteration, iterations })
+        let counts = ((offset.get() + done) as u32, all);
+        let stop = progress(TrainProgress::at(Stage::Views, t, frames_end, counts)).is_break();
+        cancelled.set(cancelled.get() || stop);
     };
     let with_masks = (config.background, true);
     let train = load_targets_counted(dataset, t, &dataset.train, with_masks, &mut decoded)?;
@@ -626,6 +667,9 @@ fn views(
     } else {
         Some(load_targets_counted(dataset, t, &dataset.test, with_masks, &mut decoded)?)
     };
+    if cancelled.get() {
+        return Err(TrainError::Cancelled);
+    }
     Ok((train, eval))
 }
 
