@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs what is missing, then runs every test with the Khronos validation layer on, and
 # builds the benchmarks so they at least compile (running them is scripts/bench.sh's job and
-# `cargo bench`'s). Extra arguments go to `cargo test`, e.g. `scripts/test.sh -- --nocapture`.
+# `cargo bench`'s); then the fronts' tests: the Python package, the C ABI and the Blender
+# add-on (each script installs what it needs). Extra arguments go to `cargo test`, e.g.
+# `scripts/test.sh -- --nocapture`.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -21,6 +23,7 @@ if ! cargo clippy --version >/dev/null 2>&1; then
 fi
 cargo clippy --all-targets --all-features -- -D warnings
 cargo clippy --lib --no-default-features -- -D warnings
+cargo clippy -p tagsplat-python -p tagsplat-capi --all-targets -- -D warnings
 
 # Every upload and readback through staging buffers, as on a discrete GPU whose working memory
 # the host cannot see (lavapipe's can be): the whole suite runs that path once. The direct path
@@ -44,3 +47,10 @@ fi
 # The public API's documentation: every public item documented, every intra-doc link resolved.
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --lib
 cargo build --benches --examples
+
+# The fronts, built once in the `fronts` profile (the wheel, the C library and the `tagsplat`
+# program share one engine compile): the Python package (pytest, its stubs against the module),
+# the C ABI (C99 and C++17, leak checkers) and the Blender add-on on the same wheel.
+bash scripts/test_python.sh
+bash scripts/test_c.sh
+bash scripts/test_blender.sh
