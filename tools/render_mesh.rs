@@ -42,15 +42,7 @@ fn load_mesh(path: &Path) -> Result<RasterMesh> {
             bail!("{}: not a mesh file this command reads (expected .ply or .obj)", path.display())
         }
     };
-    if mesh.faces.is_empty() {
-        bail!("{}: has no triangles (faces) to render", path.display());
-    }
-    let colors = match &mesh.colors {
-        Some(colors) => colors.iter().map(|c| c.map(|v| v as f32 / 255.0)).collect(),
-        None => vec![[0.8; 3]; mesh.positions.len()],
-    };
-    RasterMesh::new(mesh.positions, mesh.faces, colors)
-        .with_context(|| format!("{}: unusable mesh", path.display()))
+    RasterMesh::from_mesh(mesh).with_context(|| format!("{}: unusable mesh", path.display()))
 }
 
 pub fn render_mesh(ctx: &Arc<GpuContext>, args: &RenderMeshArgs) -> Result<()> {

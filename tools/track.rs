@@ -305,12 +305,9 @@ pub fn convert(args: ConvertArgs) -> Result<()> {
         FrameFormatArg::Obj => FrameFormat::Obj,
     };
     let orientation = args.up.orientation();
-    if args.to.extension().is_some_and(|e| e.eq_ignore_ascii_case("usda")) {
-        write_usda(&args.to, &sequence, args.fps, orientation, None)?;
-    } else {
-        let turned = orientation.sequence(&sequence);
-        turned.write(&args.to, format, args.fps).context("cannot write the sequence")?;
-    }
+    sequence
+        .export(&args.to, format, args.fps, orientation)
+        .context("cannot write the sequence")?;
     println!(
         "{} frames, {} vertices, {} faces -> {}",
         sequence.frames.len(),

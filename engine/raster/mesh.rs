@@ -41,6 +41,20 @@ impl RasterMesh {
         Ok(Self { positions, faces, colors })
     }
 
+    /// `mesh` as `tagsplat render-mesh` draws it: its vertex colours scaled to [0, 1], light grey
+    /// (0.8) without any; a mesh with no triangles is refused, as is anything [`Self::new`]
+    /// refuses.
+    pub fn from_mesh(mesh: crate::mesh::TriMesh) -> Result<Self, RasterError> {
+        if mesh.faces.is_empty() {
+            return Err(RasterError::NoTriangles);
+        }
+        let colors = match &mesh.colors {
+            Some(colors) => colors.iter().map(|c| c.map(|v| v as f32 / 255.0)).collect(),
+            None => vec![[0.8; 3]; mesh.positions.len()],
+        };
+        Self::new(mesh.positions, mesh.faces, colors)
+    }
+
     /// A mesh of one colour.
     pub fn uniform(
         positions: Vec<[f32; 3]>,

@@ -46,6 +46,9 @@ pub enum RasterError {
     /// A GPU allocation, upload, pipeline or submission failed.
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    /// A mesh with no triangles, which draws nothing.
+    #[error("has no triangles (faces) to render")]
+    NoTriangles,
     /// A vertex position has a NaN or infinite coordinate (the first such vertex).
     #[error("vertex {vertex} has a non-finite position {position:?}")]
     NonFinite {

@@ -74,10 +74,12 @@ impl MeshSequence {
         if path.is_dir() {
             return Self::read_folder(path);
         }
+        if !path.exists() {
+            return Err(invalid(path, "no such file or folder"));
+        }
         match extension(path).as_deref() {
             Some("pc2") => Self::read_pc2(path),
             Some("glb") => Ok(glb::read_glb(path)?),
-            _ if !path.exists() => Err(invalid(path, "no such file or folder")),
             _ => Err(invalid(
                 path,
                 "not a sequence: expected a folder of .ply/.obj frames, a .pc2 or a .glb",
@@ -93,6 +95,22 @@ impl MeshSequence {
             Some("glb") => Ok(glb::write_glb(path, self, fps)?),
             _ => self.write_folder(path, format),
         }
+    }
+
+    /// Writes the sequence as `tagsplat convert` does, turned by `orientation` onto the file's
+    /// up axis: a `.usda` (time-sampled at `fps`), or any form [`Self::write`] writes.
+    pub fn export(
+        &self,
+        path: &Path,
+        format: FrameFormat,
+        fps: f64,
+        orientation: orient::Orientation,
+    ) -> Result<(), SequenceError> {
+        if extension(path).as_deref() == Some("usda") {
+            let failed = |e: usd::UsdError| invalid(path, e.problem);
+            return usd::write_usda(path, self, fps, orientation, None).map_err(failed);
+        }
+        orientation.sequence(self).write(path, format, fps)
     }
 
     /// Frame `t` as a mesh (its colours when the sequence has them). None past the end.
