@@ -75,9 +75,6 @@ pub struct TrackArgs {
 }
 
 pub fn track(args: TrackArgs) -> Result<()> {
-    if !(args.max_distance >= 0.0 && args.max_distance.is_finite()) {
-        bail!("--max-distance {} must be a finite non-negative fraction", args.max_distance);
-    }
     let sequence = MeshSequence::read(&args.sequence).context("cannot read the sequence")?;
     // The outputs' folders are made, as `train` makes OUT.
     for path in [Some(&args.out), args.json.as_ref(), args.usd.as_ref(), args.plot.as_ref()] {

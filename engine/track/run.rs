@@ -35,6 +35,9 @@ pub fn track(
     queries: &Queries,
     max_distance_relative: f64,
 ) -> Result<TrackReport, TrackError> {
+    if !(max_distance_relative >= 0.0 && max_distance_relative.is_finite()) {
+        return Err(TrackError::MaxDistance(max_distance_relative));
+    }
     let frame0 = frames.first().ok_or(SurfaceError::EmptyMesh)?;
     let bvh = SurfaceBvh::build(frame0, faces)?;
     let max_distance = max_distance_relative * bounding_diagonal(frame0);

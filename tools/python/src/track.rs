@@ -95,10 +95,6 @@ pub fn track(
     camera: Option<&Bound<'_, PyAny>>,
     max_distance: f64,
 ) -> PyResult<Tracks> {
-    if !(max_distance >= 0.0 && max_distance.is_finite()) {
-        let message = format!("max_distance {max_distance} must be a finite non-negative fraction");
-        return Err(bad_input(py, message));
-    }
     let queries = queries(py, points, pixels, ids, camera)?;
     let source = match sequence.cast::<Sequence>() {
         Ok(held) => Source::Held(held.get()),
