@@ -178,7 +178,7 @@ fn damaged_sequences_are_clear_errors_naming_the_frame() {
     std::fs::write(folder.join("notes.obj"), "v 0 0 0\n").unwrap();
     assert!(error_of(&folder).contains("keep one kind of frame file"));
     assert!(error_of(&temp_dir("seq-empty")).contains("no .ply or .obj frame files"));
-    assert!(error_of(&dir.join("nothing.glb")).contains("cannot read"));
+    assert!(error_of(&dir.join("nothing.glb")).contains("nothing.glb: no such file or folder"));
 
     // A truncated PC2, a PC2 without its base OBJ, a PC2 of another vertex count.
     let pc2 = dir.join("anim.pc2");
