@@ -171,82 +171,61 @@ fn convert<T: Outcome>(
     result.map_err(|f| to_py(py, f))?.to_dict(py)
 }
 
-/// A training run in progress (from `start_train`): poll it, cancel it, wait for its report.
-/// Dropping it cancels the run.
-#[pyclass(frozen, module = "tagsplat", name = "TrainJob")]
-pub struct TrainJobHandle {
-    handle: Handle<TrainReport>,
+/// A job class for Python: `$name` wraps a `Handle<$outcome>`; `$what` names what it runs in
+/// the docstrings. Python classes cannot be generic, so one macro writes both.
+macro_rules! job_class {
+    ($(#[$doc:meta])* $name:ident, $python:literal, $outcome:ty, $what:literal) => {
+        $(#[$doc])*
+        #[pyclass(frozen, module = "tagsplat", name = $python)]
+        pub struct $name {
+            handle: Handle<$outcome>,
+        }
+
+        #[pymethods]
+        impl $name {
+            #[doc = concat!("The latest progress report; None once the ", $what, " has finished. Never blocks.")]
+            fn poll(&self) -> Option<Progress> {
+                self.handle.poll()
+            }
+
+            #[doc = concat!("Asks the ", $what, " to stop at its next iteration; `wait` then raises CancelledError.")]
+            #[doc = "What a run finished stays in OUT, and the next `train` on OUT resumes after it."]
+            fn cancel(&self) {
+                self.handle.job.cancel()
+            }
+
+            #[doc = concat!("Whether the ", $what, " has finished (done, failed or cancelled).")]
+            #[getter]
+            fn done(&self) -> bool {
+                self.handle.job.is_finished()
+            }
+
+            #[doc = concat!("The latest progress report, also after the ", $what, " finished.")]
+            #[getter]
+            fn progress(&self) -> Progress {
+                self.handle.job.progress().into()
+            }
+
+            #[doc = concat!("Waits for the ", $what, " (at most `timeout` seconds; TimeoutError past it) and")]
+            #[doc = "returns its report as a dict, or raises its error."]
+            #[pyo3(signature = (timeout = None))]
+            fn wait(&self, py: Python<'_>, timeout: Option<f64>) -> PyResult<Py<PyAny>> {
+                self.handle.wait(py, timeout)
+            }
+        }
+    };
 }
 
-/// A fit in progress (from `start_fit`): poll it, cancel it, wait for its report.
-#[pyclass(frozen, module = "tagsplat", name = "FitJob")]
-pub struct FitJobHandle {
-    handle: Handle<FitOutcome>,
-}
-
-#[pymethods]
-impl TrainJobHandle {
-    /// The latest progress report; None once the run has finished. Never blocks.
-    fn poll(&self) -> Option<Progress> {
-        self.handle.poll()
-    }
-
-    /// Asks the run to stop at its next iteration; `wait` then raises CancelledError. The
-    /// frames it finished stay in OUT, and the next `train` on OUT resumes after them.
-    fn cancel(&self) {
-        self.handle.job.cancel()
-    }
-
-    /// Whether the run has finished (done, failed or cancelled).
-    #[getter]
-    fn done(&self) -> bool {
-        self.handle.job.is_finished()
-    }
-
-    /// The latest progress report, also after the run finished.
-    #[getter]
-    fn progress(&self) -> Progress {
-        self.handle.job.progress().into()
-    }
-
-    /// Waits for the run (at most `timeout` seconds; TimeoutError past it) and returns its
-    /// report (the dict of OUT/report.json), or raises its error.
-    #[pyo3(signature = (timeout = None))]
-    fn wait(&self, py: Python<'_>, timeout: Option<f64>) -> PyResult<Py<PyAny>> {
-        self.handle.wait(py, timeout)
-    }
-}
-
-#[pymethods]
-impl FitJobHandle {
-    /// The latest progress report; None once the fit has finished. Never blocks.
-    fn poll(&self) -> Option<Progress> {
-        self.handle.poll()
-    }
-
-    /// Asks the fit to stop at its next iteration; `wait` then raises CancelledError.
-    fn cancel(&self) {
-        self.handle.job.cancel()
-    }
-
-    /// Whether the fit has finished.
-    #[getter]
-    fn done(&self) -> bool {
-        self.handle.job.is_finished()
-    }
-
-    /// The latest progress report, also after the fit finished.
-    #[getter]
-    fn progress(&self) -> Progress {
-        self.handle.job.progress().into()
-    }
-
-    /// Waits for the fit (at most `timeout` seconds) and returns its report, or raises.
-    #[pyo3(signature = (timeout = None))]
-    fn wait(&self, py: Python<'_>, timeout: Option<f64>) -> PyResult<Py<PyAny>> {
-        self.handle.wait(py, timeout)
-    }
-}
+job_class!(
+    /// A training run in progress (from `start_train`): poll it, cancel it, wait for its report.
+    /// Dropping it cancels the run.
+    TrainJobHandle, "TrainJob", TrainReport, "run"
+);
+job_class!(
+    /// A fit in progress (from `start_fit`): poll it, cancel it, wait for its report.
+    /// Dropping it cancels the fit.
+    FitJobHandle, "FitJob", FitOutcome, "fit"
+);
 
 /// Starts training `data` into `out` and returns at once with the job. `config`: a dict or the
 /// path of a TOML file (keys left out take their defaults); `frames`: a range or (a, b), frames
