@@ -38,8 +38,10 @@ pub enum TrackError {
     /// are no frames.
     #[error(transparent)]
     Surface(#[from] SurfaceError),
-    /// The binding tolerance is negative or not finite.
-    #[error("max_distance {0}: must be a finite non-negative fraction of the frame-0 diagonal")]
+    /// The binding tolerance is negative or NaN.
+    #[error(
+        "max_distance {0}: must be a non-negative fraction of the frame-0 diagonal (inf: no limit)"
+    )]
     MaxDistance(f64),
     /// A frame's vertex count differs from frame 0's.
     #[error("frame {frame} has {found} vertices, frame 0 has {expected}")]

@@ -26,16 +26,17 @@ pub enum Queries {
 /// Binds `queries` on frame 0 of the sequence (`faces`, vertex positions per frame) and
 /// returns every bound point's trajectory. A 3D point farther from the surface than
 /// `max_distance_relative` × the frame-0 bounding-box diagonal, a pixel whose ray misses, or a
-/// non-finite query is listed in `unbound`, never snapped.
+/// non-finite query is listed in `unbound`, never snapped. An infinite tolerance binds every
+/// finite point.
 ///
-/// Errors: no frames, an unusable frame-0 mesh, frames of different vertex counts.
+/// Errors: a negative or NaN tolerance, no frames, an unusable frame-0 mesh, frames of different vertex counts.
 pub fn track(
     faces: &[[u32; 3]],
     frames: &[Vec<[f32; 3]>],
     queries: &Queries,
     max_distance_relative: f64,
 ) -> Result<TrackReport, TrackError> {
-    if !(max_distance_relative >= 0.0 && max_distance_relative.is_finite()) {
+    if !(max_distance_relative >= 0.0) {
         return Err(TrackError::MaxDistance(max_distance_relative));
     }
     let frame0 = frames.first().ok_or(SurfaceError::EmptyMesh)?;
