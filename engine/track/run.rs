@@ -36,7 +36,7 @@ pub fn track(
     queries: &Queries,
     max_distance_relative: f64,
 ) -> Result<TrackReport, TrackError> {
-    if !(max_distance_relative >= 0.0) {
+    if max_distance_relative.is_nan() || max_distance_relative < 0.0 {
         return Err(TrackError::MaxDistance(max_distance_relative));
     }
     let frame0 = frames.first().ok_or(SurfaceError::EmptyMesh)?;
