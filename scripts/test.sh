@@ -1,7 +1,6 @@
 #!/usr/bin/env bash
-# Installs what is missing, then runs every test with the Khronos validation layer on, and
-# builds the benchmarks so they at least compile (running them is scripts/bench.sh's job and
-# `cargo bench`'s); then the fronts' tests: the Python package, the C ABI and the Blender
+# Installs what is missing, lints every target (which keeps the benchmarks compiling), then runs
+# every test with the Khronos validation layer on; then the fronts' tests: the Python package, the C ABI and the Blender
 # add-on (each script installs what it needs). Extra arguments go to `cargo test`, e.g.
 # `scripts/test.sh -- --nocapture`.
 set -euo pipefail
@@ -16,14 +15,16 @@ if ! cargo fmt --version >/dev/null 2>&1; then
     rustup component add rustfmt
 fi
 cargo fmt --check
-# Lints too, every target with every feature and the library as embedders build it; a lint that
-# is wrong for a piece of code is allowed there, with the reason beside it.
+# Lints too: every target of the workspace (the engine, the CLI, its tests, benchmarks and
+# examples, the Python and C fronts) with every feature, and the library as embedders build it;
+# a lint that is wrong for a piece of code is allowed there, with the reason beside it. Checking
+# every target is also what keeps the benchmarks compiling (running them is scripts/bench.sh's
+# job and `cargo bench`'s).
 if ! cargo clippy --version >/dev/null 2>&1; then
     rustup component add clippy
 fi
-cargo clippy --all-targets --all-features -- -D warnings
+cargo clippy --workspace --all-targets --all-features -- -D warnings
 cargo clippy --lib --no-default-features -- -D warnings
-cargo clippy -p tagsplat-python -p tagsplat-capi --all-targets -- -D warnings
 
 # Every upload and readback through staging buffers, as on a discrete GPU whose working memory
 # the host cannot see (lavapipe's can be): the whole suite runs that path once. The direct path
@@ -46,11 +47,10 @@ if [[ "${VK_ICD_FILENAMES:-}" == *lvp_icd* ]]; then
 fi
 # The public API's documentation: every public item documented, every intra-doc link resolved.
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --lib
-cargo build --benches --examples
 
-# The fronts, built once in the `fronts` profile (the wheel, the C library and the `tagsplat`
-# program share one engine compile): the Python package (pytest, its stubs against the module),
-# the C ABI (C99 and C++17, leak checkers) and the Blender add-on on the same wheel.
+# The fronts, built in the `test` profile on the engine `cargo test` compiled (the wheel, the C
+# library and the `tagsplat` program share it): the Python package (pytest, its stubs against
+# the module), the C ABI (C99 and C++17, leak checkers) and the Blender add-on on the same wheel.
 bash scripts/test_python.sh
 bash scripts/test_c.sh
 bash scripts/test_blender.sh

@@ -35,4 +35,4 @@ fi
 . scripts/env.sh
 export TAGSPLAT_VALIDATION=1
 blender -b --factory-startup --python-exit-code 1 --python tests/blender/run.py -- \
-    --package-folder "$PWD/$site" --cli "$PWD/target/fronts/tagsplat" "$@"
+    --package-folder "$PWD/$site" --cli "$PWD/target/debug/tagsplat" "$@"

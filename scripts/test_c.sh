@@ -27,9 +27,9 @@ export TAGSPLAT_VALIDATION=1
 # The header is checked, never rewritten, here.
 unset TAGSPLAT_WRITE_HEADER
 
-cargo build --profile fronts -p tagsplat-capi
-cargo build --profile fronts --bin tagsplat
-lib=target/fronts
+cargo build --profile test -p tagsplat-capi
+cargo build --profile test --bin tagsplat
+lib=target/debug
 tagsplat=$lib/tagsplat
 work=target/c-smoke
 rm -rf "$work"

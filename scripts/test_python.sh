@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The Python package's checks: builds the wheel (profile `fronts`, so the engine compiles once
-# for the wheel, the C library and the `tagsplat` program the tests compare against), installs
+# The Python package's checks: builds the wheel (profile `test`, so the engine `cargo test`
+# compiled serves the wheel, the C library and the `tagsplat` program the tests compare against), installs
 # it into a venv of its own, checks the stubs against the module, and runs tests/python.
 # Idempotent: the venv and the builds are reused; run it again after any change.
 #     scripts/test_python.sh [pytest arguments]
@@ -20,8 +20,8 @@ if [ "$(cat "$venv/tools.txt" 2>/dev/null)" != "${tools[*]}" ]; then
     echo "${tools[*]}" >"$venv/tools.txt"
 fi
 
-cargo build --profile fronts --bin tagsplat
-"$venv/bin/maturin" build --profile fronts --manifest-path tools/python/Cargo.toml \
+cargo build --profile test --bin tagsplat
+"$venv/bin/maturin" build --profile test --manifest-path tools/python/Cargo.toml \
     --out target/wheels --interpreter "$venv/bin/python"
 version=$(sed -n 's/^version = "\(.*\)"/\1/p' tools/python/Cargo.toml | head -n 1)
 wheel=$(ls -t target/wheels/tagsplat-"$version"-cp311-abi3-*.whl | head -n 1)
@@ -32,5 +32,5 @@ wheel=$(ls -t target/wheels/tagsplat-"$version"-cp311-abi3-*.whl | head -n 1)
 (cd tests/python && "../../$venv/bin/python" -m mypy.stubtest tagsplat)
 
 . scripts/env.sh
-export TAGSPLAT_VALIDATION=1 TAGSPLAT_CLI="$PWD/target/fronts/tagsplat"
+export TAGSPLAT_VALIDATION=1 TAGSPLAT_CLI="$PWD/target/debug/tagsplat"
 "$venv/bin/python" -m pytest tests/python -q "$@"

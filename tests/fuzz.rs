@@ -29,6 +29,7 @@ use tagsplat::dataset::Dataset;
 use tagsplat::io::image::{write_png, Image};
 use tagsplat::rng::SplitMix64;
 use tagsplat::synth::{generate, SubjectSource, SynthOptions};
+use tagsplat::track::bindings::read_bindings;
 use tagsplat::track::queries::{read_pixels, read_points};
 use tagsplat::train::FitConfig;
 use tagsplat::{FrameFormat, GaussianScene, GroundTruth, MeshSequence, TrainConfig, TriMesh};
@@ -444,6 +445,30 @@ fn readers(scratch: &Path) -> Vec<Reader> {
                 }),
             ],
         },
+        // A two-joint skinned tetrahedron with a morph target and LINEAR rotation, STEP weights
+        // and CUBICSPLINE translation channels, written by hand for this test (CC0).
+        Reader {
+            name: "gltf_animation",
+            read: |d| message(MeshSequence::read(&d.join("anim.glb"))),
+            seeds: vec![vec![SeedFile {
+                path: "anim.glb".into(),
+                bytes: include_bytes!("fuzz_corpus/gltf_animation/seed-anim.glb").to_vec(),
+                kind: Kind::Glb,
+            }]],
+        },
+        // Alembic files Maya wrote through the reference library (tests/formats/data/alembic);
+        // the corpus starts with that library's own hostile test files (BSD 3-clause, see the
+        // README there).
+        Reader {
+            name: "alembic_sequence",
+            read: |d| message(MeshSequence::read(&d.join("anim.abc"))),
+            seeds: [
+                &include_bytes!("formats/data/alembic/animatedCube.abc")[..],
+                &include_bytes!("formats/data/alembic/rotatingCube.abc")[..],
+            ]
+            .map(|abc| vec![binary("anim.abc", abc.to_vec())])
+            .into(),
+        },
         Reader {
             name: "frame_folder",
             read: |d| message(MeshSequence::read(&d.join("frames"))),
@@ -451,6 +476,46 @@ fn readers(scratch: &Path) -> Vec<Reader> {
                 written(&dir("folder_ply"), &by_extension, folder(FrameFormat::Ply)),
                 written(&dir("folder_obj"), &by_extension, folder(FrameFormat::Obj)),
             ],
+        },
+        Reader {
+            name: "mdd_sequence",
+            read: |d| message(MeshSequence::read(&d.join("anim.mdd"))),
+            seeds: {
+                let kind =
+                    |p: &str| Some(if p.ends_with(".mdd") { Kind::Binary } else { Kind::Text });
+                let blender =
+                    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/formats/data/blender");
+                vec![
+                    written(&dir("mdd"), &kind, |d| {
+                        sequence().write(&d.join("anim.mdd"), FrameFormat::Ply, 24.0).unwrap()
+                    }),
+                    written(&dir("mdd_blender"), &kind, |d| {
+                        for ext in ["mdd", "obj"] {
+                            let from = blender.join(format!("strip.{ext}"));
+                            std::fs::copy(from, d.join(format!("anim.{ext}"))).unwrap();
+                        }
+                    }),
+                ]
+            },
+        },
+        Reader {
+            name: "fbx_sequence",
+            read: |d| {
+                let options = tagsplat::sequence::ReadOptions {
+                    mesh: Some("Strip".into()),
+                    ..Default::default()
+                };
+                message(MeshSequence::read_with(&d.join("anim.fbx"), &options))
+            },
+            // Blender's skinned strip with a shape key (tests/formats/data/blender/README.md).
+            seeds: vec![vec![binary(
+                "anim.fbx",
+                std::fs::read(
+                    Path::new(env!("CARGO_MANIFEST_DIR"))
+                        .join("tests/formats/data/blender/strip.fbx"),
+                )
+                .unwrap(),
+            )]],
         },
         Reader {
             name: "camera_json",
@@ -461,6 +526,21 @@ fn readers(scratch: &Path) -> Vec<Reader> {
             name: "points_csv",
             read: |d| message(read_points(&d.join("points.csv"))),
             seeds: vec![vec![text("points.csv", POINTS_CSV)]],
+        },
+        Reader {
+            name: "bindings_csv",
+            // Read, then checked against the tetrahedron (4 triangles, the first two one polygon).
+            read: |d| {
+                let mesh = tetrahedron(0.0);
+                message(read_bindings(&d.join("bindings.csv")).and_then(|b| {
+                    b.resolve(&mesh.faces, mesh.positions.len(), Some(&[0, 0, 1, 2]))
+                }))
+            },
+            seeds: vec![vec![text(
+                "bindings.csv",
+                "# tetrahedron\nid,face,u,v,w,vertex,polygon\nmid,1,0.25,0.25,0.5,,0\n\
+                 corner,,,,,3,\nedge,3,0.5,0.5,0,,2\n",
+            )]],
         },
         Reader {
             name: "pixels_csv",

@@ -333,14 +333,14 @@ fn cli_tracks_points_of_a_folder_sequence_into_csv_json_and_png() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let tracks = std::fs::read_to_string(dir.join("tracks.csv")).unwrap();
     let mut lines = tracks.lines();
-    assert_eq!(lines.next(), Some("id,frame,x,y,z"));
+    assert_eq!(lines.next(), Some("id,frame,x,y,z,nx,ny,nz,tx,ty,tz,time,fps,start_frame"));
     let rows: Vec<Vec<String>> =
         lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
     assert_eq!(rows.len(), 3 * 6);
     for row in &rows {
         let v: usize = row[0].trim_start_matches("vertex").parse().unwrap();
         let t: usize = row[1].parse().unwrap();
-        let xyz: Vec<f64> = row[2..].iter().map(|s| s.parse().unwrap()).collect();
+        let xyz: Vec<f64> = row[2..5].iter().map(|s| s.parse().unwrap()).collect();
         assert_eq!(xyz, seq.frames[t][v].map(f64::from).to_vec(), "vertex {v} frame {t}");
     }
     let json: serde_json::Value =
@@ -605,5 +605,308 @@ fn track_cli_draws_the_points_over_the_cameras_images() {
         }
     }
     assert!(checked >= 3, "only {checked} visible points lie apart from the others");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A triangle turning about a tilted axis and moving: its corners at frame t are R(t)·p + c(t).
+fn turning_triangle(t: f64) -> (glam::DMat3, [DVec3; 3]) {
+    let rotation = glam::DMat3::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.4 * t);
+    let corners = [[0.3, -0.2, 0.1], [1.2, 0.4, -0.3], [-0.1, 0.9, 0.5]]
+        .map(|p| rotation * DVec3::from(p) + DVec3::new(0.2 * t, -0.1 * t, 0.05 * t * t));
+    (rotation, corners)
+}
+
+#[test]
+fn orientation_frames_of_a_turning_triangle_follow_its_rotation() {
+    let frames: Vec<Vec<[f32; 3]>> = (0..12)
+        .map(|t| turning_triangle(t as f64).1.iter().map(|p| p.as_vec3().to_array()).collect())
+        .collect();
+    let given = vec![(
+        "p".to_string(),
+        tagsplat::track::Binding { face: 0, barycentric: [0.2, 0.3, 0.5], distance: 0.0 },
+    )];
+    let report = track(&[[0, 1, 2]], &frames, &Queries::Bindings(given), 0.0).unwrap();
+    let point = &report.points[0];
+    assert!(point.orientation_held.is_empty());
+    // The analytic frame: R(t) applied to frame 0's normal and first edge, in f64 from the
+    // unrounded corners; the tracked one comes from f32 corners.
+    let [p0, p1, p2] = turning_triangle(0.0).1;
+    let (normal0, tangent0) = ((p1 - p0).cross(p2 - p0).normalize(), (p1 - p0).normalize());
+    let mut worst: f64 = 0.0;
+    for t in 0..frames.len() {
+        let (rotation, _) = turning_triangle(t as f64);
+        let (normal, tangent) = (DVec3::from(point.normal[t]), DVec3::from(point.tangent[t]));
+        worst = worst
+            .max(normal.distance(rotation * normal0))
+            .max(tangent.distance(rotation * tangent0));
+        assert!((normal.length() - 1.0).abs() < 1e-15 && normal.dot(tangent).abs() < 1e-15);
+        // The quaternion takes X, Y, Z to tangent, normal × tangent, normal.
+        let q = glam::DQuat::from_array(point.surface_frame(t).unwrap().rotation());
+        assert!((q * DVec3::X).distance(tangent) < 1e-14, "frame {t}");
+        assert!((q * DVec3::Y).distance(normal.cross(tangent)) < 1e-14, "frame {t}");
+        assert!((q * DVec3::Z).distance(normal) < 1e-14, "frame {t}");
+    }
+    // f32 corners of size ~1 move the normal by a few f32 epsilons.
+    assert!(worst < 1e-6, "{worst}");
+    eprintln!("largest orientation difference from the analytic rotation: {worst:e}");
+}
+
+#[test]
+fn a_triangle_that_collapses_holds_its_last_orientation_without_nan() {
+    let triangle =
+        |squash: f32| vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, squash, 1.0 - squash]];
+    let frames = vec![triangle(1.0), triangle(0.5), [[0.0; 3]; 3].to_vec(), triangle(1.0)];
+    let given = vec![(
+        "p".to_string(),
+        tagsplat::track::Binding { face: 0, barycentric: [1.0, 0.0, 0.0], distance: 0.0 },
+    )];
+    let report = track(&[[0, 1, 2]], &frames, &Queries::Bindings(given), 0.0).unwrap();
+    let point = &report.points[0];
+    assert_eq!(point.orientation_held, [2]);
+    assert_eq!((point.normal[2], point.tangent[2]), (point.normal[1], point.tangent[1]));
+    assert!(point.normal.iter().chain(&point.tangent).flatten().all(|c| c.is_finite()));
+}
+
+/// The bindings of `report`, written and read back, on a sequence of `faces` and `vertices`.
+fn bindings_round_trip(
+    dir: &Path,
+    report: &tagsplat::track::TrackReport,
+    faces: &[[u32; 3]],
+    vertices: usize,
+    polygon_of: Option<&[u32]>,
+) -> Vec<(String, tagsplat::track::Binding)> {
+    use tagsplat::track::bindings::{read_bindings, write_bindings_csv};
+    let path = dir.join("bindings.csv");
+    write_bindings_csv(&path, &report.points).unwrap();
+    read_bindings(&path).unwrap().resolve(faces, vertices, polygon_of).unwrap()
+}
+
+#[test]
+fn bindings_written_then_read_give_identical_trajectories_on_every_sequence_of_the_mesh() {
+    let dir = temp_dir("bindings-round-trip");
+    let (bent, moved) = (sequence(3, 8, bend), sequence(3, 5, affine));
+    assert_eq!(bent.faces, moved.faces, "two sequences of one mesh");
+    let mut rng = SplitMix64::new(5);
+    let points: Vec<(String, [f64; 3])> =
+        (0..200).map(|i| (format!("p{i}"), (random_in_cube(&mut rng) * 1.2).to_array())).collect();
+    let first = track(&bent.faces, &bent.frames, &Queries::Points(points), f64::INFINITY).unwrap();
+    let vertices = bent.frames[0].len();
+    let given = bindings_round_trip(&dir, &first, &bent.faces, vertices, None);
+    let again = track(&bent.faces, &bent.frames, &Queries::Bindings(given.clone()), 0.0).unwrap();
+    for (a, b) in first.points.iter().zip(&again.points) {
+        assert_eq!(
+            (&a.id, a.binding.face, a.binding.barycentric),
+            (&b.id, b.binding.face, b.binding.barycentric)
+        );
+        assert_eq!((&a.trajectory, &a.normal, &a.tangent), (&b.trajectory, &b.normal, &b.tangent));
+    }
+    // On the other sequence, every frame's position is Σ bₖ·vₖ(t), summed here in f64.
+    let other = track(&moved.faces, &moved.frames, &Queries::Bindings(given), 0.0).unwrap();
+    for point in &other.points {
+        let face = moved.faces[point.binding.face as usize];
+        for (t, frame) in moved.frames.iter().enumerate() {
+            let mut expected = [0.0; 3];
+            for (k, &v) in face.iter().enumerate() {
+                for (e, &c) in expected.iter_mut().zip(&frame[v as usize]) {
+                    *e += point.binding.barycentric[k] * f64::from(c);
+                }
+            }
+            let got = point.trajectory[t];
+            assert!(
+                (0..3).all(|c| (got[c] - expected[c]).abs() <= 1e-15),
+                "{} frame {t}",
+                point.id
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_vertex_binding_tracks_that_vertex_exactly() {
+    let dir = temp_dir("vertex-bindings");
+    let seq = sequence(2, 6, bend);
+    let vertices = seq.frames[0].len();
+    let rows: String = (0..vertices).map(|v| format!("v{v},{v}\n")).collect();
+    std::fs::write(dir.join("vertices.csv"), format!("id,vertex\n{rows}")).unwrap();
+    let file = tagsplat::track::bindings::read_bindings(&dir.join("vertices.csv")).unwrap();
+    let given = file.resolve(&seq.faces, vertices, None).unwrap();
+    let report = track(&seq.faces, &seq.frames, &Queries::Bindings(given), 0.0).unwrap();
+    assert_eq!(report.points.len(), vertices);
+    for (v, point) in report.points.iter().enumerate() {
+        for (t, frame) in seq.frames.iter().enumerate() {
+            assert_eq!(point.trajectory[t], frame[v].map(f64::from), "vertex {v} frame {t}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bindings_on_a_polygon_mesh_name_their_polygon_and_refuse_another_fanning() {
+    use tagsplat::sequence::SourceSequence;
+    let dir = temp_dir("polygon-bindings");
+    // Three quads in a row (a 4 × 2 grid of vertices), each fanned into two triangles.
+    let grid: Vec<[f32; 3]> = (0..8).map(|i| [(i % 4) as f32, (i / 4) as f32, 0.0]).collect();
+    let source = SourceSequence {
+        counts: vec![4, 4, 4],
+        indices: vec![0, 1, 5, 4, 1, 2, 6, 5, 2, 3, 7, 6],
+        frames: vec![grid.clone(), grid.iter().map(|p| [p[0], p[1], p[0] * p[1]]).collect()],
+        times: vec![0.0, 0.5],
+        ..SourceSequence::default()
+    };
+    let (seq, info) = source.into_sequence().unwrap();
+    let polygon_of = info.polygon_of.unwrap();
+    assert_eq!(polygon_of, [0, 0, 1, 1, 2, 2]);
+    // A point inside each quad, on either of its triangles.
+    let points = (0..3).map(|q| (format!("quad{q}"), [q as f64 + 0.7, 0.4, 0.0])).collect();
+    let report = track(&seq.faces, &seq.frames, &Queries::Points(points), 0.0)
+        .unwrap()
+        .in_polygons(&polygon_of)
+        .unwrap();
+    assert_eq!(report.points.iter().map(|p| p.polygon).collect::<Vec<_>>(), [0, 1, 2]);
+    let given = bindings_round_trip(&dir, &report, &seq.faces, 8, Some(&polygon_of));
+    assert_eq!(given.len(), 3);
+    // Read as if the triangles were the file's faces, the polygon column disagrees.
+    let file = tagsplat::track::bindings::read_bindings(&dir.join("bindings.csv")).unwrap();
+    let error = file.resolve(&seq.faces, 8, None).unwrap_err().to_string();
+    assert!(
+        error.contains("bindings.csv: line 3: ") && error.contains("not in polygon 1"),
+        "{error}"
+    );
+    assert!(report.in_polygons(&[0, 0]).is_err(), "a map of the wrong length");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Runs the Khronos glTF validator on `path` when it is installed (scripts/setup.sh); without
+/// it the check says SKIPPED, and fails in CI. (tests/sequence.rs runs the same check.)
+fn validate_gltf(path: &Path) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let installed =
+        root.join(".tools/gltf-validator/node_modules/gltf-validator/package.json").is_file();
+    let node = std::process::Command::new("node").arg("--version").output();
+    if !(installed && node.is_ok_and(|o| o.status.success())) {
+        let why = "node or .tools/gltf-validator is missing (run scripts/setup.sh)";
+        common::skipped(&format!("the Khronos glTF validator on {}", path.display()), why);
+        return;
+    }
+    let out = std::process::Command::new("node")
+        .arg(root.join("scripts/validate_gltf.cjs"))
+        .arg(path)
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&out.stdout);
+    eprintln!("glTF validator: {report}");
+    assert!(out.status.success(), "the glTF validator rejects {}: {report}", path.display());
+    let json: serde_json::Value = serde_json::from_str(report.trim()).unwrap();
+    assert_eq!((json["errors"].as_u64(), json["warnings"].as_u64()), (Some(0), Some(0)));
+}
+
+/// The JSON chunk of a GLB and the floats of its accessor `index` (tightly packed).
+fn glb_floats(bytes: &[u8], index: usize) -> (serde_json::Value, Vec<f32>) {
+    let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+    let json_length = word(12);
+    let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_length]).unwrap();
+    let bin = &bytes[20 + json_length + 8..];
+    let accessor = &json["accessors"][index];
+    let view = &json["bufferViews"][accessor["bufferView"].as_u64().unwrap() as usize];
+    let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let length = view["byteLength"].as_u64().unwrap() as usize;
+    let floats = bin[start..start + length]
+        .chunks(4)
+        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    (json, floats)
+}
+
+#[test]
+fn cli_writes_oriented_tracks_a_valid_pins_glb_and_bindings_that_track_the_same() {
+    let dir = temp_dir("cli-pins");
+    let seq = sequence(3, 6, bend);
+    seq.write_folder(&dir.join("frames"), tagsplat::sequence::FrameFormat::Ply).unwrap();
+    std::fs::write(
+        dir.join("points.csv"),
+        "id,x,y,z\nside,1,0,0\nmid,0.3769,0.3769,0.3769\nfront,0,0,0.5\n",
+    )
+    .unwrap();
+    let (glb, bindings) = (dir.join("pins.glb"), dir.join("bindings.csv"));
+    let out = track_cli(
+        &dir,
+        &dir,
+        ["--glb".as_ref(), glb.as_os_str(), "--bindings-out".as_ref(), bindings.as_os_str()],
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("tracks.json")).unwrap()).unwrap();
+    assert_eq!((json["fps"].as_f64(), json["start_frame"].as_f64()), (Some(24.0), Some(0.0)));
+    let tracks = std::fs::read_to_string(dir.join("tracks.csv")).unwrap();
+    let mut lines = tracks.lines();
+    assert_eq!(lines.next(), Some("id,frame,x,y,z,nx,ny,nz,tx,ty,tz,time,fps,start_frame"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 3 * 6);
+    for row in &rows {
+        let point = json["points"].as_array().unwrap().iter().find(|p| p["id"] == row[0]).unwrap();
+        let t: usize = row[1].parse().unwrap();
+        let number = |k: usize| row[k].parse::<f64>().unwrap();
+        for (column, field) in [(2, "trajectory"), (5, "normal"), (8, "tangent")] {
+            let expected: Vec<f64> = (0..3).map(|c| point[field][t][c].as_f64().unwrap()).collect();
+            assert_eq!((column..column + 3).map(number).collect::<Vec<_>>(), expected);
+        }
+        assert_eq!((number(11), number(12), number(13)), (t as f64 / 24.0, 24.0, 0.0));
+        assert_eq!(point["polygon"], point["face"], "a triangle mesh's polygons are its faces");
+    }
+    // The GLB: valid, one node per point named by its id, keyed at every frame's time with the
+    // CSV's positions (as f32) and rotations that take Z to the normal.
+    validate_gltf(&glb);
+    let bytes = std::fs::read(&glb).unwrap();
+    let (gltf, times) = glb_floats(&bytes, 0);
+    assert_eq!(times, (0..6).map(|t| (t as f64 / 24.0) as f32).collect::<Vec<_>>());
+    let names: Vec<&str> =
+        gltf["nodes"].as_array().unwrap().iter().map(|n| n["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["side", "mid", "front"]);
+    for (n, point) in json["points"].as_array().unwrap().iter().enumerate() {
+        let (_, translations) = glb_floats(&bytes, 1 + 2 * n);
+        let (_, rotations) = glb_floats(&bytes, 2 + 2 * n);
+        for t in 0..6 {
+            let position: Vec<f32> =
+                (0..3).map(|c| point["trajectory"][t][c].as_f64().unwrap() as f32).collect();
+            assert_eq!(translations[3 * t..3 * t + 3], position[..]);
+            let q = glam::Quat::from_slice(&rotations[4 * t..4 * t + 4]).as_dquat();
+            let normal = DVec3::new(
+                point["normal"][t][0].as_f64().unwrap(),
+                point["normal"][t][1].as_f64().unwrap(),
+                point["normal"][t][2].as_f64().unwrap(),
+            );
+            assert!((q * DVec3::Z).distance(normal) < 1e-6, "{} frame {t}", point["id"]);
+        }
+    }
+    // The bindings written back track the same: the same CSV byte for byte.
+    let again = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+        .args(["track", "--sequence"])
+        .arg(dir.join("frames"))
+        .arg("--bindings")
+        .arg(&bindings)
+        .arg("--out")
+        .arg(dir.join("again.csv"))
+        .output()
+        .unwrap();
+    assert!(again.status.success(), "{}", String::from_utf8_lossy(&again.stderr));
+    assert_eq!(std::fs::read_to_string(dir.join("again.csv")).unwrap(), tracks);
+    // A binding off the mesh names the file, the line and the problem.
+    std::fs::write(&bindings, "id,face,u,v,w\nok,0,1,0,0\nfar,99999,1,0,0\n").unwrap();
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+        .args(["track", "--sequence"])
+        .arg(dir.join("frames"))
+        .arg("--bindings")
+        .arg(&bindings)
+        .arg("--out")
+        .arg(dir.join("again.csv"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        !bad.status.success()
+            && stderr.contains("bindings.csv: line 3: face 99999 is out of range"),
+        "{stderr}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

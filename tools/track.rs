@@ -7,25 +7,45 @@ use tagsplat::camera::Camera;
 use tagsplat::dataset::Dataset;
 use tagsplat::io::image::write_png;
 use tagsplat::sequence::orient::{Orientation, SignedAxis, UpAxis};
+use tagsplat::sequence::source::CLOCKLESS_FPS;
 use tagsplat::sequence::usd::{write_usda, UsdTracks};
-use tagsplat::sequence::{FrameFormat, MeshSequence};
+use tagsplat::sequence::{FrameFormat, MeshSequence, ReadOptions, SequenceInfo};
 use tagsplat::track::bench::{bench_track, TrackBenchReport};
+use tagsplat::track::bindings::{read_bindings, write_bindings_csv};
 use tagsplat::track::output::{
-    write_image_tracks_csv, write_report_json, write_tracks_csv, write_unbound_csv,
+    write_image_tracks_csv, write_pinned_tracks_csv, write_report_json, write_unbound_csv,
 };
 use tagsplat::track::overlay::{draw_marks, mark_colour, mark_radius, rgb_of, Mark};
+use tagsplat::track::pins::write_pins_glb;
 use tagsplat::track::plot::write_plot;
 use tagsplat::track::queries::{read_pixels, read_points};
-use tagsplat::track::{project_tracks, track as track_sequence, ImagePoint, Queries, TrackReport};
+use tagsplat::track::{
+    project_tracks, track as track_sequence, Clock, ImagePoint, Queries, TrackReport,
+};
 
 #[derive(Args)]
 pub struct TrackArgs {
-    /// The sequence: a folder of .ply/.obj frames, a .pc2 (with its .obj beside it) or a .glb.
+    /// The sequence (any form `tagsplat convert` reads).
     #[arg(long)]
     sequence: PathBuf,
+    #[command(flatten)]
+    read: ReadArgs,
     /// Frame-0 points to track: CSV with header `id,x,y,z`.
-    #[arg(long, required_unless_present = "pixels", conflicts_with = "pixels")]
+    #[arg(
+        long,
+        required_unless_present_any = ["pixels", "bindings"],
+        conflicts_with_all = ["pixels", "bindings"]
+    )]
     points: Option<PathBuf>,
+    /// Points bound already, instead of --points or --pixels: CSV `id,face,u,v,w` (barycentric
+    /// on a triangle of the sequence) or `id,vertex`, as --bindings-out writes them (one
+    /// binding serves every sequence of the same mesh).
+    #[arg(long, conflicts_with = "pixels")]
+    bindings: Option<PathBuf>,
+    /// Also write the bindings used: CSV `id,face,u,v,w,polygon` (polygon: the file's face the
+    /// triangle was fanned from), which --bindings reads.
+    #[arg(long)]
+    bindings_out: Option<PathBuf>,
     /// Pixels to track: CSV with header `id,u,v` (pixel (i, j) is centred at (i+0.5, j+0.5)),
     /// ray-cast onto frame 0 through --camera.
     #[arg(long, requires = "camera")]
@@ -45,18 +65,23 @@ pub struct TrackArgs {
     /// where the camera sees it and a ring where the frame's surface hides it.
     #[arg(long, requires = "data")]
     overlay: Option<PathBuf>,
-    /// Trajectories out: CSV `id,frame,x,y,z`.
+    /// Trajectories out: CSV `id,frame,x,y,z,nx,ny,nz,tx,ty,tz,time,fps,start_frame`: per point
+    /// per frame its position, the bound triangle's normal and tangent (its first edge), the
+    /// time in seconds, the frame rate and the scene frame of frame 0.
     #[arg(long)]
     out: PathBuf,
-    /// Also write a JSON report: bindings (face, barycentric, distance) and trajectories.
+    /// Also write a JSON report: the clock (fps, start_frame, times), bindings (face,
+    /// barycentric, distance, polygon), trajectories, normals and tangents.
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Also write the tracks as a GLB of animated empty nodes, one per point named by its id,
+    /// translated and rotated by its position and orientation frame at every frame's time
+    /// (+Y up: turned from --from-up, else the file's up, else --up).
+    #[arg(long)]
+    glb: Option<PathBuf>,
     /// Also write the sequence with the tracked points as USD (time-sampled mesh and points).
     #[arg(long)]
     usd: Option<PathBuf>,
-    /// Frames per second of the --usd file.
-    #[arg(long, default_value_t = 24.0)]
-    fps: f64,
     /// Up axis of the --usd file.
     #[command(flatten)]
     up: UpArgs,
@@ -75,9 +100,10 @@ pub struct TrackArgs {
 }
 
 pub fn track(args: TrackArgs) -> Result<()> {
-    let sequence = MeshSequence::read(&args.sequence).context("cannot read the sequence")?;
+    let (sequence, info) = args.read.read(&args.sequence)?;
     // The outputs' folders are made, as `train` makes OUT.
-    for path in [Some(&args.out), args.json.as_ref(), args.usd.as_ref(), args.plot.as_ref()] {
+    let outputs = [&args.json, &args.usd, &args.plot, &args.glb, &args.bindings_out];
+    for path in std::iter::once(Some(&args.out)).chain(outputs.map(Option::as_ref)) {
         if let Some(folder) = path.and_then(|p| p.parent()).filter(|f| !f.as_os_str().is_empty()) {
             std::fs::create_dir_all(folder)
                 .with_context(|| format!("cannot create the folder {}", folder.display()))?;
@@ -93,23 +119,36 @@ pub fn track(args: TrackArgs) -> Result<()> {
         (None, None) => None,
     };
     let queries = match (&args.points, &args.pixels, &camera) {
+        _ if args.bindings.is_some() => given_bindings(&args, &sequence, &info)?,
         (Some(points), _, _) => Queries::Points(read_points(points)?),
         (None, Some(pixels), Some(camera)) => {
             Queries::Pixels { camera: *camera, pixels: read_pixels(pixels)? }
         }
-        _ => bail!("give --points, or --pixels with --camera"),
+        _ => bail!("give --points, --bindings, or --pixels with --camera"),
     };
+    let on = || format!("cannot track on {}", args.sequence.display());
     let report = track_sequence(&sequence.faces, &sequence.frames, &queries, args.max_distance)
-        .with_context(|| format!("cannot track on {}", args.sequence.display()))?;
+        .with_context(on)?;
+    let report = match &info.polygon_of {
+        Some(polygon_of) => report.in_polygons(polygon_of).with_context(on)?,
+        None => report,
+    };
+    let clock = Clock::of(&info, sequence.frames.len()).with_context(on)?;
     if report.unbound.is_empty() {
         // A list from an earlier run would describe points that are now tracked.
         let _ = std::fs::remove_file(unbound_path(&args.out));
     } else {
         report_unbound(&args, &queries, &report)?;
     }
-    write_tracks_csv(&args.out, &report.points)?;
+    write_pinned_tracks_csv(&args.out, &report.points, &clock)?;
     if let Some(json) = &args.json {
-        write_report_json(json, &report)?;
+        write_report_json(json, &report, &clock)?;
+    }
+    if let Some(glb) = &args.glb {
+        write_pins_glb(glb, &report.points, &clock, args.up.gltf_orientation(info.up))?;
+    }
+    if let Some(path) = &args.bindings_out {
+        write_bindings_csv(path, &report.points)?;
     }
     if let Some(camera) = &camera {
         let seen = project_tracks(&sequence.faces, &sequence.frames, &report.points, camera)?;
@@ -122,7 +161,7 @@ pub fn track(args: TrackArgs) -> Result<()> {
         let ids: Vec<String> = report.points.iter().map(|p| p.id.clone()).collect();
         let trajectories: Vec<_> = report.points.iter().map(|p| p.trajectory.clone()).collect();
         let tracks = UsdTracks { ids: &ids, trajectories: &trajectories };
-        write_usda(usd, &sequence, args.fps, args.up.orientation(), Some(&tracks))?;
+        write_usda(usd, &sequence, clock.fps, args.up.orientation(info.up), Some(&tracks))?;
     }
     if let Some(plot) = &args.plot {
         let paths: Vec<Vec<glam::DVec3>> = report
@@ -158,7 +197,7 @@ fn report_unbound(args: &TrackArgs, queries: &Queries, report: &TrackReport) -> 
                 " (farther than --max-distance {} x the frame-0 extent = {})",
                 args.max_distance, report.max_distance
             ),
-            Queries::Pixels { .. } => String::new(),
+            Queries::Pixels { .. } | Queries::Bindings(_) => String::new(),
         };
         bail!(
             "{} of {total} points not bound{hint}; --strict refuses the run",
@@ -174,6 +213,22 @@ fn report_unbound(args: &TrackArgs, queries: &Queries, report: &TrackReport) -> 
         listed.display()
     );
     Ok(())
+}
+
+/// The points of `--bindings`, checked against the sequence read.
+fn given_bindings(
+    args: &TrackArgs,
+    sequence: &MeshSequence,
+    info: &SequenceInfo,
+) -> Result<Queries> {
+    let path = args.bindings.as_deref().context("no --bindings")?;
+    let vertices = sequence.frames.first().map_or(0, Vec::len);
+    let resolved =
+        read_bindings(path)?.resolve(&sequence.faces, vertices, info.polygon_of.as_deref());
+    Ok(Queries::Bindings(
+        resolved
+            .with_context(|| format!("cannot use the bindings on {}", args.sequence.display()))?,
+    ))
 }
 
 /// The dataset at `data` and the index of its camera called `name`; the error lists the names
@@ -243,6 +298,8 @@ pub struct ConvertArgs {
     /// The sequence to read: a folder of .ply/.obj frames, a .pc2 (with its .obj) or a .glb.
     #[arg(long)]
     sequence: PathBuf,
+    #[command(flatten)]
+    read: ReadArgs,
     /// Where to write: FILE.pc2 (plus FILE.obj), FILE.glb, FILE.usda, or a folder (created;
     /// must hold no frame files yet).
     #[arg(long)]
@@ -250,11 +307,49 @@ pub struct ConvertArgs {
     /// Frame file format when writing a folder.
     #[arg(long, value_enum, default_value = "ply")]
     frame_format: FrameFormatArg,
-    /// Frames per second of the .glb or .usda animation.
-    #[arg(long, default_value_t = 24.0)]
-    fps: f64,
     #[command(flatten)]
     up: UpArgs,
+}
+
+/// What to read from a sequence file that holds more than one thing.
+#[derive(Args)]
+pub struct ReadArgs {
+    /// glTF or FBX: the animation (take) to play, by name or index. A file with several needs
+    /// one; the error lists them.
+    #[arg(long)]
+    animation: Option<String>,
+    /// Frames per second: the rate a glTF or FBX animation is sampled at (default its key rate,
+    /// else 30), or the clock of a folder or PC2 (default 24). Files with their own time samples
+    /// (USD, Alembic, MDD) keep them.
+    #[arg(long)]
+    fps: Option<f64>,
+    /// The mesh to read from a file that holds several: a USD prim path, an Alembic object
+    /// path, a glTF or FBX node name. The error for a file with several lists them.
+    #[arg(long, alias = "prim")]
+    mesh: Option<String>,
+}
+
+impl ReadArgs {
+    /// Reads `path` with these options, and says on stderr what the reader chose or noticed.
+    fn read(&self, path: &Path) -> Result<(MeshSequence, SequenceInfo)> {
+        let options = ReadOptions {
+            animation: self.animation.clone(),
+            fps: self.fps,
+            mesh: self.mesh.clone(),
+        };
+        let (sequence, info) =
+            MeshSequence::read_with(path, &options).context("cannot read the sequence")?;
+        for note in &info.notes {
+            eprintln!("{}: {note}", path.display());
+        }
+        if let Some(meters) = info.meters_per_unit.filter(|&m| m != 1.0) {
+            eprintln!(
+                "{}: one unit is {meters} m (positions are kept in file units)",
+                path.display()
+            );
+        }
+        Ok((sequence, info))
+    }
 }
 
 /// The up axis of a written sequence, and the input's, turned onto it.
@@ -264,15 +359,25 @@ pub struct UpArgs {
     #[arg(long, value_enum, default_value = "y")]
     up: UpArg,
     /// The input's up (+x, -x, +y, -y, +z or -z), turned onto --up by quarter turns. Default:
-    /// --up itself, so positions are written as read.
+    /// the up axis the file declares (USD, FBX, glTF), else --up itself, so positions are
+    /// written as read.
     #[arg(long, value_parser = parse_signed_axis, allow_hyphen_values = true)]
     from_up: Option<SignedAxis>,
 }
 
 impl UpArgs {
-    fn orientation(&self) -> Orientation {
+    /// The turn onto --up from --from-up, else from the file's own up (`file_up`), else none.
+    fn orientation(&self, file_up: Option<SignedAxis>) -> Orientation {
         let up = UpAxis::from(self.up);
-        self.from_up.map_or(Orientation::keep(up), |source| Orientation::new(source, up))
+        self.from_up
+            .or(file_up)
+            .map_or(Orientation::keep(up), |source| Orientation::new(source, up))
+    }
+
+    /// The turn onto glTF's +Y from --from-up, else the file's own up, else --up (the capture's
+    /// up that [`Self::orientation`] turns onto --up).
+    fn gltf_orientation(&self, file_up: Option<SignedAxis>) -> Orientation {
+        Orientation::new(self.orientation(file_up).source, UpAxis::Y)
     }
 }
 
@@ -296,14 +401,14 @@ impl From<UpArg> for UpAxis {
 }
 
 pub fn convert(args: ConvertArgs) -> Result<()> {
-    let sequence = MeshSequence::read(&args.sequence).context("cannot read the sequence")?;
+    let (sequence, info) = args.read.read(&args.sequence)?;
     let format = match args.frame_format {
         FrameFormatArg::Ply => FrameFormat::Ply,
         FrameFormatArg::Obj => FrameFormat::Obj,
     };
-    let orientation = args.up.orientation();
+    let orientation = args.up.orientation(info.up);
     sequence
-        .export(&args.to, format, args.fps, orientation)
+        .export(&args.to, format, info.fps.unwrap_or(CLOCKLESS_FPS), orientation)
         .context("cannot write the sequence")?;
     println!(
         "{} frames, {} vertices, {} faces -> {}",

@@ -81,13 +81,18 @@ pub fn guard<T>(work: impl FnOnce() -> Result<T, Failure>) -> Result<T, Failure>
 
 /// The failure a panic's payload describes.
 pub(crate) fn panicked(payload: &(dyn std::any::Any + Send)) -> Failure {
-    let what = payload
+    let what = panic_text(payload);
+    let message = format!("internal error (a bug in tagsplat, please report it): {what}");
+    Failure { kind: ErrorKind::Internal, message }
+}
+
+/// The message a panic's payload carries ("no message" when it is not text).
+pub(crate) fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
         .downcast_ref::<&str>()
         .map(|s| s.to_string())
         .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "no message".into());
-    let message = format!("internal error (a bug in tagsplat, please report it): {what}");
-    Failure { kind: ErrorKind::Internal, message }
+        .unwrap_or_else(|| "no message".into())
 }
 
 /// `error`, then each of its sources.

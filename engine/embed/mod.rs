@@ -10,7 +10,7 @@
 
 mod dataset_info;
 mod evaluate;
-mod failure;
+pub(crate) mod failure;
 mod job;
 
 pub use dataset_info::{CameraInfo, DatasetInfo};

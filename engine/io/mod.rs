@@ -3,13 +3,16 @@
 //! - [`ply`]: generic PLY (ascii and binary in, binary little-endian out).
 //! - [`image`]: PNG / EXR as float arrays.
 //! - [`host`]: work spread over the host's threads, the process's peak memory.
-//! - [`pc2`]: the point-cache container; [`trajectories`]: the trajectory CSV.
+//! - [`pc2`] and [`mdd`]: the point-cache containers; [`trajectories`]: the trajectory CSV.
+//! - [`ogawa`]: the container of Alembic files.
 //! - [`write_atomically`]: every output goes to a temporary name and is renamed into place, so a
 //!   crash never leaves a half-written file behind.
 
 pub mod host;
 pub mod image;
 pub mod lock;
+pub mod mdd;
+pub mod ogawa;
 pub mod pc2;
 pub mod plot;
 pub mod ply;

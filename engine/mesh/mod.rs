@@ -3,6 +3,7 @@
 
 mod bounds;
 pub mod obj;
+pub mod polygon;
 
 pub use bounds::{bounding_box, bounding_diagonal};
 
@@ -83,7 +84,7 @@ impl TriMesh {
             Some(face) => {
                 let property =
                     if face.has("vertex_indices") { "vertex_indices" } else { "vertex_index" };
-                fan_triangles(path, &face.lists_u32(property)?)?
+                fan_triangles(path, &face.lists_u32(property)?, vertex.len())?
             }
             None => Vec::new(),
         };
@@ -112,18 +113,15 @@ impl TriMesh {
     }
 }
 
-/// Polygons as triangle fans (v0, vi, vi+1); a polygon of fewer than 3 vertices is an error.
-fn fan_triangles(path: &Path, polygons: &[Vec<u32>]) -> Result<Vec<[u32; 3]>, MeshError> {
-    let mut faces = Vec::with_capacity(polygons.len());
-    for (f, polygon) in polygons.iter().enumerate() {
-        if polygon.len() < 3 {
-            return Err(MeshError::Invalid {
-                path: path.to_path_buf(),
-                problem: format!("face {f} has {} vertices", polygon.len()),
-            });
-        }
-        faces.extend(polygon.windows(2).skip(1).map(|w| [polygon[0], w[0], w[1]]));
-    }
+/// Polygons as triangle fans ([`polygon::fan_triangulate`]), every index below `vertices`.
+fn fan_triangles(
+    path: &Path,
+    polygons: &[Vec<u32>],
+    vertices: usize,
+) -> Result<Vec<[u32; 3]>, MeshError> {
+    let counts: Vec<u32> = polygons.iter().map(|p| p.len() as u32).collect();
+    let (faces, _) = polygon::fan_triangulate(&counts, &polygons.concat(), vertices)
+        .map_err(|problem| MeshError::Invalid { path: path.to_path_buf(), problem })?;
     Ok(faces)
 }
 
@@ -149,7 +147,10 @@ mod tests {
         assert_eq!(read.colors, None);
         std::fs::write(&path, quad.replace("4 0 1 2 3", "3 0 1 9")).unwrap();
         let message = TriMesh::read_ply(&path).unwrap_err().to_string();
-        assert!(message.contains("face 0") && message.contains("past the 4 vertices"), "{message}");
+        assert!(
+            message.contains("polygon 0") && message.contains("past the 4 vertices"),
+            "{message}"
+        );
         std::fs::write(&path, quad.replace("property float z\n", "").replace("0 0 0\n", "0 0\n"))
             .unwrap();
         assert!(TriMesh::read_ply(&path).unwrap_err().to_string().contains("no property 'z'"));

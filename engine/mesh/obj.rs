@@ -97,7 +97,7 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<TriMesh, MeshError> {
             _ => {}
         }
     }
-    let faces = super::fan_triangles(path, &polygons)?;
+    let faces = super::fan_triangles(path, &polygons, positions.len())?;
     let colors = (!colors.is_empty() && colors.len() == positions.len()).then_some(colors);
     Ok(TriMesh { positions, faces, colors })
 }

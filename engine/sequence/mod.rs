@@ -3,22 +3,38 @@
 //!
 //! - A folder of per-frame PLY (binary, vertex colours) or OBJ files, natural order
 //!   ([`folder`]).
-//! - A base OBJ plus a PC2 point cache beside it (`anim.obj` + `anim.pc2`).
-//! - glTF 2.0 binary: base mesh, one morph target per frame, a stepping animation
-//!   ([`glb`]).
+//! - A base OBJ plus a PC2 or MDD point cache beside it (`anim.obj` + `anim.pc2`, [`crate::io::mdd`]).
+//! - glTF 2.0 (`.gltf`, `.glb`): skins, morph targets and node animation evaluated as the
+//!   specification says ([`gltf`]); written as a base mesh, one morph target per frame and a
+//!   stepping animation ([`glb`]).
+//! - USD: a `Mesh` prim's time-sampled points under its xforms ([`usd_read`]); written as text
+//!   ([`usd`]).
+//! - Alembic (Ogawa): a PolyMesh's time-sampled `P` under its Xforms ([`alembic`]).
+//! - FBX: skins, blend shapes and point caches evaluated by ufbx ([`fbx`]).
+//!
+//! The animation readers return a [`SourceSequence`] (polygons, frames, times, axes), which
+//! [`SourceSequence::into_sequence`] checks and fans into triangles the same way for every
+//! format ([`crate::mesh::polygon`]).
 //!
 //! Reading any of them checks that every frame has frame 0's vertex count and face list, and
 //! names the first frame that differs. Colours: a folder keeps them per frame; the OBJ + PC2
 //! and GLB layouts store the frame-0 colours only, and read them back for every frame.
 
+pub mod alembic;
+pub mod bench;
+pub mod fbx;
 pub mod folder;
 pub mod glb;
+pub mod gltf;
 pub mod orient;
+pub mod source;
 pub mod usd;
+pub mod usd_read;
 
 use crate::io::pc2::{self, Pc2Error, PointCache};
 use crate::mesh::{MeshError, TriMesh};
 use glb::GlbError;
+pub use source::{ReadOptions, SequenceInfo, SourceSequence};
 use std::path::{Path, PathBuf};
 
 /// What can go wrong reading or writing a sequence; every message names the file.
@@ -33,6 +49,16 @@ pub enum SequenceError {
     /// Reading or writing the GLB file failed.
     #[error(transparent)]
     Glb(#[from] GlbError),
+    /// An animation file (glTF, USD, Alembic, FBX, MDD) does not read as its format says, or
+    /// holds no usable sequence (the frames disagree, the topology changes, the choice of
+    /// animation or mesh is missing or names nothing).
+    #[error("{}: {problem}", path.display())]
+    Format {
+        /// The file concerned.
+        path: PathBuf,
+        /// What is wrong with it.
+        problem: String,
+    },
     /// The path is no sequence, a file is missing, the frames disagree with frame 0, or the
     /// sequence cannot be written.
     #[error("{}: {problem}", path.display())]
@@ -69,20 +95,53 @@ pub enum FrameFormat {
 }
 
 impl MeshSequence {
-    /// Reads a folder, a `.pc2` (with the `.obj` of the same name beside it) or a `.glb`.
+    /// Reads a sequence with the default [`ReadOptions`] (see [`Self::read_with`]).
     pub fn read(path: &Path) -> Result<Self, SequenceError> {
-        if path.is_dir() {
-            return Self::read_folder(path);
-        }
+        Ok(Self::read_with(path, &ReadOptions::default())?.0)
+    }
+
+    /// Reads a folder of frames, a `.pc2` or `.mdd` (with the `.obj` of the same name beside
+    /// it), glTF (`.gltf`, `.glb`), USD (`.usda`, `.usdc`, `.usd`, `.usdz`), Alembic (`.abc`) or
+    /// FBX, and what the file says beside its frames (times, rate, up axis, units, which
+    /// polygon each triangle came from). An option the format has no use for is an error naming
+    /// it, never silently ignored.
+    pub fn read_with(
+        path: &Path,
+        options: &ReadOptions,
+    ) -> Result<(Self, SequenceInfo), SequenceError> {
         if !path.exists() {
             return Err(invalid(path, "no such file or folder"));
         }
-        match extension(path).as_deref() {
-            Some("pc2") => Self::read_pc2(path),
-            Some("glb") => Ok(glb::read_glb(path)?),
+        if let Some(fps) = options.fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
+            return Err(invalid(path, format!("--fps {fps}: must be a positive number")));
+        }
+        let kind =
+            if path.is_dir() { "folder".to_owned() } else { extension(path).unwrap_or_default() };
+        // A format without a clock takes --fps as its frame rate.
+        let clockless = |sequence: Self| {
+            Ok((sequence, SequenceInfo { fps: options.fps, ..SequenceInfo::default() }))
+        };
+        match kind.as_str() {
+            "folder" => refuse_options(path, &kind, options, [false, true, false])
+                .and_then(|()| clockless(Self::read_folder(path)?)),
+            "pc2" => refuse_options(path, &kind, options, [false, true, false])
+                .and_then(|()| clockless(Self::read_pc2(path)?)),
+            "glb" | "gltf" => refuse_options(path, &kind, options, [true, true, true])
+                .and_then(|()| from_source(path, gltf::read(path, options))),
+            "abc" => refuse_options(path, &kind, options, [false, false, true])
+                .and_then(|()| from_source(path, alembic::read(path, options))),
+            "fbx" => refuse_options(path, &kind, options, [true; 3])
+                .and_then(|()| from_source(path, fbx::read(path, options))),
+            "usda" | "usdc" | "usd" | "usdz" => {
+                refuse_options(path, &kind, options, [false, false, true])
+                    .and_then(|()| from_source(path, usd_read::read(path, options)))
+            }
+            "mdd" => refuse_options(path, &kind, options, [false; 3])
+                .and_then(|()| from_source(path, crate::io::mdd::read_sequence(path))),
             _ => Err(invalid(
                 path,
-                "not a sequence: expected a folder of .ply/.obj frames, a .pc2 or a .glb",
+                "not a sequence: expected a folder of .ply/.obj frames, or a .pc2, .mdd, .gltf, \
+                 .glb, .usda, .usdc, .usd, .usdz, .abc or .fbx file",
             )),
         }
     }
@@ -92,6 +151,7 @@ impl MeshSequence {
     pub fn write(&self, path: &Path, format: FrameFormat, fps: f64) -> Result<(), SequenceError> {
         match extension(path).as_deref() {
             Some("pc2") => self.write_pc2(path),
+            Some("mdd") => crate::io::mdd::write_sequence(path, self, fps),
             Some("glb") => Ok(glb::write_glb(path, self, fps)?),
             _ => self.write_folder(path, format),
         }
@@ -290,6 +350,36 @@ pub(crate) fn check_same_topology(
         ));
     }
     Ok(())
+}
+
+/// The triangulated sequence of a reader's result, its errors naming `path`.
+fn from_source(
+    path: &Path,
+    read: Result<SourceSequence, String>,
+) -> Result<(MeshSequence, SequenceInfo), SequenceError> {
+    read.and_then(SourceSequence::into_sequence)
+        .map_err(|problem| SequenceError::Format { path: path.to_path_buf(), problem })
+}
+
+/// Refuses an option of `options` that a `kind` file has no use for: `uses` says whether it
+/// uses the animation, the frame rate and the mesh choice.
+fn refuse_options(
+    path: &Path,
+    kind: &str,
+    options: &ReadOptions,
+    uses: [bool; 3],
+) -> Result<(), SequenceError> {
+    let given = [
+        ("--animation", options.animation.is_some()),
+        ("--fps", options.fps.is_some()),
+        ("--mesh", options.mesh.is_some()),
+    ];
+    match given.iter().zip(uses).find(|((_, given), used)| *given && !used) {
+        Some(((option, _), _)) => {
+            Err(invalid(path, format!("{option} has no meaning for a {kind}")))
+        }
+        None => Ok(()),
+    }
 }
 
 fn extension(path: &Path) -> Option<String> {

@@ -44,8 +44,9 @@ pub struct Subject {
 pub enum Motion {
     /// [`procedural::procedural_pose`].
     Procedural,
-    /// A glTF animation sampled at `frame / fps` seconds (wrapping at its duration).
-    Gltf(gltf::GltfRig),
+    /// A glTF animation sampled at `frame / fps` seconds (wrapping at its duration); boxed, as
+    /// a rig is large and the procedural body carries nothing.
+    Gltf(Box<gltf::GltfRig>),
 }
 
 impl Subject {

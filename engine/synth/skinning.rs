@@ -15,14 +15,26 @@ pub struct SkinWeights {
 /// `joint_matrices` (each already multiplied by its inverse bind matrix). Every joint index
 /// must be below `joint_matrices.len()` (checked where the weights are built).
 pub fn skin(rest: &[[f32; 3]], skin: &SkinWeights, joint_matrices: &[DMat4]) -> Vec<[f32; 3]> {
+    skin_layers(rest, std::slice::from_ref(skin), joint_matrices)
+}
+
+/// [`skin`] with more than four influences per vertex: the sum runs over every layer's four
+/// slots (a glTF file's `JOINTS_0`, `JOINTS_1`, …), in f64, rounded once to f32.
+pub fn skin_layers(
+    rest: &[[f32; 3]],
+    layers: &[SkinWeights],
+    joint_matrices: &[DMat4],
+) -> Vec<[f32; 3]> {
     rest.iter()
-        .zip(skin.joints.iter().zip(&skin.weights))
-        .map(|(p, (joints, weights))| {
+        .enumerate()
+        .map(|(v, p)| {
             let p = DVec3::from(p.map(f64::from));
             let mut out = DVec3::ZERO;
-            for (&j, &w) in joints.iter().zip(weights) {
-                if w != 0.0 {
-                    out += w as f64 * joint_matrices[j as usize].transform_point3(p);
+            for layer in layers {
+                for (&j, &w) in layer.joints[v].iter().zip(&layer.weights[v]) {
+                    if w != 0.0 {
+                        out += w as f64 * joint_matrices[j as usize].transform_point3(p);
+                    }
                 }
             }
             out.as_vec3().to_array()
@@ -44,5 +56,17 @@ mod tests {
         let m = [DMat4::IDENTITY, DMat4::from_translation(DVec3::new(0.0, 0.0, 4.0))];
         let out = skin(&rest, &w, &m);
         assert_eq!(out, vec![[1.0, 0.0, 3.0], [0.0, 2.0, 4.0]]);
+    }
+
+    #[test]
+    fn layers_sum_every_set_of_four() {
+        let rest = [[1.0, 0.0, 0.0]];
+        let layer = |j: u32, w: f32| SkinWeights {
+            joints: vec![[j, 0, 0, 0]],
+            weights: vec![[w, 0.0, 0.0, 0.0]],
+        };
+        let m = [DMat4::IDENTITY, DMat4::from_translation(DVec3::new(0.0, 0.0, 4.0))];
+        let out = skin_layers(&rest, &[layer(0, 0.5), layer(1, 0.5)], &m);
+        assert_eq!(out, vec![[1.0, 0.0, 2.0]]);
     }
 }

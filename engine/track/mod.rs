@@ -5,8 +5,11 @@
 //! every frame as Σ bₖ·vₖ(t) (docs/conventions.md, "Tracking"). The surface queries are the
 //! internal `geometry` module's (BVH closest point and ray casts).
 //! - [`bind`]: query points → bindings, refusing points too far from the surface.
-//! - [`trajectory`]: bindings → positions in every frame.
-//! - [`queries`]: `points.csv` / `pixels.csv` readers; [`output`]: `tracks.csv` / JSON writers.
+//! - [`trajectory`]: bindings → positions in every frame; [`frame`]: bindings → orientation
+//!   frames (normal, tangent) in every frame.
+//! - [`queries`]: `points.csv` / `pixels.csv` readers; [`bindings`]: `bindings.csv` read, checked
+//!   against the mesh and written; [`output`]: `tracks.csv` / JSON writers on a [`clock`];
+//!   [`pins`]: a GLB of animated empties, one per point.
 //! - [`plot`]: an SVG of the trajectories; [`project`]: tracks seen through a camera;
 //!   [`overlay`]: those drawn over the camera's images.
 //! - [`run`]: one tracking run from queries to report.
@@ -14,8 +17,12 @@
 
 pub mod bench;
 pub mod bind;
+pub mod bindings;
+pub mod clock;
+pub mod frame;
 pub mod output;
 pub mod overlay;
+pub mod pins;
 pub mod plot;
 pub mod project;
 pub mod queries;
@@ -23,6 +30,8 @@ pub mod run;
 pub mod trajectory;
 
 pub use bind::{bind_point, bind_ray, Binding, Unbound};
+pub use clock::Clock;
+pub use frame::SurfaceFrame;
 pub use output::{TrackReport, TrackedPoint, UnboundPoint};
 pub use project::{project_tracks, ImagePoint};
 pub use run::{track, Queries};
@@ -62,6 +71,33 @@ pub enum TrackError {
         face: u32,
         /// The sequence's face count.
         faces: usize,
+    },
+    /// A given binding is unusable on the mesh (see [`bindings::check_binding`]).
+    #[error("binding of point {id}: {problem}")]
+    Binding {
+        /// The point's id.
+        id: String,
+        /// What is wrong with its binding.
+        problem: String,
+    },
+    /// A polygon map does not have one entry per face.
+    #[error("{polygons} polygon entries for {faces} faces")]
+    Polygons {
+        /// Entries in the map.
+        polygons: usize,
+        /// Faces of the sequence.
+        faces: usize,
+    },
+    /// A clock is unusable, or does not match the frames.
+    #[error("clock: {0}")]
+    Clock(String),
+    /// A pins GLB cannot be written.
+    #[error("{}: cannot write: {problem}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why not.
+        problem: String,
     },
     /// A query CSV file is malformed.
     #[error("{path}: line {line}: {message}")]

@@ -59,7 +59,16 @@ mod tests {
 
     fn point(id: &str, trajectory: Vec<[f64; 3]>) -> TrackedPoint {
         let binding = Binding { face: 0, barycentric: [1.0, 0.0, 0.0], distance: 0.0 };
-        TrackedPoint { id: id.into(), binding, trajectory }
+        let frames = trajectory.len();
+        TrackedPoint {
+            id: id.into(),
+            binding,
+            polygon: 0,
+            trajectory,
+            normal: vec![[0.0, 0.0, 1.0]; frames],
+            tangent: vec![[1.0, 0.0, 0.0]; frames],
+            orientation_held: Vec::new(),
+        }
     }
 
     #[test]

@@ -31,62 +31,138 @@ pub fn parse_id_table<const N: usize>(
     path: &Path,
     columns: [&str; N],
 ) -> Result<Vec<(String, [f64; N])>, TrackError> {
-    let err =
-        |line: usize, message: String| TrackError::Csv { path: path.to_owned(), line, message };
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let (header_line, header) = lines.next().ok_or_else(|| {
-        err(1, format!("empty file; expected a header `id,{}`", columns.join(",")))
-    })?;
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    let find = |name: &str| {
-        names.iter().position(|n| n.eq_ignore_ascii_case(name)).ok_or_else(|| {
-            err(
-                header_line,
-                format!(
-                    "header `{header}` has no column `{name}`; expected `id,{}`",
-                    columns.join(",")
-                ),
-            )
-        })
-    };
-    let id_col = find("id")?;
+    let expected = format!("id,{}", columns.join(","));
+    let table = Table::parse(text, path, &expected)?;
     let mut cols = [0usize; N];
     for (c, name) in cols.iter_mut().zip(columns) {
-        *c = find(name)?;
+        *c = table.require(name)?;
     }
-    let mut seen = HashSet::new();
-    let mut rows = Vec::new();
-    for (line, row) in lines {
-        let fields: Vec<&str> = row.split(',').map(str::trim).collect();
-        if fields.len() < names.len() {
-            return Err(err(
-                line,
-                format!("{} fields, the header has {}", fields.len(), names.len()),
-            ));
-        }
-        let id = fields[id_col];
-        if id.is_empty() || id.contains('"') {
-            return Err(err(line, format!("invalid id `{id}` (empty or quoted)")));
-        }
-        if !seen.insert(id.to_owned()) {
-            return Err(err(line, format!("duplicate id `{id}`")));
-        }
-        let mut values = [0.0; N];
-        for ((value, &c), name) in values.iter_mut().zip(&cols).zip(columns) {
-            *value = fields[c].parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
-                err(line, format!("`{}` is not a finite number for column `{name}`", fields[c]))
-            })?;
-        }
-        rows.push((id.to_owned(), values));
+    table
+        .rows()?
+        .into_iter()
+        .map(|row| {
+            let mut values = [0.0; N];
+            for (value, (&c, name)) in values.iter_mut().zip(cols.iter().zip(columns)) {
+                *value = row.number(c, name)?;
+            }
+            Ok((row.id.to_owned(), values))
+        })
+        .collect()
+}
+
+/// A CSV table as the module describes it: the header's column names and the rows after it.
+pub(crate) struct Table<'a> {
+    path: &'a Path,
+    expected: &'a str,
+    header_line: usize,
+    header: &'a str,
+    names: Vec<&'a str>,
+    lines: Vec<(usize, &'a str)>,
+}
+
+/// One row of a [`Table`]: its line (from 1), its unique id and its fields.
+pub(crate) struct Row<'a> {
+    path: &'a Path,
+    pub line: usize,
+    pub id: &'a str,
+    fields: Vec<&'a str>,
+}
+
+impl<'a> Table<'a> {
+    /// The header and the rows of `text`; `expected` is the header the errors suggest.
+    /// Errors: no header.
+    pub fn parse(text: &'a str, path: &'a Path, expected: &'a str) -> Result<Self, TrackError> {
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .map(|(i, l)| (i + 1, l.trim()))
+            .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+        let (header_line, header) = lines.next().ok_or_else(|| {
+            csv_error(path, 1, format!("empty file; expected a header `{expected}`"))
+        })?;
+        let names = header.split(',').map(str::trim).collect();
+        Ok(Table { path, expected, header_line, header, names, lines: lines.collect() })
     }
-    if rows.is_empty() {
-        return Err(err(header_line, "no rows after the header".into()));
+
+    /// The index of column `name` (case-insensitive), if the header has it.
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n.eq_ignore_ascii_case(name))
     }
-    Ok(rows)
+
+    /// The index of column `name`; an error naming the header when it lacks it.
+    pub fn require(&self, name: &str) -> Result<usize, TrackError> {
+        self.column(name).ok_or_else(|| {
+            let (header, expected) = (self.header, self.expected);
+            let message =
+                format!("header `{header}` has no column `{name}`; expected `{expected}`");
+            csv_error(self.path, self.header_line, message)
+        })
+    }
+
+    /// An error on the header line.
+    pub fn header_error(&self, message: String) -> TrackError {
+        csv_error(self.path, self.header_line, message)
+    }
+
+    /// Every row, its id checked. Errors: an id column missing, a row with fewer fields than
+    /// the header, an empty, quoted or repeated id, no rows.
+    pub fn rows(&self) -> Result<Vec<Row<'a>>, TrackError> {
+        let id_col = self.require("id")?;
+        let mut seen = HashSet::new();
+        let mut rows = Vec::with_capacity(self.lines.len());
+        for &(line, text) in &self.lines {
+            let fields: Vec<&str> = text.split(',').map(str::trim).collect();
+            let err = |message: String| csv_error(self.path, line, message);
+            if fields.len() < self.names.len() {
+                let (found, expected) = (fields.len(), self.names.len());
+                return Err(err(format!("{found} fields, the header has {expected}")));
+            }
+            let id = fields[id_col];
+            if id.is_empty() || id.contains('"') {
+                return Err(err(format!("invalid id `{id}` (empty or quoted)")));
+            }
+            if !seen.insert(id) {
+                return Err(err(format!("duplicate id `{id}`")));
+            }
+            rows.push(Row { path: self.path, line, id, fields });
+        }
+        if rows.is_empty() {
+            return Err(self.header_error("no rows after the header".into()));
+        }
+        Ok(rows)
+    }
+}
+
+impl Row<'_> {
+    /// The field of column `c`, trimmed (the row has every column of the header).
+    pub fn field(&self, c: usize) -> &str {
+        self.fields[c]
+    }
+
+    /// An error on this row's line.
+    pub fn error(&self, message: String) -> TrackError {
+        csv_error(self.path, self.line, message)
+    }
+
+    /// The field of column `c` (called `name`) as a finite number.
+    pub fn number(&self, c: usize, name: &str) -> Result<f64, TrackError> {
+        let text = self.field(c);
+        text.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+            self.error(format!("`{text}` is not a finite number for column `{name}`"))
+        })
+    }
+
+    /// The field of column `c` (called `name`) as an index (an unsigned 32-bit integer).
+    pub fn index(&self, c: usize, name: &str) -> Result<u32, TrackError> {
+        let text = self.field(c);
+        text.parse::<u32>().map_err(|_| {
+            self.error(format!("`{text}` is not an index (0 to 4294967295) for column `{name}`"))
+        })
+    }
+}
+
+fn csv_error(path: &Path, line: usize, message: String) -> TrackError {
+    TrackError::Csv { path: path.to_owned(), line, message }
 }
 
 #[cfg(test)]

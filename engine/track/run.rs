@@ -1,6 +1,8 @@
 //! One tracking run: bind the queries on frame 0, follow them through every frame.
 
 use super::bind::{bind_point, bind_ray, Binding, Unbound};
+use super::bindings::check_binding;
+use super::frame::surface_frames;
 use super::output::{TrackReport, TrackedPoint, UnboundPoint};
 use super::trajectory::trajectories;
 use super::TrackError;
@@ -21,15 +23,22 @@ pub enum Queries {
         /// (id, (u, v)) per point; pixel (i, j) is centred at (i + 0.5, j + 0.5).
         pixels: Vec<(String, [f64; 2])>,
     },
+    /// Points bound already, e.g. read from a bindings file
+    /// ([`super::bindings::BindingsFile::resolve`]): (id, binding) per point.
+    Bindings(Vec<(String, Binding)>),
 }
 
 /// Binds `queries` on frame 0 of the sequence (`faces`, vertex positions per frame) and
-/// returns every bound point's trajectory. A 3D point farther from the surface than
+/// returns every bound point's trajectory and orientation frames ([`super::frame`]); given
+/// bindings are used as they are. A 3D point farther from the surface than
 /// `max_distance_relative` × the frame-0 bounding-box diagonal, a pixel whose ray misses, or a
 /// non-finite query is listed in `unbound`, never snapped. An infinite tolerance binds every
 /// finite point.
 ///
-/// Errors: a negative or NaN tolerance, no frames, an unusable frame-0 mesh, frames of different vertex counts.
+/// Each point's polygon is its face; [`TrackReport::in_polygons`] names the file's polygons.
+///
+/// Errors: a negative or NaN tolerance, no frames, an unusable frame-0 mesh, frames of
+/// different vertex counts, a given binding that is unusable on the mesh.
 pub fn track(
     faces: &[[u32; 3]],
     frames: &[Vec<[f32; 3]>],
@@ -54,6 +63,13 @@ pub fn track(
                 (id.as_str(), bind_ray(&bvh, origin, dir))
             })
             .collect(),
+        Queries::Bindings(given) => {
+            for (id, binding) in given {
+                check_binding(binding, faces.len())
+                    .map_err(|problem| TrackError::Binding { id: id.clone(), problem })?;
+            }
+            given.iter().map(|(id, b)| (id.as_str(), Ok(*b))).collect()
+        }
     };
     let mut bound = Vec::new();
     let mut unbound = Vec::new();
@@ -75,12 +91,25 @@ pub fn track(
     let points = bound
         .into_iter()
         .zip(paths)
-        .map(|((id, binding), path)| TrackedPoint {
-            id: id.to_owned(),
-            binding,
-            trajectory: path.iter().map(|p| p.to_array()).collect(),
+        .enumerate()
+        .map(|(i, ((id, binding), path))| {
+            let (oriented, held) =
+                surface_frames(&binding, faces, frames).ok_or(TrackError::FaceOutOfRange {
+                    binding: i,
+                    face: binding.face,
+                    faces: faces.len(),
+                })?;
+            Ok(TrackedPoint {
+                id: id.to_owned(),
+                binding,
+                polygon: binding.face,
+                trajectory: path.iter().map(|p| p.to_array()).collect(),
+                normal: oriented.iter().map(|o| o.normal).collect(),
+                tangent: oriented.iter().map(|o| o.tangent).collect(),
+                orientation_held: held,
+            })
         })
-        .collect();
+        .collect::<Result<_, TrackError>>()?;
     Ok(TrackReport {
         frames: frames.len(),
         vertices: frame0.len(),

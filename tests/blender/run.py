@@ -1,7 +1,7 @@
 """Runs the add-on's tests inside Blender:
 
     blender -b --factory-startup --python tests/blender/run.py -- \
-        --package-folder DIR [--cli target/fronts/tagsplat] [--work DIR] [-k NAME]
+        --package-folder DIR [--cli target/debug/tagsplat] [--work DIR] [-k NAME]
 
 It enables the add-on from tools/blender (``addon_utils``, as Blender's preferences do), points
 its preferences at ``--package-folder`` (where the tagsplat wheel is installed), and runs every

@@ -191,6 +191,13 @@ static void test_sequence_read(void) {
     FAILS(tagsplat_sequence_read(in_work("train.toml"), &sequence), TAGSPLAT_STATUS_BAD_INPUT, "not a sequence");
     FAILS(tagsplat_sequence_read(NULL, &sequence), TAGSPLAT_STATUS_BAD_INPUT, "path is NULL");
     FAILS(tagsplat_sequence_read("", &sequence), TAGSPLAT_STATUS_BAD_INPUT, "empty path");
+    /* The read options reach the engine: a folder has no animations; the frame rate is checked. */
+    FAILS(tagsplat_sequence_read_with(in_work("data/meshes"), "Run", 0.0, NULL, &sequence),
+          TAGSPLAT_STATUS_BAD_INPUT, "--animation has no meaning for a folder");
+    FAILS(tagsplat_sequence_read_with(in_work("data/meshes"), NULL, -5.0, NULL, &sequence),
+          TAGSPLAT_STATUS_BAD_INPUT, "--fps -5");
+    OK(tagsplat_sequence_read_with(in_work("data/meshes"), NULL, 30.0, NULL, &sequence));
+    OK(tagsplat_sequence_free(sequence));
 }
 
 /* A tetrahedron over two frames: from arrays, copied back, written and read again as PC2 and as

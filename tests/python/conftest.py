@@ -41,10 +41,10 @@ def missing_oracle(what: str) -> None:
 
 @pytest.fixture(scope="session")
 def cli() -> pathlib.Path:
-    """The `tagsplat` program built with the wheel (`cargo build --profile fronts --bin tagsplat`)."""
-    path = pathlib.Path(os.environ.get("TAGSPLAT_CLI", ROOT / "target" / "fronts" / "tagsplat"))
+    """The `tagsplat` program built with the wheel (`cargo build --profile test --bin tagsplat`)."""
+    path = pathlib.Path(os.environ.get("TAGSPLAT_CLI", ROOT / "target" / "debug" / "tagsplat"))
     if not path.is_file():
-        missing_oracle(f"{path} (cargo build --profile fronts --bin tagsplat)")
+        missing_oracle(f"{path} (cargo build --profile test --bin tagsplat)")
     return path
 
 

@@ -82,16 +82,22 @@ def test_a_callback_that_raises_stops_the_job_with_its_exception(ctx, data, tmp_
 
 
 def test_ctrl_c_cancels_the_run_then_raises_keyboard_interrupt(ctx, data, tmp_path):
+    # A run far longer than the signal can take to arrive, even on a loaded host (the quick one
+    # could end first); the callback ends it after a minute, so a Ctrl-C that is missed fails
+    # the test (CancelledError) instead of hanging it.
+    endless = {**QUICK_CONFIG, "canonical": {**QUICK_CONFIG["canonical"], "iterations": 1_000_000}}
     started = threading.Event()
+    begun = time.monotonic()
 
     def watch(p):
         if p.stage == "frame":
             started.set()
+        return time.monotonic() - begun < 60
 
     timer = threading.Thread(target=lambda: started.wait(120) and os.kill(os.getpid(), signal.SIGINT))
     timer.start()
     with pytest.raises(KeyboardInterrupt):
-        tagsplat.train(ctx, data, tmp_path / "out", config=QUICK_CONFIG, frames=(0, 1), progress=watch)
+        tagsplat.train(ctx, data, tmp_path / "out", config=endless, frames=(0, 1), progress=watch)
     timer.join()
 
 

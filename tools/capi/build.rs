@@ -27,7 +27,7 @@ fn main() {
     }
     eprintln!(
         "error: {} is not what cbindgen generates from src/ (the new one is {}).\n\
-         Rewrite it with `{WRITE_ENV}=1 cargo build --profile fronts -p tagsplat-capi` and \
+         Rewrite it with `{WRITE_ENV}=1 cargo build --profile test -p tagsplat-capi` and \
          commit it: it is the library's ABI.",
         committed.display(),
         generated.display()

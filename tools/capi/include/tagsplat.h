@@ -519,11 +519,24 @@ tagsplat_status tagsplat_job_report_json(const tagsplat_job *job,
 tagsplat_status tagsplat_job_free(tagsplat_job *job);
 
 /**
- * Reads the sequence at `path`: a folder of .ply/.obj frames, a .pc2 (with the .obj of the same
- * name beside it) or a .glb. Every frame is checked against frame 0. Stores the new handle in
- * `*out` (NULL on failure).
+ * Reads the sequence at `path`: anything `tagsplat convert` reads (a folder of .ply/.obj frames,
+ * a .pc2 or .mdd with the .obj of the same name beside it, glTF, USD, Alembic, FBX), with the
+ * default choices (see [`tagsplat_sequence_read_with`]). Every frame is checked against frame
+ * 0. Stores the new handle in `*out` (NULL on failure).
  */
 tagsplat_status tagsplat_sequence_read(const char *path, tagsplat_sequence **out);
+
+/**
+ * [`tagsplat_sequence_read`] with the CLI's read options: `animation` (glTF, FBX: a name or
+ * index; NULL: the file's only one), `fps` (the rate an animation is sampled at, or the clock
+ * of a folder or PC2; 0: the default) and `mesh` (which mesh of a file that holds several: a
+ * USD prim path, an Alembic object path, a glTF or FBX node name; NULL: the only one).
+ */
+tagsplat_status tagsplat_sequence_read_with(const char *path,
+                                            const char *animation,
+                                            double fps,
+                                            const char *mesh,
+                                            tagsplat_sequence **out);
 
 /**
  * A sequence copied from caller arrays: `positions` holds `frames` × `vertices` × 3 floats

@@ -1,10 +1,11 @@
 //! `tagsplat_sequence`: a topology-consistent mesh sequence (one face list, positions per
 //! frame), read from a file or folder, or copied from caller arrays.
 
-use crate::buffers::{input, output, store, to_path};
+use crate::buffers::{input, optional_text, output, store, to_path};
 use crate::handles::{create, get, release, Handle};
 use crate::status::{call, engine, Error, Status};
 use std::ffi::c_char;
+use tagsplat::sequence::ReadOptions;
 use tagsplat::{FrameFormat as EngineFormat, MeshSequence};
 
 /// A mesh sequence, immutable once made.
@@ -39,17 +40,39 @@ pub enum FrameFormat {
     Obj = 1,
 }
 
-/// Reads the sequence at `path`: a folder of .ply/.obj frames, a .pc2 (with the .obj of the same
-/// name beside it) or a .glb. Every frame is checked against frame 0. Stores the new handle in
-/// `*out` (NULL on failure).
+/// Reads the sequence at `path`: anything `tagsplat convert` reads (a folder of .ply/.obj frames,
+/// a .pc2 or .mdd with the .obj of the same name beside it, glTF, USD, Alembic, FBX), with the
+/// default choices (see [`tagsplat_sequence_read_with`]). Every frame is checked against frame
+/// 0. Stores the new handle in `*out` (NULL on failure).
 #[no_mangle]
 pub unsafe extern "C" fn tagsplat_sequence_read(
     path: *const c_char,
     out: *mut *mut Sequence,
 ) -> Status {
-    call("tagsplat_sequence_read", || unsafe {
+    unsafe { tagsplat_sequence_read_with(path, std::ptr::null(), 0.0, std::ptr::null(), out) }
+}
+
+/// [`tagsplat_sequence_read`] with the CLI's read options: `animation` (glTF, FBX: a name or
+/// index; NULL: the file's only one), `fps` (the rate an animation is sampled at, or the clock
+/// of a folder or PC2; 0: the default) and `mesh` (which mesh of a file that holds several: a
+/// USD prim path, an Alembic object path, a glTF or FBX node name; NULL: the only one).
+#[no_mangle]
+pub unsafe extern "C" fn tagsplat_sequence_read_with(
+    path: *const c_char,
+    animation: *const c_char,
+    fps: f64,
+    mesh: *const c_char,
+    out: *mut *mut Sequence,
+) -> Status {
+    call("tagsplat_sequence_read_with", || unsafe {
         create("out", out, || {
-            let mesh = MeshSequence::read(&to_path("path", path)?).map_err(|e| engine(&e))?;
+            let options = ReadOptions {
+                animation: optional_text("animation", animation)?.map(str::to_owned),
+                fps: (fps != 0.0).then_some(fps),
+                mesh: optional_text("mesh", mesh)?.map(str::to_owned),
+            };
+            let path = to_path("path", path)?;
+            let (mesh, _) = MeshSequence::read_with(&path, &options).map_err(|e| engine(&e))?;
             Ok(Sequence { mesh })
         })
     })

@@ -7,6 +7,7 @@ use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use tagsplat::sequence::orient::{Orientation, SignedAxis, UpAxis};
+use tagsplat::sequence::{ReadOptions, SequenceInfo};
 use tagsplat::{FrameFormat, MeshSequence};
 
 /// A topology-consistent mesh sequence: faces `(F, 3) uint32`, positions `(T, V, 3) float32`,
@@ -23,11 +24,18 @@ pub struct Sequence {
     colors: Option<Vec<[u8; 3]>>,
     frames: usize,
     vertices: usize,
+    /// What the file said beside its frames (default for a sequence made from arrays).
+    info: SequenceInfo,
 }
 
 impl Sequence {
     /// Flattens the engine's sequence once (checked by the engine as it was read or made).
     pub fn of(sequence: MeshSequence) -> Self {
+        Self::read_as(sequence, SequenceInfo::default())
+    }
+
+    /// Flattens a sequence read from a file, keeping what the file said.
+    fn read_as(sequence: MeshSequence, info: SequenceInfo) -> Self {
         let frames = sequence.frames.len();
         let vertices = sequence.frames.first().map_or(0, Vec::len);
         Sequence {
@@ -36,6 +44,7 @@ impl Sequence {
             colors: sequence.colors.map(|c| c.concat()),
             frames,
             vertices,
+            info,
         }
     }
 
@@ -118,10 +127,53 @@ impl Sequence {
         Ok(Sequence::of(sequence))
     }
 
-    /// Reads a folder of .ply/.obj frames, a .pc2 (with its .obj beside it) or a .glb.
+    /// Reads any sequence `tagsplat convert` reads. `animation` (glTF, FBX: a name or index),
+    /// `fps` (the rate an animation is sampled at, or the clock of a folder or PC2) and `mesh`
+    /// (which mesh of a file that holds several: a USD prim path, an Alembic object path, a
+    /// glTF or FBX node name) are the CLI's `--animation`, `--fps` and `--mesh`.
     #[staticmethod]
-    fn read(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        Ok(Sequence::of(run(py, || MeshSequence::read(&path))?))
+    #[pyo3(signature = (path, *, animation = None, fps = None, mesh = None))]
+    fn read(
+        py: Python<'_>,
+        path: PathBuf,
+        animation: Option<String>,
+        fps: Option<f64>,
+        mesh: Option<String>,
+    ) -> PyResult<Self> {
+        let options = ReadOptions { animation, fps, mesh };
+        let (sequence, info) = run(py, || MeshSequence::read_with(&path, &options))?;
+        Ok(Sequence::read_as(sequence, info))
+    }
+
+    /// Frames per second: the file's own rate or the rate it was sampled at; None when the
+    /// file has no clock and none was given.
+    #[getter]
+    fn fps(&self) -> Option<f64> {
+        self.info.fps
+    }
+
+    /// Each frame's time in seconds, when the file has a clock.
+    #[getter]
+    fn times(&self) -> Option<Vec<f64>> {
+        self.info.times.clone()
+    }
+
+    /// The up axis the file declares ("+Y", "+Z", ...), or None.
+    #[getter]
+    fn up(&self) -> Option<String> {
+        self.info.up.map(|axis| axis.to_string())
+    }
+
+    /// Metres per file unit, when the file says.
+    #[getter]
+    fn meters_per_unit(&self) -> Option<f64> {
+        self.info.meters_per_unit
+    }
+
+    /// What the reader chose or noticed (which animation, "no animation: one frame", ...).
+    #[getter]
+    fn notes(&self) -> Vec<String> {
+        self.info.notes.clone()
     }
 
     /// Writes FILE.pc2 (plus FILE.obj), FILE.glb or FILE.usda (at `fps`), or otherwise a new
