@@ -8,7 +8,7 @@ use std::cell::Cell;
 
 /// The least any budget grants, bytes: small files are not held to a few kilobytes, yet one
 /// edited count in a kilobyte file cannot make the reader allocate hundreds of megabytes.
-const BUDGET_FLOOR: usize = 16 << 20;
+const BUDGET_FLOOR: usize = 8 << 20;
 
 /// Bytes a reader may materialise: at least [`BUDGET_FLOOR`], else `per_byte` per byte of the
 /// file (its JSON and buffers).

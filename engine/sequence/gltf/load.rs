@@ -81,16 +81,41 @@ pub fn load(path: &Path) -> Result<Loaded, String> {
 /// except its one departure from the specification: an accessor with neither a buffer view
 /// nor sparse values is valid glTF (its values are zeros), as `write_glb` writes frame 0's
 /// morph target.
+///
+/// The `gltf` crate's own checks index some arrays before checking the index (a primitive's
+/// POSITION accessor): those indices are checked first, and a panic left there is still an
+/// out-of-range index in the file.
 fn validate(root: &gltf::json::Root) -> Result<(), String> {
     use gltf::json::validation::{Error, Validate};
-    let mut errors = Vec::new();
-    root.validate(root, gltf::json::Path::new, &mut |path, error| {
-        let path = path().to_string();
-        let zeros = path.starts_with("accessors[") && path.ends_with("].bufferView");
-        if !(zeros && matches!(error, Error::Missing)) {
-            errors.push(format!("{path}: {error}"));
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            if let Some(index) =
+                primitive.attributes.values().find(|i| i.value() >= root.accessors.len())
+            {
+                return Err(format!(
+                    "not a valid glTF 2.0 file: meshes[{m}].primitives[{p}] names accessor {}, the file has {}",
+                    index.value(),
+                    root.accessors.len()
+                ));
+            }
         }
+    }
+    let mut errors = Vec::new();
+    let check = std::panic::AssertUnwindSafe(|| {
+        root.validate(root, gltf::json::Path::new, &mut |path, error| {
+            let path = path().to_string();
+            let zeros = path.starts_with("accessors[") && path.ends_with("].bufferView");
+            // The first error is the one reported; a damaged file can have millions.
+            if !(zeros && matches!(error, Error::Missing)) && errors.is_empty() {
+                errors.push(format!("{path}: {error}"));
+            }
+        })
     });
+    if std::panic::catch_unwind(check).is_err() {
+        return Err(
+            "not a valid glTF 2.0 file: an index (of a mesh's accessor) is out of range".into()
+        );
+    }
     match errors.first() {
         None => Ok(()),
         Some(first) => Err(format!("not a valid glTF 2.0 file: {first}")),
