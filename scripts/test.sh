@@ -48,8 +48,8 @@ fi
 # The public API's documentation: every public item documented, every intra-doc link resolved.
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --lib
 
-# The fronts, built in the `test` profile on the engine `cargo test` compiled (the wheel, the C
-# library and the `tagsplat` program share it): the Python package (pytest, its stubs against
+# The fronts: the C library and the `tagsplat` program in the `test` profile, the wheel in
+# `fronts`: the Python package (pytest, its stubs against
 # the module), the C ABI (C99 and C++17, leak checkers) and the Blender add-on on the same wheel.
 bash scripts/test_python.sh
 bash scripts/test_c.sh

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The Python package's checks: builds the wheel (profile `test`, so the engine `cargo test`
-# compiled serves the wheel, the C library and the `tagsplat` program the tests compare against), installs
+# The Python package's checks: builds the wheel (profile `fronts`: maturin cannot build in the
+# `test` profile) and the `tagsplat` program the tests compare against (profile `test`), installs
 # it into a venv of its own, checks the stubs against the module, and runs tests/python.
 # Idempotent: the venv and the builds are reused; run it again after any change.
 #     scripts/test_python.sh [pytest arguments]
@@ -21,7 +21,7 @@ if [ "$(cat "$venv/tools.txt" 2>/dev/null)" != "${tools[*]}" ]; then
 fi
 
 cargo build --profile test --bin tagsplat
-"$venv/bin/maturin" build --profile test --manifest-path tools/python/Cargo.toml \
+"$venv/bin/maturin" build --profile fronts --manifest-path tools/python/Cargo.toml \
     --out target/wheels --interpreter "$venv/bin/python"
 version=$(sed -n 's/^version = "\(.*\)"/\1/p' tools/python/Cargo.toml | head -n 1)
 wheel=$(ls -t target/wheels/tagsplat-"$version"-cp311-abi3-*.whl | head -n 1)

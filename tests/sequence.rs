@@ -75,39 +75,6 @@ fn glb_round_trips_to_float_precision() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Runs the Khronos glTF validator on `path` when it is installed (scripts/setup.sh); without
-/// it the check says SKIPPED, and fails in CI.
-fn validate_gltf(path: &Path) {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let installed =
-        root.join(".tools/gltf-validator/node_modules/gltf-validator/package.json").is_file();
-    let node = Command::new("node").arg("--version").output().is_ok_and(|o| o.status.success());
-    if !(installed && node) {
-        let why = if node {
-            "gltf-validator is not installed (run scripts/setup.sh)"
-        } else {
-            "node is not on PATH"
-        };
-        common::skipped(&format!("the Khronos glTF validator on {}", path.display()), why);
-        return;
-    }
-    let out = Command::new("node")
-        .arg(root.join("scripts/validate_gltf.cjs"))
-        .arg(path)
-        .output()
-        .unwrap();
-    let report = String::from_utf8_lossy(&out.stdout);
-    eprintln!("glTF validator: {report}");
-    assert!(
-        out.status.success(),
-        "the glTF validator rejects {}: {report}{}",
-        path.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json: serde_json::Value = serde_json::from_str(report.trim()).unwrap();
-    assert_eq!((json["errors"].as_u64(), json["warnings"].as_u64()), (Some(0), Some(0)));
-}
-
 #[test]
 fn written_glb_passes_the_khronos_validator() {
     let dir = temp_dir("seq-validator");
@@ -117,7 +84,7 @@ fn written_glb_passes_the_khronos_validator() {
     ] {
         let path = dir.join(name);
         seq.write(&path, FrameFormat::Ply, 24.0).unwrap();
-        validate_gltf(&path);
+        common::validate_gltf(&path);
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -777,30 +777,6 @@ fn bindings_on_a_polygon_mesh_name_their_polygon_and_refuse_another_fanning() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Runs the Khronos glTF validator on `path` when it is installed (scripts/setup.sh); without
-/// it the check says SKIPPED, and fails in CI. (tests/sequence.rs runs the same check.)
-fn validate_gltf(path: &Path) {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let installed =
-        root.join(".tools/gltf-validator/node_modules/gltf-validator/package.json").is_file();
-    let node = std::process::Command::new("node").arg("--version").output();
-    if !(installed && node.is_ok_and(|o| o.status.success())) {
-        let why = "node or .tools/gltf-validator is missing (run scripts/setup.sh)";
-        common::skipped(&format!("the Khronos glTF validator on {}", path.display()), why);
-        return;
-    }
-    let out = std::process::Command::new("node")
-        .arg(root.join("scripts/validate_gltf.cjs"))
-        .arg(path)
-        .output()
-        .unwrap();
-    let report = String::from_utf8_lossy(&out.stdout);
-    eprintln!("glTF validator: {report}");
-    assert!(out.status.success(), "the glTF validator rejects {}: {report}", path.display());
-    let json: serde_json::Value = serde_json::from_str(report.trim()).unwrap();
-    assert_eq!((json["errors"].as_u64(), json["warnings"].as_u64()), (Some(0), Some(0)));
-}
-
 /// The JSON chunk of a GLB and the floats of its accessor `index` (tightly packed).
 fn glb_floats(bytes: &[u8], index: usize) -> (serde_json::Value, Vec<f32>) {
     let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
@@ -856,7 +832,7 @@ fn cli_writes_oriented_tracks_a_valid_pins_glb_and_bindings_that_track_the_same(
     }
     // The GLB: valid, one node per point named by its id, keyed at every frame's time with the
     // CSV's positions (as f32) and rotations that take Z to the normal.
-    validate_gltf(&glb);
+    common::validate_gltf(&glb);
     let bytes = std::fs::read(&glb).unwrap();
     let (gltf, times) = glb_floats(&bytes, 0);
     assert_eq!(times, (0..6).map(|t| (t as f64 / 24.0) as f32).collect::<Vec<_>>());

@@ -4,6 +4,7 @@
 
 #![allow(dead_code)] // Each test binary uses its own part of the harness.
 
+use std::path::Path;
 use std::sync::Arc;
 use tagsplat::gpu::{ContextOptions, GpuContext, ValidationLog};
 
@@ -106,4 +107,40 @@ pub fn file_names(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
     }
     names.sort();
     names
+}
+
+/// Runs the Khronos glTF validator on `path` when it is installed (scripts/setup.sh); without
+/// it the check says SKIPPED, and fails in CI.
+pub fn validate_gltf(path: &Path) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let installed =
+        root.join(".tools/gltf-validator/node_modules/gltf-validator/package.json").is_file();
+    let node = std::process::Command::new("node")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !(installed && node) {
+        let why = if node {
+            "gltf-validator is not installed (run scripts/setup.sh)"
+        } else {
+            "node is not on PATH"
+        };
+        skipped(&format!("the Khronos glTF validator on {}", path.display()), why);
+        return;
+    }
+    let out = std::process::Command::new("node")
+        .arg(root.join("scripts/validate_gltf.cjs"))
+        .arg(path)
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&out.stdout);
+    eprintln!("glTF validator: {report}");
+    assert!(
+        out.status.success(),
+        "the glTF validator rejects {}: {report}{}",
+        path.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_str(report.trim()).unwrap();
+    assert_eq!((json["errors"].as_u64(), json["warnings"].as_u64()), (Some(0), Some(0)));
 }
