@@ -856,28 +856,23 @@ fn cli_writes_oriented_tracks_a_valid_pins_glb_and_bindings_that_track_the_same(
         }
     }
     // The bindings written back track the same: the same CSV byte for byte.
-    let again = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
-        .args(["track", "--sequence"])
-        .arg(dir.join("frames"))
-        .arg("--bindings")
-        .arg(&bindings)
-        .arg("--out")
-        .arg(dir.join("again.csv"))
-        .output()
-        .unwrap();
+    let track_bindings = || {
+        std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
+            .args(["track", "--sequence"])
+            .arg(dir.join("frames"))
+            .arg("--bindings")
+            .arg(&bindings)
+            .arg("--out")
+            .arg(dir.join("again.csv"))
+            .output()
+            .unwrap()
+    };
+    let again = track_bindings();
     assert!(again.status.success(), "{}", String::from_utf8_lossy(&again.stderr));
     assert_eq!(std::fs::read_to_string(dir.join("again.csv")).unwrap(), tracks);
     // A binding off the mesh names the file, the line and the problem.
     std::fs::write(&bindings, "id,face,u,v,w\nok,0,1,0,0\nfar,99999,1,0,0\n").unwrap();
-    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_tagsplat"))
-        .args(["track", "--sequence"])
-        .arg(dir.join("frames"))
-        .arg("--bindings")
-        .arg(&bindings)
-        .arg("--out")
-        .arg(dir.join("again.csv"))
-        .output()
-        .unwrap();
+    let bad = track_bindings();
     let stderr = String::from_utf8_lossy(&bad.stderr);
     assert!(
         !bad.status.success()
