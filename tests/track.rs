@@ -831,7 +831,7 @@ fn cli_writes_oriented_tracks_a_valid_pins_glb_and_bindings_that_track_the_same(
         assert_eq!(point["polygon"], point["face"], "a triangle mesh's polygons are its faces");
     }
     // The GLB: valid, one node per point named by its id, keyed at every frame's time with the
-    // CSV's positions (as f32) and rotations that take Z to the normal.
+    // CSV's positions (as f32) and rotations that take Y (glTF's up) to the normal.
     common::validate_gltf(&glb);
     let bytes = std::fs::read(&glb).unwrap();
     let (gltf, times) = glb_floats(&bytes, 0);
@@ -852,7 +852,7 @@ fn cli_writes_oriented_tracks_a_valid_pins_glb_and_bindings_that_track_the_same(
                 point["normal"][t][1].as_f64().unwrap(),
                 point["normal"][t][2].as_f64().unwrap(),
             );
-            assert!((q * DVec3::Z).distance(normal) < 1e-6, "{} frame {t}", point["id"]);
+            assert!((q * DVec3::Y).distance(normal) < 1e-6, "{} frame {t}", point["id"]);
         }
     }
     // The bindings written back track the same: the same CSV byte for byte.

@@ -2,8 +2,10 @@
 //!
 //! One node per tracked point, named by its id, with no mesh. One animation, `tracks`, moves
 //! each node: a `translation` channel (the point's position) and a `rotation` channel (its
-//! orientation frame as a quaternion: X along the tangent, Y along normal × tangent, Z along
-//! the normal; [`super::frame`]), both `LINEAR`, keyed at every frame's time on the clock
+//! orientation frame ([`super::frame`]) as a glTF node carries it: X along the tangent, Y,
+//! glTF's up, along the normal, Z along tangent × normal; an importer that turns glTF's +Y up
+//! into its own +Z, as Blender's does, turns the node's axes with it, so there the locator's X
+//! is the tangent and its Z the normal, as a three-vertex parent's), both `LINEAR`, keyed at every frame's time on the clock
 //! ([`super::clock`]). Each node's own translation and rotation are frame 0's, so a viewer that
 //! does not play the animation still shows the points where they start. Consecutive keys'
 //! quaternions are on one side (non-negative dot product), so LINEAR's slerp turns the short
@@ -16,7 +18,7 @@ use super::output::{check_clock, TrackedPoint};
 use super::TrackError;
 use crate::sequence::glb::{float_accessor, write_container, Accessor, Body};
 use crate::sequence::orient::Orientation;
-use glam::DQuat;
+use glam::{DMat3, DQuat, DVec3};
 use serde_json::{json, Value};
 use std::path::Path;
 
@@ -48,6 +50,12 @@ pub fn write_pins_glb(
         .map_err(|e| fail(e.to_string()))
 }
 
+/// The node rotation of `frame`: X to the tangent, Y to the normal, Z to tangent × normal.
+fn node_rotation(frame: &SurfaceFrame) -> DQuat {
+    let (n, t) = (DVec3::from(frame.normal), DVec3::from(frame.tangent));
+    DQuat::from_mat3(&DMat3::from_cols(t, n, t.cross(n))).normalize()
+}
+
 /// Position (turned) and rotation (turned, unit, continuous in sign) of `point` per frame.
 fn keys(point: &TrackedPoint, orientation: Orientation) -> (Vec<[f32; 3]>, Vec<[f32; 4]>) {
     let positions = point.trajectory.iter().map(|&p| orientation.apply(p).map(|c| c as f32));
@@ -58,7 +66,7 @@ fn keys(point: &TrackedPoint, orientation: Orientation) -> (Vec<[f32; 3]>, Vec<[
             normal: orientation.apply(frame.normal),
             tangent: orientation.apply(frame.tangent),
         };
-        let q = DQuat::from_array(turned.rotation());
+        let q = node_rotation(&turned);
         let q = if t > 0 && q.dot(previous) < 0.0 { -q } else { q };
         previous = q;
         q.to_array().map(|c| c as f32)
