@@ -10,7 +10,7 @@ use std::cell::Cell;
 /// edited count in a kilobyte file cannot make the reader allocate hundreds of megabytes.
 const BUDGET_FLOOR: usize = 8 << 20;
 
-/// Bytes a reader may materialise: at least [`BUDGET_FLOOR`], else `per_byte` per byte of the
+/// Bytes a reader may materialise: at least `BUDGET_FLOOR` (8 MiB), else `per_byte` per byte of the
 /// file (its JSON and buffers).
 pub struct Budget {
     limit: usize,
