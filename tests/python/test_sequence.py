@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import tagsplat
-from conftest import run_cli
+from conftest import ROOT, run_cli
 
 
 @pytest.fixture(scope="module")
@@ -116,3 +116,17 @@ def test_paths_that_are_no_sequence_are_refused_by_name(tmp_path):
 def test_a_missing_sequence_file_is_bad_input(tmp_path):
     with pytest.raises(tagsplat.BadInputError, match="nothing.glb"):
         tagsplat.Sequence.read(tmp_path / "nothing.glb")
+
+
+def test_read_options_reach_the_engine(meshes):
+    fox = ROOT / "tests" / "formats" / "data" / "khronos" / "Fox.glb"
+    run = tagsplat.Sequence.read(fox, animation="Run", fps=30.0)
+    assert run.fps == 30.0 and len(run.times) == len(run) and run.times[0] == 0.0
+    assert run.up == "+Y" and run.vertex_count == 1728
+    assert any("Run" in note for note in run.notes)
+    with pytest.raises(tagsplat.Error, match="Survey"):
+        tagsplat.Sequence.read(fox)  # three animations and no choice: the error lists them
+    with pytest.raises(tagsplat.BadInputError, match="--animation has no meaning for a folder"):
+        tagsplat.Sequence.read(meshes, animation="Run")
+    clocked = tagsplat.Sequence.read(meshes, fps=12.0)
+    assert clocked.fps == 12.0 and clocked.times is None
