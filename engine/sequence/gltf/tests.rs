@@ -314,7 +314,7 @@ fn choices_and_damage_are_errors_that_say_what_and_where() {
     }
     std::fs::write(&bin, &bytes).unwrap();
     let e = error(&edited(&file, |d| d["accessors"][0]["count"] = json!(1u64 << 40)), &none);
-    assert!(e.contains("would take more than the 16 MiB"), "{e}");
+    assert!(e.contains("would take more than the 8 MiB"), "{e}");
     let e = error(&edited(&file, |d| d["bufferViews"][0]["byteLength"] = json!(400)), &none);
     assert!(e.contains("buffer view 0 (bytes 0 + 400) runs past its buffer of 68 bytes"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
