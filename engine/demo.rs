@@ -7,9 +7,10 @@ use crate::eval::{evaluate_folders, FolderOptions, FolderReport};
 use crate::gpu::GpuContext;
 use crate::sequence::orient::{Orientation, UpAxis};
 use crate::sequence::usd::{write_usda, UsdTracks};
-use crate::sequence::MeshSequence;
+use crate::sequence::{MeshSequence, ReadOptions};
 use crate::synth::{generate, SubjectSource, SynthOptions};
-use crate::track::output::write_tracks_csv;
+use crate::track::clock::Clock;
+use crate::track::output::write_pinned_tracks_csv;
 use crate::track::queries::read_points;
 use crate::track::{track, Queries};
 use crate::train::pipeline::{run_train, TrainConfig, TrainJob, TrainProgress, TrainReport};
@@ -167,11 +168,12 @@ pub fn train_and_score(
 ) -> Result<(TrainReport, Scores), DemoError> {
     let started = std::time::Instant::now();
     let train = run_train(ctx, &TrainJob::new(data, out, config), progress)?;
-    let sequence = MeshSequence::read(&out.join("meshes"))?;
+    let (sequence, info) = MeshSequence::read_with(&out.join("meshes"), &ReadOptions::default())?;
     let queries = Queries::Points(read_points(&data.join("points.csv"))?);
     // Bind within 5% of the extent: the reconstruction is not the ground-truth surface.
     let tracked = track(&sequence.faces, &sequence.frames, &queries, 0.05)?;
-    write_tracks_csv(&out.join("trajectories.csv"), &tracked.points)?;
+    let clock = Clock::of(&info, sequence.frames.len())?;
+    write_pinned_tracks_csv(&out.join("trajectories.csv"), &tracked.points, &clock)?;
     write_tracks_usda(&out.join("tracks.usda"), &sequence, &tracked.points)?;
     let eval = evaluate_folders(
         out,

@@ -31,7 +31,7 @@
 //!
 //! Internal, with no stability promise: `rng`, `geometry`, `sort`, `loss`, `optim`,
 //! `regularize`, `deform`, `topology` and `shaders` (public but hidden, for the tests and
-//! benchmarks), `ssim_window` and `flow` (private).
+//! benchmarks), `ssim_window`, `flow` and `panic_payload` (private).
 
 // Every public item says what it is: `scripts/test.sh` builds the docs with warnings as errors.
 #![warn(missing_docs)]
@@ -82,6 +82,7 @@ pub mod topology;
 
 // Used inside the crate only.
 mod flow;
+mod panic_payload;
 mod ssim_window;
 
 // The embedding API: what a program needs to reconstruct a sequence, read it, track points

@@ -228,7 +228,8 @@ fn tracker_output_on_generated_ground_truth_scores_near_zero() {
     use tagsplat::eval::{evaluate_folders, FolderOptions};
     use tagsplat::mesh::TriMesh;
     use tagsplat::synth::{generate, SubjectSource, SynthOptions};
-    use tagsplat::track::output::write_tracks_csv;
+    use tagsplat::track::clock::Clock;
+    use tagsplat::track::output::write_pinned_tracks_csv;
     use tagsplat::track::queries::read_points;
     use tagsplat::track::{track, Queries};
     let root = std::env::temp_dir().join(format!("tagsplat-eval-e2e-{}", std::process::id()));
@@ -254,7 +255,9 @@ fn tracker_output_on_generated_ground_truth_scores_near_zero() {
     let queries = Queries::Points(read_points(&gt.join("points.csv")).unwrap());
     let tracked = track(&meshes[0].faces, &frames, &queries, 1e-4).unwrap();
     assert!(tracked.unbound.is_empty());
-    write_tracks_csv(&pred.join("trajectories.csv"), &tracked.points).unwrap();
+    // The tracker's own CSV, orientation and clock columns included, is what eval reads.
+    let clock = Clock::uniform(24.0, 0.0, frames.len()).unwrap();
+    write_pinned_tracks_csv(&pred.join("trajectories.csv"), &tracked.points, &clock).unwrap();
     let r = evaluate_folders(
         &pred,
         &gt,

@@ -20,7 +20,7 @@ use tagsplat::track::pins::write_pins_glb;
 use tagsplat::track::plot::write_plot;
 use tagsplat::track::queries::{read_pixels, read_points};
 use tagsplat::track::{
-    project_tracks, track as track_sequence, Clock, ImagePoint, Queries, TrackReport,
+    project_tracks, track_sequence, ImagePoint, Queries, RunError, Targets, TrackReport,
 };
 
 #[derive(Args)]
@@ -118,34 +118,31 @@ pub fn track(args: TrackArgs) -> Result<()> {
         (Some(file), None) => Some(Camera::load_json(file)?),
         (None, None) => None,
     };
-    let queries = match (&args.points, &args.pixels, &camera) {
-        _ if args.bindings.is_some() => given_bindings(&args, &sequence, &info)?,
-        (Some(points), _, _) => Queries::Points(read_points(points)?),
-        (None, Some(pixels), Some(camera)) => {
-            Queries::Pixels { camera: *camera, pixels: read_pixels(pixels)? }
+    let targets = match (&args.bindings, &args.points, &args.pixels, &camera) {
+        (Some(bindings), ..) => Targets::File(read_bindings(bindings)?),
+        (None, Some(points), _, _) => Targets::Queries(Queries::Points(read_points(points)?)),
+        (None, None, Some(pixels), Some(camera)) => {
+            Targets::Queries(Queries::Pixels { camera: *camera, pixels: read_pixels(pixels)? })
         }
         _ => bail!("give --points, --bindings, or --pixels with --camera"),
     };
-    let on = || format!("cannot track on {}", args.sequence.display());
-    let report = track_sequence(&sequence.faces, &sequence.frames, &queries, args.max_distance)
-        .with_context(on)?;
-    let report = match &info.polygon_of {
-        Some(polygon_of) => report.in_polygons(polygon_of).with_context(on)?,
-        None => report,
-    };
-    let clock = Clock::of(&info, sequence.frames.len()).with_context(on)?;
+    let tracked =
+        track_sequence(&sequence.faces, &sequence.frames, &info, &targets, args.max_distance)
+            .map_err(|e| on_sequence(e, &args.sequence))?;
+    let (report, clock) = (&tracked.report, &tracked.clock);
     if report.unbound.is_empty() {
         // A list from an earlier run would describe points that are now tracked.
         let _ = std::fs::remove_file(unbound_path(&args.out));
     } else {
-        report_unbound(&args, &queries, &report)?;
+        report_unbound(&args, &targets, report)?;
     }
-    write_pinned_tracks_csv(&args.out, &report.points, &clock)?;
+    write_pinned_tracks_csv(&args.out, &report.points, clock)?;
     if let Some(json) = &args.json {
-        write_report_json(json, &report, &clock)?;
+        write_report_json(json, report, clock)?;
     }
     if let Some(glb) = &args.glb {
-        write_pins_glb(glb, &report.points, &clock, args.up.gltf_orientation(info.up))?;
+        let orientation = tracked.pins_orientation(args.up.from_up, args.up.up.into());
+        write_pins_glb(glb, &report.points, clock, orientation)?;
     }
     if let Some(path) = &args.bindings_out {
         write_bindings_csv(path, &report.points)?;
@@ -184,20 +181,29 @@ pub fn track(args: TrackArgs) -> Result<()> {
     Ok(())
 }
 
+/// A failed run on `--sequence`, in the words of the step that failed.
+fn on_sequence(error: RunError, sequence: &Path) -> anyhow::Error {
+    let (step, cause) = match error {
+        RunError::Bindings(cause) => ("cannot use the bindings on", cause),
+        RunError::Track(cause) => ("cannot track on", cause),
+    };
+    anyhow::Error::new(cause).context(format!("{step} {}", sequence.display()))
+}
+
 /// Lists the points that were not bound on stderr and beside `--out`, or fails with `--strict`.
-fn report_unbound(args: &TrackArgs, queries: &Queries, report: &TrackReport) -> Result<()> {
+fn report_unbound(args: &TrackArgs, targets: &Targets, report: &TrackReport) -> Result<()> {
     let level = if args.strict { "error" } else { "warning" };
     for u in &report.unbound {
         eprintln!("{level}: point {} not bound: {}", u.id, u.reason);
     }
     let total = report.unbound.len() + report.points.len();
     if args.strict {
-        let hint = match queries {
-            Queries::Points(_) => format!(
+        let hint = match targets {
+            Targets::Queries(Queries::Points(_)) => format!(
                 " (farther than --max-distance {} x the frame-0 extent = {})",
                 args.max_distance, report.max_distance
             ),
-            Queries::Pixels { .. } | Queries::Bindings(_) => String::new(),
+            _ => String::new(),
         };
         bail!(
             "{} of {total} points not bound{hint}; --strict refuses the run",
@@ -213,22 +219,6 @@ fn report_unbound(args: &TrackArgs, queries: &Queries, report: &TrackReport) -> 
         listed.display()
     );
     Ok(())
-}
-
-/// The points of `--bindings`, checked against the sequence read.
-fn given_bindings(
-    args: &TrackArgs,
-    sequence: &MeshSequence,
-    info: &SequenceInfo,
-) -> Result<Queries> {
-    let path = args.bindings.as_deref().context("no --bindings")?;
-    let vertices = sequence.frames.first().map_or(0, Vec::len);
-    let resolved =
-        read_bindings(path)?.resolve(&sequence.faces, vertices, info.polygon_of.as_deref());
-    Ok(Queries::Bindings(
-        resolved
-            .with_context(|| format!("cannot use the bindings on {}", args.sequence.display()))?,
-    ))
 }
 
 /// The dataset at `data` and the index of its camera called `name`; the error lists the names
@@ -372,12 +362,6 @@ impl UpArgs {
         self.from_up
             .or(file_up)
             .map_or(Orientation::keep(up), |source| Orientation::new(source, up))
-    }
-
-    /// The turn onto glTF's +Y from --from-up, else the file's own up, else --up (the capture's
-    /// up that [`Self::orientation`] turns onto --up).
-    fn gltf_orientation(&self, file_up: Option<SignedAxis>) -> Orientation {
-        Orientation::new(self.orientation(file_up).source, UpAxis::Y)
     }
 }
 

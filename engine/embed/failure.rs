@@ -3,6 +3,7 @@
 
 use crate::dataset::DatasetError;
 use crate::gpu::GpuError;
+use crate::panic_payload::panic_text;
 use crate::sequence::SequenceError;
 use crate::train::TrainError;
 use std::error::Error;
@@ -84,15 +85,6 @@ pub(crate) fn panicked(payload: &(dyn std::any::Any + Send)) -> Failure {
     let what = panic_text(payload);
     let message = format!("internal error (a bug in tagsplat, please report it): {what}");
     Failure { kind: ErrorKind::Internal, message }
-}
-
-/// The message a panic's payload carries ("no message" when it is not text).
-pub(crate) fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "no message".into())
 }
 
 /// `error`, then each of its sources.

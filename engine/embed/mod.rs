@@ -10,7 +10,7 @@
 
 mod dataset_info;
 mod evaluate;
-pub(crate) mod failure;
+mod failure;
 mod job;
 
 pub use dataset_info::{CameraInfo, DatasetInfo};

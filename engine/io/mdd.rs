@@ -6,14 +6,12 @@
 //! refused.
 //!
 //! An MDD holds no faces, so a sequence is an MDD with its base mesh beside it: `anim.mdd` and
-//! `anim.obj` (as for PC2). Blender's exporter writes world-space positions in Blender's axes
+//! `anim.obj` (as for PC2; see `sequence::point_cache`). Blender's exporter writes world-space positions in Blender's axes
 //! (+Z up; its Y/Z flip is commented out), times `k / fps` from 0 whatever the start frame, and
 //! with "Rest Frame" on, one extra first frame: the start frame's evaluated mesh again (so frame
 //! 0 and 1 are equal and the count is end − start + 2). Both are read as the file says.
 
 use super::write_atomically;
-use crate::mesh::TriMesh;
-use crate::sequence::{MeshSequence, SequenceError, SourceSequence};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -138,50 +136,6 @@ pub fn write_mdd(path: &Path, mdd: &Mdd) -> Result<(), MddError> {
         Ok(())
     })
     .map_err(|e| error(path, format!("cannot write: {e}")))
-}
-
-/// The sequence of `anim.mdd` and its base mesh `anim.obj` beside it: faces (and frame-0
-/// colours) from the OBJ, positions and times from the MDD. Errors (the problem, for the caller
-/// to put after the MDD's name): a missing or bad base mesh, a bad MDD, a point count that is
-/// not the base mesh's vertex count.
-pub fn read_sequence(path: &Path) -> Result<SourceSequence, String> {
-    let base_path = path.with_extension("obj");
-    if !base_path.is_file() {
-        return Err(format!("the base mesh {} is missing", base_path.display()));
-    }
-    let base = TriMesh::read_obj(&base_path).map_err(|e| e.to_string())?;
-    let mdd = read_mdd(path).map_err(|e| e.problem)?;
-    let points = mdd.frames.first().ok_or("the file holds no frames")?.len();
-    if points != base.positions.len() {
-        return Err(format!(
-            "{points} points per frame, the base mesh {} has {} vertices",
-            base_path.display(),
-            base.positions.len()
-        ));
-    }
-    Ok(SourceSequence {
-        counts: vec![3; base.faces.len()],
-        indices: base.faces.concat(),
-        frames: mdd.frames,
-        times: mdd.times.iter().map(|&t| f64::from(t)).collect(),
-        colors: base.colors,
-        ..SourceSequence::default()
-    })
-}
-
-/// Writes `anim.mdd` (frame `t` at `t / fps` seconds) and the base mesh `anim.obj` (frame 0,
-/// with frame-0 colours).
-pub fn write_sequence(path: &Path, sequence: &MeshSequence, fps: f64) -> Result<(), SequenceError> {
-    sequence.check(path)?;
-    let invalid = |problem: String| SequenceError::Invalid { path: path.to_path_buf(), problem };
-    if !(fps.is_finite() && fps > 0.0) {
-        return Err(invalid(format!("cannot write: {fps} frames per second")));
-    }
-    let base = sequence.frame_mesh(0).ok_or_else(|| invalid("no frames".into()))?;
-    base.write_obj(&path.with_extension("obj"))?;
-    let times = (0..sequence.frames.len()).map(|t| (t as f64 / fps) as f32).collect();
-    let mdd = Mdd { times, frames: sequence.frames.clone() };
-    write_mdd(path, &mdd).map_err(|e| invalid(e.problem))
 }
 
 #[cfg(test)]

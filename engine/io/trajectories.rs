@@ -1,6 +1,9 @@
 //! The trajectory CSV shared by the tracker, the generator and `eval`: a header line
 //! `id,frame,x,y,z`, then one row per point and frame (id a non-empty name without commas or
-//! quotes, as the tracker writes it; frame an unsigned integer; positions in scene units). Rows may come in any order; an (id, frame) pair appears once.
+//! quotes, as the tracker writes it; frame an unsigned integer; positions in scene units). Rows
+//! may come in any order; an (id, frame) pair appears once. The header may name more columns
+//! after these (the tracker's `tracks.csv` adds orientation and clock columns): every row then
+//! has as many fields as the header, and the reader reads the first five.
 
 use std::collections::HashSet;
 use std::io::Write;
@@ -70,19 +73,19 @@ pub fn read_trajectories_csv(path: &Path) -> Result<Vec<TrackPoint>, Trajectorie
 /// Parses CSV text; errors carry the 1-based line number.
 pub fn parse_trajectories_csv(text: &str) -> Result<Vec<TrackPoint>, (usize, String)> {
     let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
-    match lines.next() {
-        Some((_, h)) if h.trim().replace(' ', "") == HEADER => {}
+    let columns = match lines.next() {
+        Some((_, h)) if is_header(h) => h.split(',').count(),
         Some((i, h)) => {
             return Err((i + 1, format!("expected the header `{HEADER}`, found `{h}`")))
         }
         None => return Err((1, format!("empty file, expected the header `{HEADER}`"))),
-    }
+    };
     let mut seen = HashSet::new();
     let mut points = Vec::new();
     for (i, line) in lines {
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if fields.len() != 5 {
-            return Err((i + 1, format!("expected 5 fields, found {}", fields.len())));
+        if fields.len() != columns {
+            return Err((i + 1, format!("expected {columns} fields, found {}", fields.len())));
         }
         let id = fields[0];
         if id.is_empty() || id.contains('"') {
@@ -105,6 +108,12 @@ pub fn parse_trajectories_csv(text: &str) -> Result<Vec<TrackPoint>, (usize, Str
         points.push(TrackPoint { id: id.to_owned(), frame, position });
     }
     Ok(points)
+}
+
+/// `id,frame,x,y,z` (spaces around names allowed), perhaps followed by more named columns.
+fn is_header(line: &str) -> bool {
+    let names: Vec<String> = line.split(',').map(|n| n.trim().to_owned()).collect();
+    names.len() >= 5 && names[..5].join(",") == HEADER && names[5..].iter().all(|n| !n.is_empty())
 }
 
 #[cfg(test)]
@@ -130,5 +139,16 @@ mod tests {
         assert_eq!(parse_trajectories_csv("id,frame,x,y,z\n,0,1,2,3\n").unwrap_err().0, 2);
         assert_eq!(parse_trajectories_csv("id,frame,x,y,z\na,-1,1,2,3\n").unwrap_err().0, 2);
         assert!(parse_trajectories_csv("").is_err());
+        // The tracker's columns after the five are read past; every row has them all.
+        let wide = "id,frame,x,y,z,nx,fps\nnose,1,1e10,0,-0,0,24\n3,0,0.1,-2.5e-7,0.3333333333333333,1,24\n";
+        let read = parse_trajectories_csv(wide).unwrap();
+        assert_eq!(read[0], pts[1]);
+        assert_eq!(read[1].position, pts[0].position);
+        let short = "id,frame,x,y,z,nx\n1,0,1,2,3\n";
+        assert_eq!(
+            parse_trajectories_csv(short).unwrap_err(),
+            (2, "expected 6 fields, found 5".into())
+        );
+        assert_eq!(parse_trajectories_csv("id,frame,x,y,z,\n1,0,1,2,3,\n").unwrap_err().0, 1);
     }
 }

@@ -4,6 +4,7 @@
 mod bounds;
 pub mod obj;
 pub mod polygon;
+pub mod skinning;
 
 pub use bounds::{bounding_box, bounding_diagonal};
 

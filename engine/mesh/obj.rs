@@ -56,50 +56,121 @@ fn invalid(path: &Path, problem: String) -> MeshError {
 /// Parses OBJ text; `path` names the source in errors. Not validated (faces may refer to
 /// vertices that come later in the file).
 pub fn parse_obj(path: &Path, text: &str) -> Result<TriMesh, MeshError> {
-    let mut positions = Vec::new();
-    let mut colors = Vec::new();
-    let mut polygons = Vec::new();
-    for (n, line) in text.lines().enumerate() {
+    let parsed = parse_obj_text(path, text, None)?;
+    let (faces, _) = parsed.faces.unwrap_or_default();
+    Ok(TriMesh { positions: parsed.positions, faces, colors: parsed.colors })
+}
+
+/// The statements of an OBJ text that tagsplat reads.
+#[derive(Debug, Default)]
+pub struct ObjText {
+    /// `v` positions, in file order.
+    pub positions: Vec<[f32; 3]>,
+    /// `v` colours, when every vertex has them.
+    pub colors: Option<Vec<[u8; 3]>>,
+    /// The fanned triangles and, per triangle, the polygon (`f` statement) it came from. None
+    /// when the face statements were the `known_faces` text (see [`parse_obj_text`]).
+    pub faces: Option<(Vec<[u32; 3]>, Vec<u32>)>,
+    /// Byte offset of the first `f` statement when no `v` statement follows it: then the text
+    /// from there on, with the vertex count, decides the faces, and a later frame whose text
+    /// ends the same way has the same faces.
+    pub face_text_start: Option<usize>,
+}
+
+/// Parses OBJ text (see the module doc); `path` names the source in errors.
+///
+/// `known_faces`: the face text of an earlier file (from its [`ObjText::face_text_start`]
+/// on). When this text's first `f` statement starts the same bytes to the end, its faces are
+/// not parsed again and `faces` is None: they are the earlier file's, provided the caller
+/// checks that both have the same number of vertices. Frames of an exported sequence differ
+/// only in their `v` lines, so this halves the work of reading them.
+pub fn parse_obj_text(
+    path: &Path,
+    text: &str,
+    known_faces: Option<&str>,
+) -> Result<ObjText, MeshError> {
+    let mut out = ObjText::default();
+    let (mut colors, mut counts, mut indices) = (Vec::new(), Vec::new(), Vec::new());
+    let mut offset = 0;
+    for (n, line) in text.split_inclusive('\n').enumerate() {
         let at = |problem: String| invalid(path, format!("line {}: {problem}", n + 1));
-        let mut tokens = line.split_whitespace();
+        let (start, mut tokens) = (offset, line.split_ascii_whitespace());
+        offset += line.len();
         match tokens.next() {
             Some("v") => {
-                let values = tokens
-                    .map(|t| t.parse::<f32>().map_err(|_| at(format!("`{t}` is not a number"))))
-                    .collect::<Result<Vec<f32>, _>>()?;
-                match values.len() {
-                    3 | 4 => positions.push([values[0], values[1], values[2]]),
-                    6 => {
-                        positions.push([values[0], values[1], values[2]]);
-                        colors.push(
-                            [values[3], values[4], values[5]]
-                                .map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8),
-                        );
-                    }
-                    k => return Err(at(format!("a vertex needs 3, 4 or 6 numbers, found {k}"))),
-                }
+                // A vertex after a face: the face text alone no longer decides the faces.
+                out.face_text_start = None;
+                vertex(tokens, &mut out.positions, &mut colors).map_err(at)?;
             }
             Some("f") => {
-                let polygon = tokens
-                    .map(|t| {
-                        vertex_index(t, positions.len())
-                            .ok_or_else(|| at(format!("`{t}` is not a valid vertex reference")))
-                    })
-                    .collect::<Result<Vec<u32>, _>>()?;
-                if polygon.len() < 3 {
-                    return Err(at(format!(
-                        "a face needs at least 3 vertices, found {}",
-                        polygon.len()
-                    )));
+                if counts.is_empty() {
+                    if known_faces == Some(&text[start..]) {
+                        out.colors = all_or_none(colors, out.positions.len());
+                        return Ok(out);
+                    }
+                    out.face_text_start = Some(start);
                 }
-                polygons.push(polygon);
+                face(tokens, out.positions.len(), &mut indices)
+                    .map(|c| counts.push(c))
+                    .map_err(at)?;
             }
             _ => {}
         }
     }
-    let faces = super::fan_triangles(path, &polygons, positions.len())?;
-    let colors = (!colors.is_empty() && colors.len() == positions.len()).then_some(colors);
-    Ok(TriMesh { positions, faces, colors })
+    let fanned = super::polygon::fan_triangulate(&counts, &indices, out.positions.len())
+        .map_err(|problem| invalid(path, problem))?;
+    out.faces = Some(fanned);
+    out.colors = all_or_none(colors, out.positions.len());
+    Ok(out)
+}
+
+/// Reads a `v` statement's numbers: a position, and a colour when there are six.
+fn vertex<'a>(
+    tokens: impl Iterator<Item = &'a str>,
+    positions: &mut Vec<[f32; 3]>,
+    colors: &mut Vec<[u8; 3]>,
+) -> Result<(), String> {
+    let (mut values, mut k) = ([0.0f32; 6], 0);
+    for t in tokens {
+        let value = t.parse::<f32>().map_err(|_| format!("`{t}` is not a number"))?;
+        if let Some(slot) = values.get_mut(k) {
+            *slot = value;
+        }
+        k += 1;
+    }
+    match k {
+        3 | 4 | 6 => positions.push([values[0], values[1], values[2]]),
+        k => return Err(format!("a vertex needs 3, 4 or 6 numbers, found {k}")),
+    }
+    if k == 6 {
+        colors.push(
+            [values[3], values[4], values[5]].map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8),
+        );
+    }
+    Ok(())
+}
+
+/// Appends an `f` statement's vertex indices (0-based) to `indices`; returns how many.
+fn face<'a>(
+    tokens: impl Iterator<Item = &'a str>,
+    defined: usize,
+    indices: &mut Vec<u32>,
+) -> Result<u32, String> {
+    let before = indices.len();
+    for t in tokens {
+        let index = vertex_index(t, defined);
+        indices.push(index.ok_or_else(|| format!("`{t}` is not a valid vertex reference"))?);
+    }
+    let count = indices.len() - before;
+    if count < 3 {
+        return Err(format!("a face needs at least 3 vertices, found {count}"));
+    }
+    Ok(count as u32)
+}
+
+/// Colours are kept only when every vertex has one.
+fn all_or_none(colors: Vec<[u8; 3]>, vertices: usize) -> Option<Vec<[u8; 3]>> {
+    (!colors.is_empty() && colors.len() == vertices).then_some(colors)
 }
 
 /// The 0-based vertex index of an `f` token (`i`, `i/t`, `i//n`, `i/t/n`); negative indices
@@ -126,6 +197,22 @@ mod tests {
         assert_eq!(mesh.positions.len(), 4);
         assert_eq!(mesh.faces, vec![[0, 1, 2], [0, 2, 3], [0, 1, 2], [0, 2, 3]]);
         assert_eq!(mesh.colors, None);
+    }
+
+    #[test]
+    fn face_text_is_shared_only_when_no_vertex_follows_it() {
+        let path = Path::new("a.obj");
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1 2 3\n";
+        let first = parse_obj_text(path, text, None).unwrap();
+        let start = first.face_text_start.unwrap();
+        assert_eq!(&text[start..], "f 1 2 3\n");
+        let later = "v 0 0 1\nv 1 0 1\nv 0 1 1\nf 1 2 3\n";
+        let known = parse_obj_text(path, later, Some(&text[start..])).unwrap();
+        assert!(known.faces.is_none());
+        assert_eq!(known.positions[2], [0.0, 1.0, 1.0]);
+        let after = parse_obj_text(path, "v 0 0 0\nv 1 0 0\nf 1 2 3\nv 0 1 0\n", None).unwrap();
+        assert_eq!(after.face_text_start, None);
+        assert_eq!(after.faces.unwrap().0, vec![[0, 1, 2]]);
     }
 
     #[test]

@@ -24,14 +24,17 @@ pub mod alembic;
 pub mod bench;
 pub mod fbx;
 pub mod folder;
+mod folder_read;
 pub mod glb;
 pub mod gltf;
 pub mod orient;
+mod point_cache;
 pub mod source;
 pub mod usd;
 pub mod usd_read;
+mod usdc_check;
 
-use crate::io::pc2::{self, Pc2Error, PointCache};
+use crate::io::pc2::Pc2Error;
 use crate::mesh::{MeshError, TriMesh};
 use glb::GlbError;
 pub use source::{ReadOptions, SequenceInfo, SourceSequence};
@@ -122,8 +125,11 @@ impl MeshSequence {
             Ok((sequence, SequenceInfo { fps: options.fps, ..SequenceInfo::default() }))
         };
         match kind.as_str() {
-            "folder" => refuse_options(path, &kind, options, [false, true, false])
-                .and_then(|()| clockless(Self::read_folder(path)?)),
+            "folder" => refuse_options(path, &kind, options, [false, true, false]).and_then(|()| {
+                let (sequence, polygon_of) = folder_read::read_frames(path)?;
+                let (sequence, info) = clockless(sequence)?;
+                Ok((sequence, SequenceInfo { polygon_of, ..info }))
+            }),
             "pc2" => refuse_options(path, &kind, options, [false, true, false])
                 .and_then(|()| clockless(Self::read_pc2(path)?)),
             "glb" | "gltf" => refuse_options(path, &kind, options, [true, true, true])
@@ -137,7 +143,7 @@ impl MeshSequence {
                     .and_then(|()| from_source(path, usd_read::read(path, options)))
             }
             "mdd" => refuse_options(path, &kind, options, [false; 3])
-                .and_then(|()| from_source(path, crate::io::mdd::read_sequence(path))),
+                .and_then(|()| point_cache::read_mdd(path)),
             _ => Err(invalid(
                 path,
                 "not a sequence: expected a folder of .ply/.obj frames, or a .pc2, .mdd, .gltf, \
@@ -151,7 +157,7 @@ impl MeshSequence {
     pub fn write(&self, path: &Path, format: FrameFormat, fps: f64) -> Result<(), SequenceError> {
         match extension(path).as_deref() {
             Some("pc2") => self.write_pc2(path),
-            Some("mdd") => crate::io::mdd::write_sequence(path, self, fps),
+            Some("mdd") => point_cache::write_mdd(path, self, fps),
             Some("glb") => Ok(glb::write_glb(path, self, fps)?),
             _ => self.write_folder(path, format),
         }
@@ -208,29 +214,10 @@ impl MeshSequence {
         })
     }
 
-    /// Reads the frames of a folder (see [`folder`]), checking them against frame 0.
+    /// Reads the frames of a folder (see [`folder`]), checking them against frame 0: every
+    /// frame has its vertex count and faces, or the error names the first frame that differs.
     pub fn read_folder(dir: &Path) -> Result<Self, SequenceError> {
-        let files = folder::frame_files(dir)?;
-        let mut sequence = MeshSequence::default();
-        let mut colors = Some(Vec::new());
-        for (t, file) in files.iter().enumerate() {
-            let mesh = match folder::frame_extension(&file.to_string_lossy()) {
-                Some("obj") => TriMesh::read_obj(file)?,
-                _ => TriMesh::read_ply(file)?,
-            };
-            if t == 0 {
-                sequence.faces = mesh.faces;
-            } else {
-                check_same_topology(&sequence, &mesh, t, file, &files[0])?;
-            }
-            sequence.frames.push(mesh.positions);
-            colors = colors.zip(mesh.colors).map(|(mut all, c)| {
-                all.push(c);
-                all
-            });
-        }
-        sequence.colors = colors;
-        Ok(sequence)
+        Ok(folder_read::read_frames(dir)?.0)
     }
 
     /// Writes `frame_000000.ply` (or `.obj`), … into `dir`, creating it. Refuses a folder that
@@ -260,47 +247,6 @@ impl MeshSequence {
         Ok(())
     }
 
-    /// Reads `anim.pc2` and its base mesh `anim.obj`: faces (and colours) from the OBJ,
-    /// positions of every frame from the PC2 samples.
-    pub fn read_pc2(path: &Path) -> Result<Self, SequenceError> {
-        let base_path = path.with_extension("obj");
-        if !base_path.is_file() {
-            return Err(invalid(path, format!("the base mesh {} is missing", base_path.display())));
-        }
-        let base = TriMesh::read_obj(&base_path)?;
-        let cache = pc2::read_pc2(path)?;
-        if cache.samples.is_empty() {
-            return Err(invalid(path, "no samples"));
-        }
-        if cache.samples[0].len() != base.positions.len() {
-            return Err(invalid(
-                path,
-                format!(
-                    "{} points per sample, the base mesh {} has {} vertices",
-                    cache.samples[0].len(),
-                    base_path.display(),
-                    base.positions.len()
-                ),
-            ));
-        }
-        let frames = cache.samples.len();
-        Ok(MeshSequence {
-            faces: base.faces,
-            colors: base.colors.map(|c| vec![c; frames]),
-            frames: cache.samples,
-        })
-    }
-
-    /// Writes `anim.pc2` (one sample per frame, starting at frame 0) and the base mesh
-    /// `anim.obj` (frame 0, with frame-0 colours).
-    pub fn write_pc2(&self, path: &Path) -> Result<(), SequenceError> {
-        self.check(path)?;
-        let base = self.frame_mesh(0).ok_or_else(|| invalid(path, "no frames"))?;
-        base.write_obj(&path.with_extension("obj"))?;
-        let cache = PointCache { start_frame: 0.0, sample_rate: 1.0, samples: self.frames.clone() };
-        Ok(pc2::write_pc2(path, &cache)?)
-    }
-
     /// [`MeshSequence::problem`] as an error naming `path`.
     pub fn check(&self, path: &Path) -> Result<(), SequenceError> {
         if self.frames.is_empty() {
@@ -318,18 +264,8 @@ pub(crate) fn check_same_topology(
     file: &Path,
     first: &Path,
 ) -> Result<(), SequenceError> {
-    let first_name =
-        first.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let n = sequence.frames[0].len();
-    if mesh.positions.len() != n {
-        return Err(invalid(
-            file,
-            format!(
-                "frame {t} has {} vertices, frame 0 ({first_name}) has {n}",
-                mesh.positions.len()
-            ),
-        ));
-    }
+    check_vertex_count(sequence, mesh.positions.len(), t, file, first)?;
+    let first_name = file_name(first);
     if mesh.faces.len() != sequence.faces.len() {
         return Err(invalid(
             file,
@@ -350,6 +286,27 @@ pub(crate) fn check_same_topology(
         ));
     }
     Ok(())
+}
+
+/// Frame `t` (read from `file`) must have frame 0's vertex count.
+pub(crate) fn check_vertex_count(
+    sequence: &MeshSequence,
+    vertices: usize,
+    t: usize,
+    file: &Path,
+    first: &Path,
+) -> Result<(), SequenceError> {
+    let n = sequence.frames.first().map_or(vertices, Vec::len);
+    if vertices == n {
+        return Ok(());
+    }
+    let problem =
+        format!("frame {t} has {vertices} vertices, frame 0 ({}) has {n}", file_name(first));
+    Err(invalid(file, problem))
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
 }
 
 /// The triangulated sequence of a reader's result, its errors naming `path`.

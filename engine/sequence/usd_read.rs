@@ -27,12 +27,13 @@ use std::path::Path;
 ///
 /// openusd trusts some counts and indices of a binary (usdc) file and panics on a few damaged
 /// or very old ones: such a panic is caught here and becomes an error naming the file's
-/// damage, so it never reaches the caller. (Its allocations are not bounded by the file's
-/// size: see docs/tracking.md.)
+/// damage, so it never reaches the caller. Every binary layer the stage opens is checked
+/// first (`sequence::usdc_check`), so that what openusd allocates stays within 64 bytes per
+/// byte of the layer (8 MiB at least).
 pub fn read(path: &Path, options: &ReadOptions) -> Result<SourceSequence, String> {
     let read = std::panic::AssertUnwindSafe(|| read_stage(path, options));
     std::panic::catch_unwind(read).unwrap_or_else(|payload| {
-        let what = crate::embed::failure::panic_text(&*payload);
+        let what = crate::panic_payload::panic_text(&*payload);
         Err(format!("damaged, or a kind of USD the reader cannot read (openusd failed: {what})"))
     })
 }
@@ -82,7 +83,10 @@ fn read_stage(path: &Path, options: &ReadOptions) -> Result<SourceSequence, Stri
 /// fails to compose.
 fn open(path: &Path) -> Result<Stage, String> {
     let name = path.to_str().ok_or("the path is not valid UTF-8")?;
-    let stage = Stage::open(name).map_err(|e| format!("cannot open the stage: {e:#}"))?;
+    let stage = Stage::builder()
+        .resolver(super::usdc_check::CheckedResolver::default())
+        .open(name)
+        .map_err(|e| format!("cannot open the stage: {e:#}"))?;
     match stage.composition_errors().first() {
         Some(error) => Err(format!("composition failed (not read in part): {error}")),
         None => Ok(stage),

@@ -6,8 +6,8 @@
 //! `global(joint) · inverseBind` (the skinned node's own transform ignored, as the glTF
 //! specification requires).
 
-use super::skinning::SkinWeights;
 use super::Subject;
+use crate::mesh::skinning::SkinWeights;
 use crate::sequence::gltf::animation::Animation;
 use crate::sequence::gltf::{load::load, mesh::read_mesh, rig::Rig, skin::Skin};
 use glam::DMat4;

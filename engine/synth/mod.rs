@@ -2,7 +2,8 @@
 //!
 //! - [`procedural`]: an articulated body (closed manifold, 5 limbs bending at joints).
 //! - [`gltf`]: a rigged glTF 2.0 character (skin, joints, animation channels).
-//! - [`skinning`]: linear blend skinning, shared by both subjects.
+//! - linear blend skinning ([`crate::mesh::skinning`]), shared by both subjects and the glTF
+//!   sequence reader.
 //! - [`texture`]: the coloured procedural texture painted on the rest pose.
 //! - [`raster`]: the supersampled CPU reference renderer (RGB + anti-aliased mask).
 //! - [`generate`](mod@generate): cameras, renders, per-frame meshes and point trajectories on disk.
@@ -14,12 +15,11 @@ pub mod manifold;
 pub mod motion_stats;
 pub mod procedural;
 pub mod raster;
-pub mod skinning;
 pub mod texture;
 
+pub use crate::mesh::skinning::{skin, SkinWeights};
 pub use generate::{generate, MotionPreset, SubjectSource, SynthOptions, SynthReport};
 pub use raster::{render, Render, RenderError};
-pub use skinning::{skin, SkinWeights};
 pub use texture::Texture;
 
 use glam::DMat4;

@@ -7,7 +7,7 @@
 //! cap's tangent), and the caps are disjoint, so the rest pose never self-intersects.
 
 use super::icosphere::icosphere;
-use super::skinning::SkinWeights;
+use crate::mesh::skinning::SkinWeights;
 use glam::{DMat4, DQuat, DVec3};
 
 /// Frames per animation cycle.
@@ -163,8 +163,8 @@ pub fn procedural_pose(time: f64) -> Vec<DMat4> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::skinning::skin;
     use crate::synth::manifold::closed_manifold_problem;
-    use crate::synth::skinning::skin;
 
     #[test]
     fn closed_manifold_weights_sum_to_one_and_rest_pose_is_identity() {

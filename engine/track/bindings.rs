@@ -7,6 +7,7 @@
 //! fills one of them and leaves the other's fields empty. An optional `polygon` column names
 //! the file polygon the triangle was fanned from, and is checked against the sequence read.
 //! Other columns are ignored. The CSV rules are the query files' ([`super::queries`]).
+//! The same anchors given as arrays (a front's) resolve alike ([`resolve_anchors`]).
 //!
 //! Written files have `id,face,u,v,w,polygon`, floats as shortest round-trip decimals, so a
 //! written binding reads back bit for bit.
@@ -140,23 +141,8 @@ impl BindingsFile {
         self.rows
             .iter()
             .map(|row| {
-                let binding = match row.anchor {
-                    Anchor::Surface { face, barycentric } => {
-                        Binding { face, barycentric, distance: 0.0 }
-                    }
-                    Anchor::Vertex(v) if v as usize >= vertices => {
-                        return Err(fail(row, format!("vertex {v} is out of range: the sequence has {vertices} vertices")));
-                    }
-                    Anchor::Vertex(v) => {
-                        let (face, corner) = first_face[v as usize].ok_or_else(|| {
-                            fail(row, format!("vertex {v} is in no triangle of the sequence"))
-                        })?;
-                        let mut barycentric = [0.0; 3];
-                        barycentric[corner] = 1.0;
-                        Binding { face, barycentric, distance: 0.0 }
-                    }
-                };
-                check_binding(&binding, faces.len()).map_err(|m| fail(row, m))?;
+                let binding = anchor_binding(row.anchor, faces.len(), &first_face)
+                    .map_err(|m| fail(row, m))?;
                 let polygon = polygon_of_face(binding.face, polygon_of);
                 match row.polygon {
                     Some(p) if p != polygon => Err(fail(row, format!("face {} is in polygon {polygon} of the sequence, not in polygon {p}: the file was made on another mesh", binding.face))),
@@ -165,6 +151,50 @@ impl BindingsFile {
             })
             .collect()
     }
+}
+
+/// The bindings of anchors given directly, (id, anchor) per point (a front's arrays), on a
+/// sequence with `faces` and `vertices` vertices per frame, as [`BindingsFile::resolve`] finds
+/// them. Errors name the point: a face or vertex out of range, a vertex no triangle has,
+/// barycentric coordinates that are negative or do not sum to 1.
+pub fn resolve_anchors(
+    anchors: &[(String, Anchor)],
+    faces: &[[u32; 3]],
+    vertices: usize,
+) -> Result<Vec<(String, Binding)>, TrackError> {
+    let first_face = first_face_of_each_vertex(faces, vertices);
+    anchors
+        .iter()
+        .map(|(id, anchor)| match anchor_binding(*anchor, faces.len(), &first_face) {
+            Ok(binding) => Ok((id.clone(), binding)),
+            Err(problem) => Err(TrackError::Binding { id: id.clone(), problem }),
+        })
+        .collect()
+}
+
+/// The binding `anchor` names on a sequence of `faces` triangles whose vertices' first
+/// triangles are `first_face` ([`first_face_of_each_vertex`]), checked ([`check_binding`]).
+fn anchor_binding(
+    anchor: Anchor,
+    faces: usize,
+    first_face: &[Option<(u32, usize)>],
+) -> Result<Binding, String> {
+    let binding = match anchor {
+        Anchor::Surface { face, barycentric } => Binding { face, barycentric, distance: 0.0 },
+        Anchor::Vertex(v) => {
+            let vertices = first_face.len();
+            let slot = first_face.get(v as usize).ok_or_else(|| {
+                format!("vertex {v} is out of range: the sequence has {vertices} vertices")
+            })?;
+            let (face, corner) =
+                (*slot).ok_or_else(|| format!("vertex {v} is in no triangle of the sequence"))?;
+            let mut barycentric = [0.0; 3];
+            barycentric[corner] = 1.0;
+            Binding { face, barycentric, distance: 0.0 }
+        }
+    };
+    check_binding(&binding, faces)?;
+    Ok(binding)
 }
 
 /// Per vertex, the first triangle that has it and its corner there.
@@ -270,6 +300,24 @@ mod tests {
                 e.starts_with(&format!("b.csv: line {line}: ")) && e.contains(needle),
                 "{text:?} -> {e}"
             );
+        }
+    }
+
+    #[test]
+    fn anchors_given_directly_resolve_as_rows_do_and_errors_name_the_point() {
+        let anchors =
+            |anchor| vec![("a".to_string(), Anchor::Vertex(3)), ("b".to_string(), anchor)];
+        let got = resolve_anchors(&anchors(Anchor::Vertex(0)), &SQUARE, 5).unwrap();
+        let from_file = resolve("id,vertex\na,3\nb,0\n").unwrap();
+        assert_eq!(got, from_file);
+        for (anchor, needle) in [
+            (Anchor::Vertex(5), "vertex 5 is out of range: the sequence has 5 vertices"),
+            (Anchor::Vertex(4), "vertex 4 is in no triangle"),
+            (Anchor::Surface { face: 2, barycentric: [1.0, 0.0, 0.0] }, "face 2 is out of range"),
+            (Anchor::Surface { face: 0, barycentric: [0.5, 0.75, 0.0] }, "sums to 1.25, not 1"),
+        ] {
+            let e = resolve_anchors(&anchors(anchor), &SQUARE, 5).unwrap_err().to_string();
+            assert!(e.starts_with("binding of point b: ") && e.contains(needle), "{e}");
         }
     }
 }

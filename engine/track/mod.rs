@@ -12,7 +12,7 @@
 //!   [`pins`]: a GLB of animated empties, one per point.
 //! - [`plot`]: an SVG of the trajectories; [`project`]: tracks seen through a camera;
 //!   [`overlay`]: those drawn over the camera's images.
-//! - [`run`]: one tracking run from queries to report.
+//! - [`run`]: one tracking run from queries to report, and the run on a sequence as read.
 //! - [`bench`](mod@bench): the `bench track` measurement.
 
 pub mod bench;
@@ -34,7 +34,7 @@ pub use clock::Clock;
 pub use frame::SurfaceFrame;
 pub use output::{TrackReport, TrackedPoint, UnboundPoint};
 pub use project::{project_tracks, ImagePoint};
-pub use run::{track, Queries};
+pub use run::{track, track_sequence, Queries, RunError, Targets, Tracked};
 pub use trajectory::trajectories;
 
 use crate::geometry::SurfaceError;

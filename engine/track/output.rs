@@ -6,14 +6,14 @@
 //! position, unit normal and unit tangent ([`super::frame`]), the frame's time in seconds, the
 //! frame rate and the scene frame of frame 0 (the same on every row), so that frame k plays at
 //! scene frame `start_frame + k`. Its first five columns are the trajectory CSV's
-//! ([`write_tracks_csv`], `id,frame,x,y,z`, which the generator, `eval` and the demo share).
+//! ([`crate::io::trajectories`], `id,frame,x,y,z`, which the generator and `eval` share), so
+//! `eval` reads it as it is.
 
 use super::bind::Binding;
 use super::clock::Clock;
 use super::frame::SurfaceFrame;
 use super::project::ImagePoint;
 use super::TrackError;
-use crate::io::trajectories::{write_trajectories_csv, TrackPoint};
 use crate::io::{write_atomically, write_json_atomically};
 use serde::Serialize;
 use std::io::Write;
@@ -91,23 +91,6 @@ pub struct UnboundPoint {
     pub reason: String,
     /// Distance to the surface when that was the reason.
     pub distance: Option<f64>,
-}
-
-/// Writes `id,frame,x,y,z`, one row per point per frame, atomically, in the trajectory CSV
-/// format of [`crate::io::trajectories::write_trajectories_csv`] (shortest round-trip floats).
-pub fn write_tracks_csv(path: &Path, points: &[TrackedPoint]) -> Result<(), TrackError> {
-    let rows: Vec<TrackPoint> = points
-        .iter()
-        .flat_map(|p| {
-            p.trajectory.iter().enumerate().map(|(frame, &position)| TrackPoint {
-                id: p.id.clone(),
-                frame: frame as u32,
-                position,
-            })
-        })
-        .collect();
-    write_atomically(path, |w| write_trajectories_csv(w, &rows))
-        .map_err(|error| TrackError::Io { path: path.to_owned(), error })
 }
 
 /// Writes the points as `tracks.csv` with their orientation frames on `clock` (see the module

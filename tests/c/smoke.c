@@ -8,8 +8,8 @@
  * dataset, with ground-truth meshes/ and trajectories.csv), gt.pc2 + gt.obj (`tagsplat convert`
  * of data/meshes), train.toml (a short config). `full` writes c_out/ (a run to compare with the
  * CLI's cli_out/) and resume_out/ (a cancelled run, then resumed), which the script compares.
- * Oracles: the PC2 and OBJ files read here byte by byte, the synthetic trajectories, the
- * header's macros, the CLI's output (in the script).
+ * Oracles: the PC2 and OBJ files read here byte by byte, the synthetic trajectories, the bound
+ * triangles' normals computed here, the header's macros, the CLI's output (in the script).
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -92,6 +92,13 @@ static char *slurp(const char *path, size_t *size) {
     }
     fclose(f);
     return data;
+}
+
+/* Writes `text` to `path`; a failure fails the test. */
+static void write_text(const char *path, const char *text) {
+    FILE *f = fopen(path, "w");
+    if (!f || fputs(text, f) < 0) fail(__LINE__, path);
+    if (f) fclose(f);
 }
 
 static uint32_t le32(const unsigned char *p) {
@@ -338,6 +345,226 @@ static void test_track_pixels(tagsplat_sequence *sequence) {
     camera.world_to_camera[0] = 2;
     FAILS(tagsplat_track_pixels(sequence, &camera, pixel, 1, &tracks), TAGSPLAT_STATUS_BAD_INPUT, "rigid");
     FAILS(tagsplat_track_pixels(sequence, NULL, pixel, 1, &tracks), TAGSPLAT_STATUS_BAD_INPUT, "camera is NULL");
+}
+
+/* The unit normal and the tangent along the first edge (a -> b, its normal part removed) of
+ * triangle (a, b, c), as docs/conventions.md and engine/track/frame.rs define them, computed here
+ * in double from the sequence's positions. */
+static void triangle_frame(const float *a, const float *b, const float *c, double n[3],
+                           double t[3]) {
+    double e1[3], e2[3], length, along = 0;
+    int k;
+    for (k = 0; k < 3; k++) e1[k] = (double)b[k] - a[k], e2[k] = (double)c[k] - a[k];
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    length = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (k = 0; k < 3; k++) n[k] /= length, along += e1[k] * n[k];
+    for (k = 0; k < 3; k++) t[k] = e1[k] - along * n[k];
+    length = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    for (k = 0; k < 3; k++) t[k] /= length;
+}
+
+/* The points of data/trajectories.csv at frame 0, tracked; `*points` and `*frames` get the
+ * counts. */
+static tagsplat_tracks *track_truth(tagsplat_sequence *sequence, size_t *points, size_t *frames) {
+    static double truth[MAX_POINTS][MAX_FRAMES][3], start[MAX_POINTS][3];
+    tagsplat_tracks *tracks = NULL;
+    size_t i;
+    *points = read_truth(truth, frames);
+    for (i = 0; i < *points; i++) memcpy(start[i], truth[i][0], sizeof start[i]);
+    OK(tagsplat_track_points(sequence, &start[0][0], *points, 0.01, &tracks));
+    return tracks;
+}
+
+/* Orientation frames, polygons and clock on data/meshes, a folder of PLY frames: no clock (24
+ * frames per second from frame 0), its triangles are its faces. The normals and tangents are
+ * each bound triangle's own, computed here from the positions. */
+static void test_track_frames(tagsplat_sequence *sequence) {
+    static double normals[MAX_POINTS * MAX_FRAMES * 3], tangents[MAX_POINTS * MAX_FRAMES * 3];
+    static unsigned char held[MAX_POINTS * MAX_FRAMES];
+    tagsplat_binding bindings[MAX_POINTS];
+    tagsplat_sequence_counts counts;
+    tagsplat_tracks_counts info;
+    size_t points = 0, frames = 0, i, t, k, n;
+    tagsplat_tracks *tracks = track_truth(sequence, &points, &frames);
+    double times[MAX_FRAMES], worst = 0, normal[3], tangent[3];
+    float *positions;
+    uint32_t *faces;
+    OK(tagsplat_tracks_info(tracks, &info));
+    CHECK(info.points == points && info.fps == 24 && info.start_frame == 0);
+    OK(tagsplat_tracks_times(tracks, times, frames));
+    for (t = 0; t < frames; t++) CHECK(times[t] == t / 24.0);
+    n = points * frames;
+    FAILS(tagsplat_tracks_normals(tracks, normals, 3), TAGSPLAT_STATUS_BUFFER_TOO_SMALL, "needed");
+    FAILS(tagsplat_tracks_orientation_held(tracks, held, n - 1), TAGSPLAT_STATUS_BUFFER_TOO_SMALL, "needed");
+    OK(tagsplat_tracks_normals(tracks, normals, n * 3));
+    OK(tagsplat_tracks_tangents(tracks, tangents, n * 3));
+    OK(tagsplat_tracks_orientation_held(tracks, held, n));
+    OK(tagsplat_tracks_bindings(tracks, bindings, points));
+    OK(tagsplat_sequence_info(sequence, &counts));
+    positions = malloc(counts.frames * counts.vertices * 3 * sizeof *positions);
+    faces = malloc(counts.faces * 3 * sizeof *faces);
+    OK(tagsplat_sequence_positions(sequence, positions, counts.frames * counts.vertices * 3));
+    OK(tagsplat_sequence_faces(sequence, faces, counts.faces * 3));
+    for (i = 0; i < points; i++) {
+        const uint32_t *face = faces + 3 * bindings[i].face;
+        CHECK(bindings[i].polygon == bindings[i].face);
+        for (t = 0; t < frames; t++) {
+            const float *frame = positions + t * counts.vertices * 3;
+            const double *got_n = normals + (i * frames + t) * 3, *got_t = tangents + (i * frames + t) * 3;
+            triangle_frame(frame + 3 * face[0], frame + 3 * face[1], frame + 3 * face[2], normal, tangent);
+            CHECK(held[i * frames + t] == 0);
+            for (k = 0; k < 3; k++) {
+                worst = fmax(worst, fabs(got_n[k] - normal[k]));
+                worst = fmax(worst, fabs(got_t[k] - tangent[k]));
+            }
+        }
+    }
+    if (!(worst < 1e-12)) fprintf(stderr, "worst orientation difference %g\n", worst);
+    CHECK(worst < 1e-12);
+    free(positions);
+    free(faces);
+    OK(tagsplat_tracks_free(tracks));
+}
+
+/* Two tracks of the same points must agree bit for bit: trajectories and normals. */
+static void expect_same_tracks(int line, tagsplat_tracks *a, tagsplat_tracks *b, size_t values) {
+    static double x[MAX_POINTS * MAX_FRAMES * 3], y[MAX_POINTS * MAX_FRAMES * 3];
+    expect(line, "tagsplat_tracks_trajectories", tagsplat_tracks_trajectories(a, x, values), TAGSPLAT_STATUS_OK, NULL);
+    expect(line, "tagsplat_tracks_trajectories", tagsplat_tracks_trajectories(b, y, values), TAGSPLAT_STATUS_OK, NULL);
+    if (memcmp(x, y, values * sizeof *x) != 0) fail(line, "trajectories differ");
+    expect(line, "tagsplat_tracks_normals", tagsplat_tracks_normals(a, x, values), TAGSPLAT_STATUS_OK, NULL);
+    expect(line, "tagsplat_tracks_normals", tagsplat_tracks_normals(b, y, values), TAGSPLAT_STATUS_OK, NULL);
+    if (memcmp(x, y, values * sizeof *x) != 0) fail(line, "normals differ");
+}
+
+/* The GLB at `path` is a glTF 2 container of its own size with a node named "0" and an
+ * animation. */
+static void expect_pins(int line, const char *path) {
+    size_t size = 0;
+    unsigned char *glb = (unsigned char *)slurp(path, &size);
+    if (!glb || size < 20 || memcmp(glb, "glTF", 4) != 0 || le32(glb + 4) != 2 || le32(glb + 8) != size) {
+        fail(line, "not a glTF 2 binary of its own length");
+    } else {
+        uint32_t length = le32(glb + 12);
+        char *json = malloc(length + 1);
+        memcpy(json, glb + 20, length);
+        json[length] = '\0';
+        if (!strstr(json, "\"name\":\"0\"") || !strstr(json, "\"animations\"")) fail(line, "no node 0 or no animation");
+        free(json);
+    }
+    free(glb);
+}
+
+/* Bindings given back (written to a file and read again, as arrays, as vertex ids) track what
+ * the points did, bit for bit; the files `tagsplat track` writes are written; bad bindings are
+ * refused naming the point, the file and the line. */
+static void test_track_bindings(tagsplat_sequence *sequence) {
+    static double paths[MAX_POINTS * MAX_FRAMES * 3], barycentric[MAX_POINTS][3];
+    tagsplat_binding bindings[MAX_POINTS], again_bindings[MAX_POINTS];
+    uint32_t faces[MAX_POINTS], vertices[3] = {0, 3, 5}, far_face = 99999;
+    size_t points = 0, frames = 0, i, t, k, size = 0;
+    tagsplat_tracks *tracks = track_truth(sequence, &points, &frames), *again = NULL;
+    tagsplat_sequence_counts counts;
+    const double nan_weights[3] = {0.5, NAN, 0.5}, unnormalised[3] = {0.5, 0.5, 0.5};
+    float *positions;
+    char *text;
+    OK(tagsplat_tracks_bindings(tracks, bindings, points));
+    OK(tagsplat_tracks_write_bindings(tracks, in_work("c_bindings.csv")));
+    OK(tagsplat_track_bindings_file(sequence, in_work("c_bindings.csv"), &again));
+    expect_same_tracks(__LINE__, tracks, again, points * frames * 3);
+    OK(tagsplat_tracks_bindings(again, again_bindings, points));
+    for (i = 0; i < points; i++) {
+        CHECK(again_bindings[i].query == i && again_bindings[i].face == bindings[i].face);
+        CHECK(memcmp(again_bindings[i].barycentric, bindings[i].barycentric, sizeof barycentric[0]) == 0);
+        faces[i] = bindings[i].face;
+        memcpy(barycentric[i], bindings[i].barycentric, sizeof barycentric[i]);
+    }
+    OK(tagsplat_tracks_free(again));
+    OK(tagsplat_track_bindings(sequence, faces, &barycentric[0][0], points, &again));
+    expect_same_tracks(__LINE__, tracks, again, points * frames * 3);
+    OK(tagsplat_tracks_free(again));
+    /* A vertex's track is its own positions, exactly. */
+    OK(tagsplat_track_vertices(sequence, vertices, 3, &again));
+    OK(tagsplat_tracks_trajectories(again, paths, 3 * frames * 3));
+    OK(tagsplat_sequence_info(sequence, &counts));
+    positions = malloc(counts.frames * counts.vertices * 3 * sizeof *positions);
+    OK(tagsplat_sequence_positions(sequence, positions, counts.frames * counts.vertices * 3));
+    for (i = 0; i < 3; i++)
+        for (t = 0; t < frames; t++)
+            for (k = 0; k < 3; k++)
+                CHECK(paths[(i * frames + t) * 3 + k] == positions[(t * counts.vertices + vertices[i]) * 3 + k]);
+    free(positions);
+    OK(tagsplat_tracks_free(again));
+    /* The program's files: the CSV has a row per point per frame after its header. */
+    OK(tagsplat_tracks_write_csv(tracks, in_work("c_tracks.csv")));
+    OK(tagsplat_tracks_write_json(tracks, in_work("c_tracks.json")));
+    OK(tagsplat_tracks_write_pins(tracks, in_work("c_pins.glb"), NULL));
+    expect_pins(__LINE__, in_work("c_pins.glb"));
+    text = slurp(in_work("c_tracks.csv"), &size);
+    CHECK(text && strncmp(text, "id,frame,x,y,z,nx,ny,nz,tx,ty,tz,time,fps,start_frame\n", 54) == 0);
+    for (i = 0, k = 0; text && text[i]; i++) k += text[i] == '\n';
+    CHECK(k == 1 + points * frames);
+    free(text);
+    text = slurp(in_work("c_tracks.json"), &size);
+    CHECK(text && strstr(text, "\"fps\": 24.0") && strstr(text, "\"normal\": ["));
+    free(text);
+    FAILS(tagsplat_tracks_write_csv(tracks, in_work("no_such_folder/t.csv")), TAGSPLAT_STATUS_BAD_INPUT, "no_such_folder");
+    FAILS(tagsplat_tracks_write_pins(tracks, in_work("p.glb"), "+q"), TAGSPLAT_STATUS_BAD_INPUT, "from_up: '+q'");
+    FAILS(tagsplat_tracks_write_json(tracks, NULL), TAGSPLAT_STATUS_BAD_INPUT, "path is NULL");
+    OK(tagsplat_tracks_free(tracks));
+    /* Bad bindings. */
+    FAILS(tagsplat_track_bindings(sequence, &far_face, unnormalised, 1, &again), TAGSPLAT_STATUS_BAD_INPUT, "binding of point 0: face 99999 is out of range");
+    CHECK(again == NULL);
+    FAILS(tagsplat_track_bindings(sequence, faces, unnormalised, 1, &again), TAGSPLAT_STATUS_BAD_INPUT, "sums to 1.5, not 1");
+    FAILS(tagsplat_track_bindings(sequence, faces, nan_weights, 1, &again), TAGSPLAT_STATUS_BAD_INPUT, "barycentric[0]");
+    FAILS(tagsplat_track_bindings(sequence, NULL, unnormalised, 1, &again), TAGSPLAT_STATUS_BAD_INPUT, "faces is NULL");
+    vertices[1] = (uint32_t)counts.vertices;
+    FAILS(tagsplat_track_vertices(sequence, vertices, 3, &again), TAGSPLAT_STATUS_BAD_INPUT, "binding of point 1: vertex");
+    FAILS(tagsplat_track_bindings_file(sequence, in_work("missing.csv"), &again), TAGSPLAT_STATUS_BAD_INPUT, "missing.csv");
+    write_text(in_work("bad_bindings.csv"), "id,face,u,v,w\nok,0,1,0,0\nfar,99999,1,0,0\n");
+    FAILS(tagsplat_track_bindings_file(sequence, in_work("bad_bindings.csv"), &again), TAGSPLAT_STATUS_BAD_INPUT, "bad_bindings.csv: line 3: face 99999 is out of range");
+}
+
+/* A Z-up USD strip of two quads, fanned into triangles 2q and 2q + 1, on scene frames 10 to 12
+ * at 24 per second, beside a second mesh: read with a mesh chosen, its points carry their
+ * quads as polygons and the file's clock. */
+static const char strip_usda[] =
+    "#usda 1.0\n(\n    startTimeCode = 10\n    endTimeCode = 12\n    timeCodesPerSecond = 24\n"
+    "    upAxis = \"Z\"\n)\n\ndef Mesh \"Strip\"\n{\n    int[] faceVertexCounts = [4, 4]\n"
+    "    int[] faceVertexIndices = [0, 1, 4, 3, 1, 2, 5, 4]\n    point3f[] points.timeSamples = {\n"
+    "        10: [(0, 0, 0), (1, 0, 0), (2, 0, 0), (0, 1, 0), (1, 1, 0), (2, 1, 0)],\n"
+    "        11: [(0, 0, 0), (1, 0, 0.2), (2, 0, 0.6), (0, 1, 0.1), (1, 1, 0.3), (2, 1, 0.7)],\n"
+    "        12: [(0, 0, 0.1), (1, 0.1, 0.5), (2, 0, 1.2), (0, 1, 0.2), (1, 1.1, 0.6), (2, 1, 1.4)],\n"
+    "    }\n}\n\ndef Mesh \"Other\"\n{\n    int[] faceVertexCounts = [3]\n"
+    "    int[] faceVertexIndices = [0, 1, 2]\n    point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n}\n";
+
+static void test_track_polygons(void) {
+    const double points[4][3] = {{0.3, 0.6, 0}, {1.7, 0.2, 0}, {1.2, 0.9, 0}, {0.8, 0.1, 0}};
+    const char *path = in_work("strip.usda");
+    tagsplat_sequence *strip = NULL;
+    tagsplat_tracks *tracks = NULL;
+    tagsplat_tracks_counts info;
+    tagsplat_binding bindings[4];
+    double times[3];
+    size_t i;
+    write_text(path, strip_usda);
+    FAILS(tagsplat_sequence_read(path, &strip), TAGSPLAT_STATUS_FILE_FORMAT, "/Strip, /Other");
+    OK(tagsplat_sequence_read_with(path, NULL, 0.0, "/Strip", &strip));
+    OK(tagsplat_track_points(strip, &points[0][0], 4, 0.01, &tracks));
+    OK(tagsplat_tracks_info(tracks, &info));
+    CHECK(info.points == 4 && info.frames == 3);
+    CHECK(fabs(info.fps - 24) < 1e-9 && fabs(info.start_frame - 10) < 1e-9);
+    OK(tagsplat_tracks_times(tracks, times, 3));
+    for (i = 0; i < 3; i++) CHECK(fabs(times[i] - (10 + i) / 24.0) < 1e-12);
+    OK(tagsplat_tracks_bindings(tracks, bindings, 4));
+    for (i = 0; i < 4; i++) CHECK(bindings[i].polygon == bindings[i].face / 2);
+    CHECK(bindings[0].polygon == 0 && bindings[1].polygon == 1);
+    OK(tagsplat_tracks_write_pins(tracks, in_work("strip_pins.glb"), NULL));
+    expect_pins(__LINE__, in_work("strip_pins.glb"));
+    OK(tagsplat_tracks_free(tracks));
+    OK(tagsplat_sequence_free(strip));
 }
 
 /* ---- jobs ---------------------------------------------------------------------------------- */
@@ -605,7 +832,10 @@ static int run_full(void) {
     OK(tagsplat_sequence_read(in_work("data/meshes"), &sequence));
     test_track_points(sequence);
     test_track_pixels(sequence);
+    test_track_frames(sequence);
+    test_track_bindings(sequence);
     OK(tagsplat_sequence_free(sequence));
+    test_track_polygons();
     test_handles(ctx);
     test_job_errors(ctx);
     test_train(ctx);
@@ -624,6 +854,7 @@ static int run_cycles(long n) {
     const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     const uint32_t faces[3] = {0, 1, 2};
     const double point[3] = {0.25, 0.25, 0};
+    const uint32_t vertex[1] = {2};
     struct train paths;
     tagsplat_train_desc *desc = train_desc(&paths, "cycles_out");
     tagsplat_context *ctx = NULL, *other = NULL;
@@ -642,6 +873,9 @@ static int run_cycles(long n) {
         OK(tagsplat_sequence_free(read));
         OK(tagsplat_sequence_create(positions, 1, 3, faces, 1, &sequence));
         OK(tagsplat_track_points(sequence, point, 1, 0.01, &tracks));
+        OK(tagsplat_tracks_free(tracks));
+        OK(tagsplat_track_vertices(sequence, vertex, 1, &tracks));
+        OK(tagsplat_tracks_write_pins(tracks, in_work("cycle_pins.glb"), NULL));
         OK(tagsplat_tracks_free(tracks));
         OK(tagsplat_sequence_free(sequence));
         /* A job whose run fails at once: the thread, the handle and the failure are freed. */

@@ -4,7 +4,7 @@
 
 use super::mesh::MeshData;
 use super::skin::Skin;
-use crate::synth::skinning::skin_layers;
+use crate::mesh::skinning::skin_layers;
 use glam::{DMat4, DVec3};
 
 /// The vertex positions of `mesh` with morph `weights`, skinned by `skin` at `globals` (the

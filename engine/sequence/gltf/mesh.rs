@@ -10,8 +10,8 @@
 //! or has a negative or non-finite weight, is an error.
 
 use super::accessor::{Accessors, Values};
+use crate::mesh::skinning::SkinWeights;
 use crate::sequence::glb::linear_to_srgb;
-use crate::synth::skinning::SkinWeights;
 use gltf::mesh::Mode;
 use gltf::Semantic;
 

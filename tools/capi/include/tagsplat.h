@@ -22,9 +22,9 @@
 #include <stddef.h>
 #include <stdint.h>
 #define TAGSPLAT_VERSION_MAJOR 0
-#define TAGSPLAT_VERSION_MINOR 1
+#define TAGSPLAT_VERSION_MINOR 2
 #define TAGSPLAT_VERSION_PATCH 0
-#define TAGSPLAT_VERSION_STRING "0.1.0"
+#define TAGSPLAT_VERSION_STRING "0.2.0"
 
 
 /**
@@ -163,7 +163,7 @@ typedef struct tagsplat_dataset tagsplat_dataset;
 typedef struct tagsplat_job tagsplat_job;
 
 /**
- * A mesh sequence, immutable once made.
+ * A mesh sequence, immutable once made, with what its file said (its clock, polygons, up).
  */
 typedef struct tagsplat_sequence tagsplat_sequence;
 
@@ -340,7 +340,7 @@ typedef struct {
 } tagsplat_camera;
 
 /**
- * A tracking run's sizes: what its copy calls need.
+ * A tracking run's sizes and clock: what its copy calls need.
  */
 typedef struct {
   /**
@@ -359,6 +359,14 @@ typedef struct {
    * The largest distance from a point to the frame-0 surface that was accepted, scene units.
    */
   double max_distance;
+  /**
+   * Frames per second: the file's rate, else its times' mean rate, else 24.
+   */
+  double fps;
+  /**
+   * The scene frame of frame 0 (its time × fps): frame k plays at start_frame + k.
+   */
+  double start_frame;
 } tagsplat_tracks_counts;
 
 /**
@@ -366,19 +374,24 @@ typedef struct {
  */
 typedef struct {
   /**
-   * Its index among the queries given.
+   * Its index among the queries given (for a bindings file: its row, from 0).
    */
   size_t query;
   /**
-   * The frame-0 face it lies on.
+   * The frame-0 triangle it lies on.
    */
   uint32_t face;
   /**
-   * Its barycentric coordinates in that face (≥ 0, summing to 1).
+   * The file polygon that triangle was fanned from (the triangle itself when the file's
+   * faces are triangles).
+   */
+  uint32_t polygon;
+  /**
+   * Its barycentric coordinates in that triangle (≥ 0, summing to 1).
    */
   double barycentric[3];
   /**
-   * Its distance from the surface (0 for a pixel's ray hit), scene units.
+   * Its distance from the surface (0 for a pixel's ray hit or a given binding), scene units.
    */
   double distance;
 } tagsplat_binding;
@@ -530,7 +543,9 @@ tagsplat_status tagsplat_sequence_read(const char *path, tagsplat_sequence **out
  * [`tagsplat_sequence_read`] with the CLI's read options: `animation` (glTF, FBX: a name or
  * index; NULL: the file's only one), `fps` (the rate an animation is sampled at, or the clock
  * of a folder or PC2; 0: the default) and `mesh` (which mesh of a file that holds several: a
- * USD prim path, an Alembic object path, a glTF or FBX node name; NULL: the only one).
+ * USD prim path, an Alembic object path, a glTF or FBX node name; NULL: the only one). The
+ * sequence keeps what the file said beside its frames, which tracking uses: its frame times,
+ * the polygons its triangles were fanned from, its up axis.
  */
 tagsplat_status tagsplat_sequence_read_with(const char *path,
                                             const char *animation,
@@ -626,7 +641,48 @@ tagsplat_status tagsplat_track_pixels(const tagsplat_sequence *sequence,
                                       tagsplat_tracks **out);
 
 /**
- * The run's counts.
+ * Follows `count` points bound already through every frame of `sequence`: point i at
+ * barycentric `barycentric[3i..3i+3]` (weights of the corners, ≥ 0, summing to 1) on triangle
+ * `faces[i]`, as tagsplat_tracks_bindings gives them (`tagsplat track --bindings`). A face out
+ * of range or weights that are negative, not finite or not summing to 1 are bad input naming
+ * the point. Stores the new handle in `*out`.
+ */
+tagsplat_status tagsplat_track_bindings(const tagsplat_sequence *sequence,
+                                        const uint32_t *faces,
+                                        const double *barycentric,
+                                        size_t count,
+                                        tagsplat_tracks **out);
+
+/**
+ * Follows `count` vertices of `sequence` (`vertices`: their indices) through every frame,
+ * each bound with weight 1 on the corner of the first triangle that has it, so its trajectory
+ * is the vertex's own. A vertex out of range or in no triangle is bad input naming the point.
+ * Stores the new handle in `*out`.
+ */
+tagsplat_status tagsplat_track_vertices(const tagsplat_sequence *sequence,
+                                        const uint32_t *vertices,
+                                        size_t count,
+                                        tagsplat_tracks **out);
+
+/**
+ * Follows the points of the bindings file at `path` through every frame of `sequence`: CSV
+ * `id,face,u,v,w` or `id,vertex` (with an optional `polygon` column, checked against the
+ * sequence's), as tagsplat_tracks_write_bindings and `tagsplat track --bindings-out` write it.
+ * The points keep the file's ids (in the files written of them); a binding's `query` is its
+ * row among the file's rows, from 0. A malformed file or a row that does not fit the sequence
+ * is bad input naming the file and the line. Stores the new handle in `*out`.
+ */
+tagsplat_status tagsplat_track_bindings_file(const tagsplat_sequence *sequence,
+                                             const char *path,
+                                             tagsplat_tracks **out);
+
+/**
+ * Frees `tracks` (NULL: nothing).
+ */
+tagsplat_status tagsplat_tracks_free(tagsplat_tracks *tracks);
+
+/**
+ * The run's counts and clock.
  */
 tagsplat_status tagsplat_tracks_info(const tagsplat_tracks *tracks, tagsplat_tracks_counts *info);
 
@@ -637,6 +693,34 @@ tagsplat_status tagsplat_tracks_info(const tagsplat_tracks *tracks, tagsplat_tra
 tagsplat_status tagsplat_tracks_trajectories(const tagsplat_tracks *tracks,
                                              double *buf,
                                              size_t len);
+
+/**
+ * Copies the bound triangle's unit normal per point per frame into `buf`, which holds `len`
+ * doubles: points × frames × 3 are needed, as for the trajectories.
+ */
+tagsplat_status tagsplat_tracks_normals(const tagsplat_tracks *tracks, double *buf, size_t len);
+
+/**
+ * Copies the unit tangent per point per frame (along the bound triangle's first edge,
+ * orthogonal to the normal; with it, the frame a locator pinned there follows) into `buf`,
+ * which holds `len` doubles: points × frames × 3 are needed, as for the trajectories.
+ */
+tagsplat_status tagsplat_tracks_tangents(const tagsplat_tracks *tracks, double *buf, size_t len);
+
+/**
+ * Copies, per point per frame, 1 where the bound triangle had no area (its normal and tangent
+ * are held from a neighbouring frame) and 0 elsewhere, into `buf`, which holds `len` bytes:
+ * points × frames are needed, point-major.
+ */
+tagsplat_status tagsplat_tracks_orientation_held(const tagsplat_tracks *tracks,
+                                                 uint8_t *buf,
+                                                 size_t len);
+
+/**
+ * Copies each frame's time in seconds (the file's times, else frame k at k / fps) into `buf`,
+ * which holds `len` doubles: frames are needed.
+ */
+tagsplat_status tagsplat_tracks_times(const tagsplat_tracks *tracks, double *buf, size_t len);
 
 /**
  * Copies the bound points' bindings into `buf`, which holds `len` of them: one per bound
@@ -653,9 +737,32 @@ tagsplat_status tagsplat_tracks_bindings(const tagsplat_tracks *tracks,
 tagsplat_status tagsplat_tracks_unbound(const tagsplat_tracks *tracks, size_t *buf, size_t len);
 
 /**
- * Frees `tracks` (NULL: nothing).
+ * Writes the tracks to `path` as `tagsplat track --out` does: CSV
+ * `id,frame,x,y,z,nx,ny,nz,tx,ty,tz,time,fps,start_frame`, one row per point per frame.
  */
-tagsplat_status tagsplat_tracks_free(tagsplat_tracks *tracks);
+tagsplat_status tagsplat_tracks_write_csv(const tagsplat_tracks *tracks, const char *path);
+
+/**
+ * Writes the JSON report `tagsplat track --json` writes to `path`: the clock, bindings (face,
+ * barycentric, distance, polygon), trajectories, normals, tangents and the unbound queries.
+ */
+tagsplat_status tagsplat_tracks_write_json(const tagsplat_tracks *tracks, const char *path);
+
+/**
+ * Writes the GLB of animated empties `tagsplat track --glb` writes to `path`: one node per
+ * point, named by its id, moved and turned by its position and orientation frame at every
+ * frame's time. glTF is +Y up: positions are turned onto it from `from_up` ("+x", "-x", "+y",
+ * "-y", "+z" or "-z"; NULL: the up the sequence's file declares, else taken as +Y already).
+ */
+tagsplat_status tagsplat_tracks_write_pins(const tagsplat_tracks *tracks,
+                                           const char *path,
+                                           const char *from_up);
+
+/**
+ * Writes the bindings to `path` as `tagsplat track --bindings-out` does: CSV
+ * `id,face,u,v,w,polygon`, which tagsplat_track_bindings_file reads back bit for bit.
+ */
+tagsplat_status tagsplat_tracks_write_bindings(const tagsplat_tracks *tracks, const char *path);
 
 #ifdef __cplusplus
 }  // extern "C"

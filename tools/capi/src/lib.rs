@@ -6,7 +6,8 @@
 //! - `status`: status codes, the thread's last error, the call wrapper (panic guard).
 //! - `handles`: the registry of live handles every call checks first.
 //! - `buffers`: caller strings and arrays in, caller buffers out.
-//! - One file per handle: `context`, `dataset`, `sequence`, `tracks`, `job`.
+//! - One file per handle: `context`, `dataset`, `sequence`, `tracks` (with `tracks_out`, what
+//!   its results copy out and write), `job`.
 //!
 //! The header's preamble (cbindgen.toml) states the contract every call keeps.
 
@@ -22,6 +23,7 @@ mod job;
 mod sequence;
 mod status;
 mod tracks;
+mod tracks_out;
 
 /// The library's version, "MAJOR.MINOR.PATCH" (static text): compare it with
 /// TAGSPLAT_VERSION_STRING to find a header that does not match the library.

@@ -5,12 +5,13 @@ use crate::buffers::{input, optional_text, output, store, to_path};
 use crate::handles::{create, get, release, Handle};
 use crate::status::{call, engine, Error, Status};
 use std::ffi::c_char;
-use tagsplat::sequence::ReadOptions;
+use tagsplat::sequence::{ReadOptions, SequenceInfo};
 use tagsplat::{FrameFormat as EngineFormat, MeshSequence};
 
-/// A mesh sequence, immutable once made.
+/// A mesh sequence, immutable once made, with what its file said (its clock, polygons, up).
 pub struct Sequence {
     pub(crate) mesh: MeshSequence,
+    pub(crate) info: SequenceInfo,
 }
 
 impl Handle for Sequence {
@@ -55,7 +56,9 @@ pub unsafe extern "C" fn tagsplat_sequence_read(
 /// [`tagsplat_sequence_read`] with the CLI's read options: `animation` (glTF, FBX: a name or
 /// index; NULL: the file's only one), `fps` (the rate an animation is sampled at, or the clock
 /// of a folder or PC2; 0: the default) and `mesh` (which mesh of a file that holds several: a
-/// USD prim path, an Alembic object path, a glTF or FBX node name; NULL: the only one).
+/// USD prim path, an Alembic object path, a glTF or FBX node name; NULL: the only one). The
+/// sequence keeps what the file said beside its frames, which tracking uses: its frame times,
+/// the polygons its triangles were fanned from, its up axis.
 #[no_mangle]
 pub unsafe extern "C" fn tagsplat_sequence_read_with(
     path: *const c_char,
@@ -72,8 +75,8 @@ pub unsafe extern "C" fn tagsplat_sequence_read_with(
                 mesh: optional_text("mesh", mesh)?.map(str::to_owned),
             };
             let path = to_path("path", path)?;
-            let (mesh, _) = MeshSequence::read_with(&path, &options).map_err(|e| engine(&e))?;
-            Ok(Sequence { mesh })
+            let (mesh, info) = MeshSequence::read_with(&path, &options).map_err(|e| engine(&e))?;
+            Ok(Sequence { mesh, info })
         })
     })
 }
@@ -110,7 +113,7 @@ pub unsafe extern "C" fn tagsplat_sequence_create(
             };
             match mesh.problem() {
                 Some(problem) => Err(Error::bad_input(format!("positions and faces: {problem}"))),
-                None => Ok(Sequence { mesh }),
+                None => Ok(Sequence { mesh, info: SequenceInfo::default() }),
             }
         })
     })

@@ -1,49 +1,31 @@
 //! `tagsplat_tracks`: surface points bound on frame 0 of a sequence and followed through every
-//! frame (`tagsplat track`).
+//! frame (`tagsplat track`), made from points, pixels or given bindings; `tracks_out` reads
+//! them back and writes their files.
 
-use crate::buffers::{finite_rows, output, store};
+use crate::buffers::{finite_rows, input, to_path};
 use crate::handles::{create, get, release, Handle};
 use crate::sequence::Sequence;
 use crate::status::{call, engine, Error, Status};
 use glam::DMat4;
+use std::collections::HashMap;
+use std::ffi::c_char;
 use std::sync::Arc;
-use tagsplat::TrackReport;
-use tagsplat::{track, Camera, Queries};
+use tagsplat::track::bindings::{read_bindings, Anchor};
+use tagsplat::track::{track_sequence, Targets, Tracked};
+use tagsplat::{Camera, Queries};
 
 /// A tracking run's result, immutable.
 pub struct Tracks {
-    report: TrackReport,
+    /// The engine's result.
+    pub(crate) tracked: Tracked,
+    /// Per bound point, its index among the queries given.
+    pub(crate) queries: Vec<usize>,
+    /// Per query not bound, its index among the queries given.
+    pub(crate) unbound: Vec<usize>,
 }
 
 impl Handle for Tracks {
     const NAME: &'static str = "tagsplat_tracks";
-}
-
-/// A tracking run's sizes: what its copy calls need.
-#[repr(C)]
-pub struct TracksCounts {
-    /// Frames of the sequence: positions per trajectory.
-    pub frames: usize,
-    /// The queries that were bound (each has a trajectory and a binding).
-    pub points: usize,
-    /// The queries that were not (too far from the surface, a ray that misses).
-    pub unbound: usize,
-    /// The largest distance from a point to the frame-0 surface that was accepted, scene units.
-    pub max_distance: f64,
-}
-
-/// Where a bound query sits on the frame-0 surface.
-#[repr(C)]
-#[derive(Clone, Copy)]
-pub struct Binding {
-    /// Its index among the queries given.
-    pub query: usize,
-    /// The frame-0 face it lies on.
-    pub face: u32,
-    /// Its barycentric coordinates in that face (≥ 0, summing to 1).
-    pub barycentric: [f64; 3],
-    /// Its distance from the surface (0 for a pixel's ray hit), scene units.
-    pub distance: f64,
 }
 
 /// A pinhole camera in OpenCV axes (x right, y down, z forward), as a cam.json holds it;
@@ -82,9 +64,9 @@ pub unsafe extern "C" fn tagsplat_track_points(
     call("tagsplat_track_points", || unsafe {
         create("out", out, || {
             let rows = finite_rows::<3>("points", points, count)?;
-            let queries = Queries::Points(numbered(rows));
+            let targets = Targets::Queries(Queries::Points(numbered(rows)));
             let sequence: Arc<Sequence> = get("sequence", sequence)?;
-            run(&sequence, &queries, max_distance)
+            run(&sequence, &targets, max_distance)
         })
     })
 }
@@ -107,26 +89,115 @@ pub unsafe extern "C" fn tagsplat_track_pixels(
                 camera_of(camera.as_ref().ok_or_else(|| Error::bad_input("camera is NULL"))?)?;
             let pixels = numbered(finite_rows::<2>("pixels", pixels, count)?);
             let sequence: Arc<Sequence> = get("sequence", sequence)?;
-            run(&sequence, &Queries::Pixels { camera, pixels }, 0.0)
+            run(&sequence, &Targets::Queries(Queries::Pixels { camera, pixels }), 0.0)
         })
     })
 }
 
-/// The engine's tracking on `sequence`.
-fn run(sequence: &Sequence, queries: &Queries, max_distance: f64) -> Result<Tracks, Error> {
-    let mesh = &sequence.mesh;
-    let report = track(&mesh.faces, &mesh.frames, queries, max_distance).map_err(|e| engine(&e))?;
-    Ok(Tracks { report })
+/// Follows `count` points bound already through every frame of `sequence`: point i at
+/// barycentric `barycentric[3i..3i+3]` (weights of the corners, ≥ 0, summing to 1) on triangle
+/// `faces[i]`, as tagsplat_tracks_bindings gives them (`tagsplat track --bindings`). A face out
+/// of range or weights that are negative, not finite or not summing to 1 are bad input naming
+/// the point. Stores the new handle in `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn tagsplat_track_bindings(
+    sequence: *const Sequence,
+    faces: *const u32,
+    barycentric: *const f64,
+    count: usize,
+    out: *mut *mut Tracks,
+) -> Status {
+    call("tagsplat_track_bindings", || unsafe {
+        create("out", out, || {
+            let faces = input("faces", faces, count)?;
+            let weights = finite_rows::<3>("barycentric", barycentric, count)?;
+            let anchors: Vec<Anchor> = faces
+                .iter()
+                .zip(weights)
+                .map(|(&face, &barycentric)| Anchor::Surface { face, barycentric })
+                .collect();
+            let sequence: Arc<Sequence> = get("sequence", sequence)?;
+            run(&sequence, &Targets::Anchors(numbered(&anchors)), 0.0)
+        })
+    })
 }
 
-/// The queries with their index as id, which the results give back as `query`.
-fn numbered<const N: usize>(rows: &[[f64; N]]) -> Vec<(String, [f64; N])> {
+/// Follows `count` vertices of `sequence` (`vertices`: their indices) through every frame,
+/// each bound with weight 1 on the corner of the first triangle that has it, so its trajectory
+/// is the vertex's own. A vertex out of range or in no triangle is bad input naming the point.
+/// Stores the new handle in `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn tagsplat_track_vertices(
+    sequence: *const Sequence,
+    vertices: *const u32,
+    count: usize,
+    out: *mut *mut Tracks,
+) -> Status {
+    call("tagsplat_track_vertices", || unsafe {
+        create("out", out, || {
+            let anchors: Vec<Anchor> =
+                input("vertices", vertices, count)?.iter().map(|&v| Anchor::Vertex(v)).collect();
+            let sequence: Arc<Sequence> = get("sequence", sequence)?;
+            run(&sequence, &Targets::Anchors(numbered(&anchors)), 0.0)
+        })
+    })
+}
+
+/// Follows the points of the bindings file at `path` through every frame of `sequence`: CSV
+/// `id,face,u,v,w` or `id,vertex` (with an optional `polygon` column, checked against the
+/// sequence's), as tagsplat_tracks_write_bindings and `tagsplat track --bindings-out` write it.
+/// The points keep the file's ids (in the files written of them); a binding's `query` is its
+/// row among the file's rows, from 0. A malformed file or a row that does not fit the sequence
+/// is bad input naming the file and the line. Stores the new handle in `*out`.
+#[no_mangle]
+pub unsafe extern "C" fn tagsplat_track_bindings_file(
+    sequence: *const Sequence,
+    path: *const c_char,
+    out: *mut *mut Tracks,
+) -> Status {
+    call("tagsplat_track_bindings_file", || unsafe {
+        create("out", out, || {
+            let file = read_bindings(&to_path("path", path)?).map_err(|e| engine(&e))?;
+            let sequence: Arc<Sequence> = get("sequence", sequence)?;
+            run(&sequence, &Targets::File(file), 0.0)
+        })
+    })
+}
+
+/// The engine's tracking on `sequence` (`tagsplat track`'s run), each result's query found.
+fn run(sequence: &Sequence, targets: &Targets, max_distance: f64) -> Result<Tracks, Error> {
+    let (mesh, info) = (&sequence.mesh, &sequence.info);
+    let tracked = track_sequence(&mesh.faces, &mesh.frames, info, targets, max_distance)
+        .map_err(|e| engine(&e))?;
+    let order: HashMap<&str, usize> =
+        query_ids(targets).into_iter().enumerate().map(|(i, id)| (id, i)).collect();
+    let query = |id: &str| {
+        let lost = || Error::new(Status::Internal, format!("point '{id}' is not a query"));
+        order.get(id).copied().ok_or_else(lost)
+    };
+    let report = &tracked.report;
+    let queries = report.points.iter().map(|p| query(&p.id)).collect::<Result<_, _>>()?;
+    let unbound = report.unbound.iter().map(|u| query(&u.id)).collect::<Result<_, _>>()?;
+    Ok(Tracks { tracked, queries, unbound })
+}
+
+/// The ids of the queries, in the order given.
+fn query_ids(targets: &Targets) -> Vec<&str> {
+    fn ids<T>(named: &[(String, T)]) -> Vec<&str> {
+        named.iter().map(|(id, _)| id.as_str()).collect()
+    }
+    match targets {
+        Targets::Queries(Queries::Points(points)) => ids(points),
+        Targets::Queries(Queries::Pixels { pixels, .. }) => ids(pixels),
+        Targets::Queries(Queries::Bindings(bindings)) => ids(bindings),
+        Targets::Anchors(anchors) => ids(anchors),
+        Targets::File(file) => file.rows.iter().map(|row| row.id.as_str()).collect(),
+    }
+}
+
+/// The queries with their index as id.
+fn numbered<T: Copy>(rows: &[T]) -> Vec<(String, T)> {
     rows.iter().enumerate().map(|(i, row)| (i.to_string(), *row)).collect()
-}
-
-/// The query index a result's id holds (see [`numbered`]).
-fn query_of(id: &str) -> Result<usize, Error> {
-    id.parse().map_err(|_| Error::new(Status::Internal, format!("query id '{id}' is not an index")))
 }
 
 /// The engine's camera, checked as a cam.json is.
@@ -134,75 +205,6 @@ fn camera_of(c: &CameraDesc) -> Result<Camera, Error> {
     let world_to_camera = DMat4::from_cols_array(&c.world_to_camera).transpose();
     Camera::new(c.width, c.height, c.fx, c.fy, c.cx, c.cy, world_to_camera)
         .map_err(|e| Error::bad_input(format!("camera: {e}")))
-}
-
-/// The run's counts.
-#[no_mangle]
-pub unsafe extern "C" fn tagsplat_tracks_info(
-    tracks: *const Tracks,
-    info: *mut TracksCounts,
-) -> Status {
-    call("tagsplat_tracks_info", || unsafe {
-        let report = &get("tracks", tracks)?.report;
-        let summary = TracksCounts {
-            frames: report.frames,
-            points: report.points.len(),
-            unbound: report.unbound.len(),
-            max_distance: report.max_distance,
-        };
-        store("info", info, summary)
-    })
-}
-
-/// Copies the trajectories into `buf`, which holds `len` doubles: points × frames × 3 are
-/// needed (point-major, in the order of tagsplat_tracks_bindings).
-#[no_mangle]
-pub unsafe extern "C" fn tagsplat_tracks_trajectories(
-    tracks: *const Tracks,
-    buf: *mut f64,
-    len: usize,
-) -> Status {
-    call("tagsplat_tracks_trajectories", || unsafe {
-        let report = &get("tracks", tracks)?.report;
-        let all: Vec<[f64; 3]> =
-            report.points.iter().flat_map(|p| p.trajectory.iter().copied()).collect();
-        output("buf", all.as_flattened(), buf, len)
-    })
-}
-
-/// Copies the bound points' bindings into `buf`, which holds `len` of them: one per bound
-/// point is needed, in query order.
-#[no_mangle]
-pub unsafe extern "C" fn tagsplat_tracks_bindings(
-    tracks: *const Tracks,
-    buf: *mut Binding,
-    len: usize,
-) -> Status {
-    call("tagsplat_tracks_bindings", || unsafe {
-        let report = &get("tracks", tracks)?.report;
-        let bindings = report.points.iter().map(|p| {
-            let b = &p.binding;
-            let query = query_of(&p.id)?;
-            Ok(Binding { query, face: b.face, barycentric: b.barycentric, distance: b.distance })
-        });
-        output("buf", &bindings.collect::<Result<Vec<_>, Error>>()?, buf, len)
-    })
-}
-
-/// Copies the indices of the queries that were not bound into `buf`, which holds `len` of them:
-/// one per unbound query is needed, in query order.
-#[no_mangle]
-pub unsafe extern "C" fn tagsplat_tracks_unbound(
-    tracks: *const Tracks,
-    buf: *mut usize,
-    len: usize,
-) -> Status {
-    call("tagsplat_tracks_unbound", || unsafe {
-        let report = &get("tracks", tracks)?.report;
-        let queries: Result<Vec<usize>, Error> =
-            report.unbound.iter().map(|u| query_of(&u.id)).collect();
-        output("buf", &queries?, buf, len)
-    })
 }
 
 /// Frees `tracks` (NULL: nothing).

@@ -111,6 +111,28 @@ pub fn rows<T: Element + Copy, const N: usize>(
     Ok((grouped, array.shape().to_vec()))
 }
 
+/// Rows of `N` indices (vertex or face numbers) from an integer array of `shape` (see
+/// [`rows`]): a negative index, or one past u32, is bad input naming `name` and the row.
+pub fn indices<const N: usize>(
+    value: &Bound<'_, PyAny>,
+    name: &str,
+    shape: &[Option<usize>],
+    shape_words: &str,
+) -> PyResult<Vec<[u32; N]>> {
+    let (rows, _) = rows::<i64, N>(value, name, Kind::Integer, shape, shape_words)?;
+    let checked = |(i, row): (usize, &[i64; N])| {
+        let mut indices = [0u32; N];
+        for (index, &v) in indices.iter_mut().zip(row) {
+            *index = u32::try_from(v).map_err(|_| {
+                let message = format!("{name}: row {i} {row:?} is not a list of indices");
+                crate::errors::bad_input(value.py(), message)
+            })?;
+        }
+        Ok(indices)
+    };
+    rows.iter().enumerate().map(checked).collect()
+}
+
 /// Float rows (`(N, K)`) that must be finite: a NaN or infinity is bad input naming `name`.
 pub fn finite_rows<const N: usize>(
     value: &Bound<'_, PyAny>,

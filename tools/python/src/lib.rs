@@ -4,7 +4,8 @@
 //!
 //! - [`context`]: devices and the Vulkan context;
 //! - [`sequence`]: mesh sequences as zero-copy arrays, read and written in every format;
-//! - [`track`](mod@track): points and pixels tracked through a sequence;
+//! - [`track`](mod@track): points, pixels and bindings tracked through a sequence;
+//!   [`tracks`]: the result's arrays and files;
 //! - [`camera`], [`render`]: cameras, and splat scenes and meshes rendered into arrays;
 //! - [`jobs`]: training and fitting, blocking or as job objects;
 //! - [`info`]: dataset info and evaluation, as dicts;
@@ -19,6 +20,7 @@ mod jobs;
 mod render;
 mod sequence;
 mod track;
+mod tracks;
 
 use pyo3::prelude::*;
 
@@ -34,7 +36,7 @@ fn _tagsplat(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<context::Device>()?;
     m.add_class::<context::Context>()?;
     m.add_class::<sequence::Sequence>()?;
-    m.add_class::<track::Tracks>()?;
+    m.add_class::<tracks::Tracks>()?;
     m.add_class::<camera::Camera>()?;
     m.add_class::<jobs::Progress>()?;
     m.add_class::<jobs::TrainJobHandle>()?;

@@ -73,6 +73,11 @@ impl Sequence {
         &self.faces
     }
 
+    /// What the file said beside its frames (the default for a sequence made from arrays).
+    pub fn info(&self) -> &SequenceInfo {
+        &self.info
+    }
+
     /// Frame `t`'s positions; None past the end.
     pub fn frame(&self, t: usize) -> Option<&[[f32; 3]]> {
         (t < self.frames).then(|| &self.positions[t * self.vertices..(t + 1) * self.vertices])
@@ -98,9 +103,7 @@ impl Sequence {
         positions: &Bound<'_, PyAny>,
         colors: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let (faces, _) =
-            arrays::rows::<i64, 3>(faces, "faces", Kind::Integer, &[None, Some(3)], "(F, 3)")?;
-        let faces = face_indices(py, &faces)?;
+        let faces = arrays::indices::<3>(faces, "faces", &[None, Some(3)], "(F, 3)")?;
         let shape = [None, None, Some(3)];
         let (positions, dims) =
             arrays::rows::<f64, 3>(positions, "positions", Kind::Float, &shape, "(T, V, 3)")?;
@@ -255,32 +258,21 @@ impl Sequence {
     }
 }
 
-/// Face indices as u32; a negative or too large one is bad input naming `faces`.
-fn face_indices(py: Python<'_>, faces: &[[i64; 3]]) -> PyResult<Vec<[u32; 3]>> {
-    faces
-        .iter()
-        .enumerate()
-        .map(|(i, f)| {
-            let index = |v: i64| u32::try_from(v).ok();
-            match f.map(index) {
-                [Some(a), Some(b), Some(c)] => Ok([a, b, c]),
-                _ => Err(bad_input(py, format!("faces: row {i} {f:?} is not a list of indices"))),
-            }
-        })
-        .collect()
-}
-
 /// The file's up axis ("y" or "z") and the sequence's (`from_up`, default `up`), with the
 /// command-line program's messages.
 pub fn orientation(py: Python<'_>, up: &str, from_up: Option<&str>) -> PyResult<Orientation> {
     let up = up_axis(py, "up", up)?;
-    let Some(text) = from_up else { return Ok(Orientation::keep(up)) };
-    match SignedAxis::parse(text) {
-        Some(source) => Ok(Orientation::new(source, up)),
-        None => {
-            Err(bad_input(py, format!("from_up: '{text}' is not one of +x, -x, +y, -y, +z, -z")))
-        }
+    match from_up {
+        Some(text) => Ok(Orientation::new(signed_axis(py, "from_up", text)?, up)),
+        None => Ok(Orientation::keep(up)),
     }
+}
+
+/// One of +x, -x, +y, -y, +z, -z as an axis; `name` is the argument's.
+pub fn signed_axis(py: Python<'_>, name: &str, text: &str) -> PyResult<SignedAxis> {
+    SignedAxis::parse(text).ok_or_else(|| {
+        bad_input(py, format!("{name}: '{text}' is not one of +x, -x, +y, -y, +z, -z"))
+    })
 }
 
 /// "y" or "z" as an up axis; `name` is the argument's.

@@ -9,7 +9,8 @@ files and error messages are the program's.
 - ``train`` / ``start_train``, ``fit`` / ``start_fit``: reconstruction runs, blocking (with a
   progress callback that can cancel) or as job objects to poll.
 - ``Sequence``: mesh sequences as zero-copy numpy arrays, read and written in every format.
-- ``track``: points or pixels bound on frame 0 and followed through a sequence.
+- ``track``: points, pixels or given bindings followed through a sequence; ``Tracks`` holds
+  their positions, orientation frames, polygons and clock, and writes the program's files.
 - ``Camera``, ``render_splats``, ``render_mesh``: one view into an array.
 - ``eval``: what ``tagsplat eval --json`` measures, as a dict.
 - ``Error`` and its subclasses ``BadInputError`` (also a ``ValueError``), ``FileFormatError``,
