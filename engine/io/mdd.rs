@@ -35,7 +35,7 @@ fn error(path: &Path, problem: impl Into<String>) -> MddError {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mdd {
     /// Time of each frame in seconds, as stored (not checked for order: see
-    /// [`SourceSequence::into_sequence`]).
+    /// [`crate::sequence::SourceSequence::into_sequence`]).
     pub times: Vec<f32>,
     /// Vertex positions of each frame, all of one length.
     pub frames: Vec<Vec<[f32; 3]>>,
