@@ -485,6 +485,21 @@ static void test_track_bindings(tagsplat_sequence *sequence) {
     OK(tagsplat_track_bindings(sequence, faces, &barycentric[0][0], points, &again));
     expect_same_tracks(__LINE__, tracks, again, points * frames * 3);
     OK(tagsplat_tracks_free(again));
+    /* A bindings file's points keep its ids; points given as arrays are named by their index. */
+    write_text(in_work("named.csv"), "id,face,u,v,w\nnose,0,1,0,0\ntail_tip,1,0,1,0\n");
+    OK(tagsplat_track_bindings_file(sequence, in_work("named.csv"), &again));
+    OK(tagsplat_tracks_point_id(again, 1, NULL, 0, &size));
+    CHECK(size == sizeof "tail_tip");
+    {
+        char id[16];
+        OK(tagsplat_tracks_point_id(again, 1, id, sizeof id, NULL));
+        CHECK(strcmp(id, "tail_tip") == 0);
+        FAILS(tagsplat_tracks_point_id(again, 0, id, 4, NULL), TAGSPLAT_STATUS_BUFFER_TOO_SMALL, "buf holds 4 values, 5 are needed");
+        FAILS(tagsplat_tracks_point_id(again, 2, id, sizeof id, NULL), TAGSPLAT_STATUS_BAD_INPUT, "point: 2 is not below the 2 bound points");
+        OK(tagsplat_tracks_point_id(tracks, 0, id, sizeof id, NULL));
+        CHECK(strcmp(id, "0") == 0);
+    }
+    OK(tagsplat_tracks_free(again));
     /* A vertex's track is its own positions, exactly. */
     OK(tagsplat_track_vertices(sequence, vertices, 3, &again));
     OK(tagsplat_tracks_trajectories(again, paths, 3 * frames * 3));

@@ -23,8 +23,8 @@
 #include <stdint.h>
 #define TAGSPLAT_VERSION_MAJOR 0
 #define TAGSPLAT_VERSION_MINOR 2
-#define TAGSPLAT_VERSION_PATCH 0
-#define TAGSPLAT_VERSION_STRING "0.2.0"
+#define TAGSPLAT_VERSION_PATCH 1
+#define TAGSPLAT_VERSION_STRING "0.2.1"
 
 
 /**
@@ -729,6 +729,17 @@ tagsplat_status tagsplat_tracks_times(const tagsplat_tracks *tracks, double *buf
 tagsplat_status tagsplat_tracks_bindings(const tagsplat_tracks *tracks,
                                          tagsplat_binding *buf,
                                          size_t len);
+
+/**
+ * The id of bound point `point` (its index in the bindings' order, below `points`), as a
+ * string of `*needed` bytes with its NUL (the header's buffer convention). Points given as
+ * arrays are named by their query index ("0", "1", …); a bindings file's keep the file's ids.
+ */
+tagsplat_status tagsplat_tracks_point_id(const tagsplat_tracks *tracks,
+                                         size_t point,
+                                         char *buf,
+                                         size_t len,
+                                         size_t *needed);
 
 /**
  * Copies the indices of the queries that were not bound into `buf`, which holds `len` of them:

@@ -1,7 +1,7 @@
 //! What a `tagsplat_tracks` holds, copied into caller buffers, and the files `tagsplat track`
 //! writes of it, each by the engine writer the program calls.
 
-use crate::buffers::{optional_text, output, store, to_path};
+use crate::buffers::{optional_text, output, output_text, store, to_path};
 use crate::handles::get;
 use crate::status::{call, engine, Error, Status};
 use crate::tracks::Tracks;
@@ -173,6 +173,30 @@ pub unsafe extern "C" fn tagsplat_tracks_bindings(
             })
             .collect();
         output("buf", &bindings, buf, len)
+    })
+}
+
+/// The id of bound point `point` (its index in the bindings' order, below `points`), as a
+/// string of `*needed` bytes with its NUL (the header's buffer convention). Points given as
+/// arrays are named by their query index ("0", "1", …); a bindings file's keep the file's ids.
+#[no_mangle]
+pub unsafe extern "C" fn tagsplat_tracks_point_id(
+    tracks: *const Tracks,
+    point: usize,
+    buf: *mut c_char,
+    len: usize,
+    needed: *mut usize,
+) -> Status {
+    call("tagsplat_tracks_point_id", || unsafe {
+        let points = &get("tracks", tracks)?.tracked.report.points;
+        let beyond = || {
+            Error::bad_input(format!(
+                "point: {point} is not below the {} bound points",
+                points.len()
+            ))
+        };
+        let id = &points.get(point).ok_or_else(beyond)?.id;
+        output_text("buf", id, (buf, len), needed)
     })
 }
 
