@@ -516,9 +516,10 @@ fn the_tracking_error_splits_by_how_many_training_cameras_see_the_points() {
         m.positions.iter_mut().filter(|_| t > 0).for_each(|v| v[1] += 0.2);
         m.write_ply(&pred.join(format!("meshes/{t:06}.ply"))).unwrap();
     }
-    // No dataset around gt/: no cameras, no split.
+    // No dataset around gt/: no cameras, no split, no pixels.
     let alone = evaluate_sequence(&pred, &gt, &options).unwrap().summary;
     assert_eq!(alone.sight, Default::default());
+    assert_eq!(alone.tracking_rmse_px, None);
     // Three cameras above the patch see every point in every frame: all of the error is seen.
     let patch = [2.0, 2.0, 0.0];
     let rig = [([2.0, 2.0, 6.0], patch), ([0.5, 1.0, 6.0], patch), ([3.5, 3.0, 6.0], patch)];
@@ -528,11 +529,48 @@ fn the_tracking_error_splits_by_how_many_training_cameras_see_the_points() {
     assert_eq!(above.sight.seen_share, Some(1.0), "{above:?}");
     assert!((above.sight.tracking_seen_over_size.unwrap() - rmse).abs() < 1e-9, "{above:?}");
     assert_eq!(above.sight.tracking_unseen_over_size, None);
+    // In pixels: each pair's slide of 0.2 along y through the pinhole of each camera (focal
+    // length 40 px), the median of the three, RMS over every pair (frame 0's slide is 0).
+    let slid_px = |g: glam::DVec3, (eye, at): ([f64; 3], [f64; 3])| {
+        let camera = tagsplat::camera::Camera::look_at(
+            64,
+            64,
+            40.0,
+            40.0,
+            32.0,
+            32.0,
+            eye.into(),
+            at.into(),
+            glam::DVec3::Y,
+        )
+        .unwrap();
+        let [a, b] = [g + glam::DVec3::new(0.0, 0.2, 0.0), g].map(|p| camera.to_camera(p));
+        40.0 * ((a.x / a.z - b.x / b.z).powi(2) + (a.y / a.z - b.y / b.z).powi(2)).sqrt()
+    };
+    let squares: Vec<f64> = gt
+        .tracks
+        .iter()
+        .map(|row| match row.frame {
+            0 => 0.0,
+            _ => {
+                let mut px = rig.map(|c| slid_px(row.position.into(), c));
+                px.sort_by(f64::total_cmp);
+                px[1] * px[1]
+            }
+        })
+        .collect();
+    let want = (squares.iter().sum::<f64>() / squares.len() as f64).sqrt();
+    let px = above.tracking_rmse_px.unwrap();
+    assert!(want > 0.5 && (px - want).abs() < 1e-3 * want, "{px} px, {want} px by hand");
+    assert_eq!(above.tracking_px_unmeasured, 0);
     // Two of them, and one that looks away: no point has three cameras.
     let away = [rig[0], rig[1], ([2.0, 2.0, 6.0], [2.0, 2.0, 12.0])];
     write_rig(&root, 3, &away);
     let below = evaluate_sequence(&pred, &gt, &options).unwrap().summary;
     assert_eq!(below.sight.seen_share, Some(0.0), "{below:?}");
+    // Two cameras still see every point: the pixel error is the median (mean) of theirs.
+    assert_eq!(below.tracking_px_unmeasured, 0);
+    assert!(below.tracking_rmse_px.unwrap() > 0.5, "{below:?}");
     assert!((below.sight.tracking_unseen_over_size.unwrap() - rmse).abs() < 1e-9, "{below:?}");
     std::fs::remove_dir_all(&root).unwrap();
 }

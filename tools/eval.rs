@@ -115,13 +115,14 @@ pub fn print_scores(pred: &Path, s: &SequenceSummary, frames: &[FrameScores]) {
         "size {:.4} scene units; {} points, {} Chamfer samples per mesh",
         s.size, s.points, s.chamfer_samples
     );
-    println!("frame  track RMSE %  off surface %  along %  track max %  Chamfer %  PSNR gs dB  PSNR mesh dB  iters  seconds  stop reason");
+    println!("frame  track RMSE %  track px  off surface %  along %  track max %  Chamfer %  PSNR gs dB  PSNR mesh dB  iters  seconds  stop reason");
     for f in frames {
         let t = &f.train;
         println!(
-            "{:>5}  {:>12}  {:>13}  {:>7}  {:>11}  {:>9}  {:>10}  {:>12}  {:>5}  {:>7}  {}",
+            "{:>5}  {:>12}  {:>8}  {:>13}  {:>7}  {:>11}  {:>9}  {:>10}  {:>12}  {:>5}  {:>7}  {}",
             f.frame,
             cell(f.tracking_rmse_over_size, 3, true),
+            cell(f.tracking_rmse_px, 2, false),
             cell(f.tracking_off_surface_over_size, 3, true),
             cell(f.tracking_along_surface_over_size, 3, true),
             cell(f.tracking_max_over_size, 3, true),
@@ -154,6 +155,11 @@ pub fn print_scores(pred: &Path, s: &SequenceSummary, frames: &[FrameScores]) {
         "  of which        {}% off the true surface (a surface in the wrong place), {}% along it (points slid on it); squares add up",
         cell(s.tracking_off_surface_over_size, 3, true),
         cell(s.tracking_along_surface_over_size, 3, true)
+    );
+    println!(
+        "  in pixels       {} px: each point's median over the training cameras that see it, RMS over points and frames ({} pairs no camera sees left out)",
+        cell(s.tracking_rmse_px, 2, false),
+        s.tracking_px_unmeasured
     );
     let share = s.sight.seen_share.map_or("-".into(), |v| format!("{:.0}", v * 100.0));
     println!(

@@ -12,6 +12,7 @@
 //! - [`tracking`]: MSE / RMSE of tracked points against ground-truth trajectories.
 //! - [`tracking_split`]: that error split into a part off the true surface and a part along it.
 //! - [`sight`]: that error split into points the cameras see in both frames and the rest.
+//! - [`pixels`]: the tracking error in pixels of the training cameras that see each point.
 //!
 //! Inputs are plain arrays; [`sample`] draws the surface samples, [`folder`] compares a
 //! prediction folder with a ground-truth folder. Scoring a whole trained sequence against a
@@ -22,6 +23,7 @@ pub mod assignment;
 pub mod chamfer;
 pub mod emd;
 pub mod folder;
+pub mod pixels;
 pub mod psnr;
 pub mod sample;
 pub mod sight;
@@ -34,6 +36,7 @@ pub use affine_psnr::affine_corrected_psnr;
 pub use chamfer::{chamfer_distance, chamfer_meshes, ChamferReport};
 pub use emd::{emd_meshes, emd_points, EmdReport};
 pub use folder::{evaluate_folders, FolderError, FolderOptions, FolderReport};
+pub use pixels::{pixel_error, PixelSplit};
 pub use psnr::psnr;
 pub use sample::{sample_surface, surface_points, SurfaceSample};
 pub use sight::{cameras_seeing, seen_in_both, SightSplit, SEEN_VIEWS};

@@ -8,7 +8,7 @@ use crate::io::{write_atomically, write_json_atomically};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-const HEADER: &str = "frame,tracking_rmse_over_size,tracking_max_over_size,tracking_off_surface_over_size,tracking_along_surface_over_size,tracking_seen_over_size,tracking_unseen_over_size,seen_share,chamfer_over_size,psnr_gs_db,psnr_mesh_db,iterations,wall_s,stop_reason";
+const HEADER: &str = "frame,tracking_rmse_over_size,tracking_max_over_size,tracking_off_surface_over_size,tracking_along_surface_over_size,tracking_seen_over_size,tracking_unseen_over_size,seen_share,tracking_rmse_px,chamfer_over_size,psnr_gs_db,psnr_mesh_db,iterations,wall_s,stop_reason";
 
 /// Writes the three files into `dir` (created when needed), each atomically; returns their
 /// paths.
@@ -43,6 +43,7 @@ fn write_csv(w: &mut impl Write, frames: &[FrameScores]) -> std::io::Result<()> 
             f.sight.tracking_seen_over_size,
             f.sight.tracking_unseen_over_size,
             f.sight.seen_share,
+            f.tracking_rmse_px,
             Some(f.chamfer_over_size),
             t.psnr_gs_db,
             t.psnr_mesh_db,
@@ -110,6 +111,7 @@ mod tests {
             tracking_off_surface_over_size: Some(0.3),
             tracking_along_surface_over_size: Some(0.4),
             sight: crate::score::SightScores { seen_share: Some(0.75), ..Default::default() },
+            tracking_rmse_px: Some(1.5),
             chamfer_over_size: 0.25,
             chamfer_pred_to_gt_over_size: 0.2,
             chamfer_gt_to_pred_over_size: 0.3,
@@ -126,8 +128,8 @@ mod tests {
             text.lines().collect::<Vec<_>>(),
             [
                 HEADER,
-                "0,0.5,,0.3,0.4,,,0.75,0.25,,,50,,",
-                "1,0.5,,0.3,0.4,,,0.75,0.25,,,50,,\"loss rose, twice\""
+                "0,0.5,,0.3,0.4,,,0.75,1.5,0.25,,,50,,",
+                "1,0.5,,0.3,0.4,,,0.75,1.5,0.25,,,50,,\"loss rose, twice\""
             ]
         );
     }

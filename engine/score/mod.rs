@@ -9,7 +9,8 @@
 //!   points' distance to the true surface and the rest, along it ([`crate::eval::split_on_surface`]);
 //!   and split into points that at least [`SEEN_VIEWS`](crate::eval::SEEN_VIEWS) training cameras
 //!   see at frame 0 and at the frame, and the rest ([`crate::eval::sight`]), when the ground
-//!   truth sits in its dataset (`DIR/gt`, the cameras read from `DIR`).
+//!   truth sits in its dataset (`DIR/gt`, the cameras read from `DIR`); with those cameras, the
+//!   same error in pixels ([`crate::eval::pixels`]).
 //! - Chamfer: point-to-surface, per frame ([`crate::eval::chamfer_to_surface`]).
 //! - Held-out PSNR, iterations, wall time, stop reason: `OUT/report.json` ([`train_report`]).
 //!
@@ -27,7 +28,7 @@ use crate::camera::Camera;
 use crate::dataset::Dataset;
 use crate::eval::{
     cameras_seeing, chamfer_to_surface, seen_in_both, split_on_surface, tracking_error, EvalError,
-    SightSplit, SurfaceSplit, TrackingReport,
+    PixelSplit, SightSplit, SurfaceSplit, TrackingReport,
 };
 use crate::io::trajectories::{TrackPoint, TrajectoriesError};
 use crate::mesh::{MeshError, TriMesh};
@@ -116,6 +117,9 @@ pub struct FrameScores {
     /// seen points' share (None without the dataset's cameras or without such points).
     #[serde(flatten)]
     pub sight: SightScores,
+    /// The tracking error in pixels ([`crate::eval::pixels`]): RMS over the frame's points of
+    /// each one's median over the training cameras that see it (None without cameras).
+    pub tracking_rmse_px: Option<f64>,
     /// Point-to-surface Chamfer, and its halves (prediction → truth, truth → prediction).
     pub chamfer_over_size: f64,
     /// Chamfer's prediction → truth half.
@@ -185,6 +189,10 @@ pub struct SequenceSummary {
     /// The RMSE split by sight over all points and scored frames.
     #[serde(flatten)]
     pub sight: SightScores,
+    /// The tracking error in pixels over all points and scored frames (None without cameras).
+    pub tracking_rmse_px: Option<f64>,
+    /// (Point, frame) pairs no training camera sees, left out of `tracking_rmse_px`.
+    pub tracking_px_unmeasured: usize,
     /// The frame of the highest tracking RMSE.
     pub tracking_worst_frame: Option<FrameValue>,
     /// Mean over the scored frames, and the worst frame (None when no frame was scored).
@@ -236,7 +244,7 @@ pub fn evaluate_sequence(
     let report_path = pred.join("report.json");
     let train = read_train_report(&report_path)?;
     let mut frames = Vec::with_capacity(present.len());
-    let (mut split_total, mut sight_total) = (SurfaceSplit::default(), SightSplit::default());
+    let mut totals = (SurfaceSplit::default(), SightSplit::default(), PixelSplit::default());
     let by_id: HashMap<&str, &TrackedPoint> =
         tracked.points.iter().map(|p| (p.id.as_str(), p)).collect();
     let sight = Sight::new(gt)?;
@@ -244,8 +252,8 @@ pub fn evaluate_sequence(
         let truth = TriMesh::read_ply(&gt.mesh_path(t))?;
         let chamfer =
             chamfer_frame(pred, gt, t, (&sequence.frames[i], &sequence.faces), &truth, options)?;
-        let (split, seen) = split_frame(gt, &by_id, (i, t), &truth, &sight)?;
-        (split_total, sight_total) = (split_total + split, sight_total + seen);
+        let (split, seen, px) = split_frame(gt, &by_id, (i, t), &truth, &sight)?;
+        totals = (totals.0 + split, totals.1 + seen, totals.2 + px);
         let per_frame = |list: &[(u32, f64)]| {
             list.iter().find(|(f, _)| *f as usize == t).map(|(_, v)| v / gt.size)
         };
@@ -257,6 +265,7 @@ pub fn evaluate_sequence(
             tracking_off_surface_over_size: off,
             tracking_along_surface_over_size: along,
             sight: SightScores::of(&seen, gt.size),
+            tracking_rmse_px: px.rms(),
             chamfer_over_size: chamfer.mean / gt.size,
             chamfer_pred_to_gt_over_size: chamfer.pred_to_gt / gt.size,
             chamfer_gt_to_pred_over_size: chamfer.gt_to_pred / gt.size,
@@ -267,7 +276,7 @@ pub fn evaluate_sequence(
         gt,
         options,
         &tracked,
-        (tracking.as_ref(), split_total, sight_total),
+        (tracking.as_ref(), totals),
         &frames,
         missing,
         train.is_some().then_some(report_path),
@@ -365,15 +374,15 @@ fn tracking_scores(
 }
 
 /// The tracking error of frame `t` (entry `i` of the trajectories) split against the true
-/// mesh `truth` and by sight; every `tracks.csv` row of the frame whose point was tracked
-/// (`by_id`).
+/// mesh `truth` and by sight, and in pixels; every `tracks.csv` row of the frame whose point
+/// was tracked (`by_id`).
 fn split_frame(
     gt: &GroundTruth,
     by_id: &HashMap<&str, &TrackedPoint>,
     (i, t): (usize, usize),
     truth: &TriMesh,
     sight: &Sight,
-) -> Result<(SurfaceSplit, SightSplit), SequenceEvalError> {
+) -> Result<(SurfaceSplit, SightSplit, PixelSplit), SequenceEvalError> {
     let rows: Vec<(&str, [f64; 3], [f64; 3])> = gt
         .tracks
         .iter()
@@ -385,18 +394,19 @@ fn split_frame(
     let metric = |source| SequenceEvalError::Metric { path: gt.mesh_path(t), source };
     let pairs: Vec<([f64; 3], [f64; 3])> = rows.iter().map(|&(_, p, g)| (p, g)).collect();
     let split = split_on_surface(&pairs, (&truth.positions, &truth.faces)).map_err(metric)?;
-    let mut seen = SightSplit::default();
+    let (mut seen, mut px) = (SightSplit::default(), PixelSplit::default());
     if !sight.cameras.is_empty() {
         let truths: Vec<[f64; 3]> = rows.iter().map(|&(_, _, g)| g).collect();
         let now = cameras_seeing(&truths, (&truth.positions, &truth.faces), &sight.cameras)
             .map_err(metric)?;
         for ((id, p, g), now) in rows.iter().zip(&now) {
             let before = sight.frame0.get(*id).map_or(&[][..], Vec::as_slice);
-            let error_sq = glam::DVec3::from(*p).distance_squared(glam::DVec3::from(*g));
-            seen.add_pair(error_sq, seen_in_both(before, now));
+            let (p, g) = (glam::DVec3::from(*p), glam::DVec3::from(*g));
+            seen.add_pair(p.distance_squared(g), seen_in_both(before, now));
+            px.add_pair(p, g, &sight.cameras, now);
         }
     }
-    Ok((split, seen))
+    Ok((split, seen, px))
 }
 
 /// The training cameras of the ground truth's dataset and which of them see each point at
@@ -443,13 +453,16 @@ fn chamfer_frame(
     })
 }
 
-/// The sequence's summary; `tracking` is the tracking error and its split over every scored
-/// frame.
+/// The sequence's summary; `tracking` is the tracking error and its splits (surface, sight,
+/// pixels) over every scored frame.
 fn summarize(
     gt: &GroundTruth,
     options: &SequenceEvalOptions,
     tracked: &TrackReport,
-    (tracking, split, sight): (Option<&TrackingReport>, SurfaceSplit, SightSplit),
+    (tracking, (split, sight, px)): (
+        Option<&TrackingReport>,
+        (SurfaceSplit, SightSplit, PixelSplit),
+    ),
     frames: &[FrameScores],
     missing_frames: Vec<usize>,
     train_report: Option<PathBuf>,
@@ -475,6 +488,8 @@ fn summarize(
         tracking_off_surface_over_size: split.rms().map(|(o, _)| o / gt.size),
         tracking_along_surface_over_size: split.rms().map(|(_, a)| a / gt.size),
         sight: SightScores::of(&sight, gt.size),
+        tracking_rmse_px: px.rms(),
+        tracking_px_unmeasured: px.unmeasured,
         tracking_worst_frame: worst(&|f| f.tracking_rmse_over_size),
         chamfer_mean_over_size: (!frames.is_empty())
             .then(|| frames.iter().map(|f| f.chamfer_over_size).sum::<f64>() / frames.len() as f64),
