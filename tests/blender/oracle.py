@@ -86,3 +86,12 @@ def evaluated_positions(bpy, obj, frame, subframe=0.0):
     finally:
         evaluated.to_mesh_clear()
     return co.reshape(-1, 3)
+
+
+def evaluated_world(bpy, obj, frame):
+    """``obj``'s evaluated vertex positions (V, 3) in world space at scene frame ``frame`` (a
+    float: its whole part is the frame, the rest the subframe), float64."""
+    whole = int(np.floor(frame + 1e-9))
+    local = evaluated_positions(bpy, obj, whole, max(0.0, frame - whole)).astype(np.float64)
+    world = np.array(obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).matrix_world)
+    return local @ world[:3, :3].T + world[:3, 3]
