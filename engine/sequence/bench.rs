@@ -2,7 +2,9 @@
 //! writes, against reading the same sequence as OBJ + PC2 in the same run (the layout 4D
 //! capture vendors deliver, and the bound the issue sets: any format within 2× of it).
 //! Files of other tools (a `.usdc`, an `.abc`, an `.fbx` of the same motion) can be timed
-//! beside them.
+//! beside them. Each row also has a bare parse of the same bytes: the time to read them and,
+//! for a text format, to parse each decimal in them with the standard float parser and build
+//! nothing, which says how much of a text reader's time its numbers alone cost.
 
 use super::{FrameFormat, MeshSequence, SequenceError};
 use serde::Serialize;
@@ -20,6 +22,10 @@ pub struct ReadTiming {
     pub read_ms: f64,
     /// `read_ms` over the OBJ + PC2 read of the same run.
     pub over_pc2: f64,
+    /// A bare parse of these bytes ([`parse_ms`]): the fastest of the repetitions, ms.
+    pub parse_ms: f64,
+    /// `parse_ms` over the OBJ + PC2 read of the same run.
+    pub parse_over_pc2: f64,
     /// The frames read equal the sequence written, position for position (a file given from
     /// outside: its frame and vertex counts equal the written sequence's).
     pub same_frames: bool,
@@ -74,6 +80,8 @@ pub fn bench_read(
 ) -> Result<ReadBenchReport, SequenceError> {
     let keep = super::orient::Orientation::keep(super::orient::UpAxis::Y);
     let written = ["anim.pc2", "anim.mdd", "anim.glb", "anim.usda", "frames"];
+    let text =
+        |file: &Path| file.ends_with("frames") || file.extension().is_some_and(|e| e == "usda");
     for name in written {
         sequence.export(&scratch.join(name), FrameFormat::Obj, 24.0, keep)?;
     }
@@ -87,12 +95,21 @@ pub fn bench_read(
             back.frames == sequence.frames
         };
         let name = file.strip_prefix(scratch).unwrap_or(&file).display().to_string();
-        let bytes = disk_bytes(&file);
-        formats.push(ReadTiming { file: name, bytes, read_ms, over_pc2: 0.0, same_frames });
+        let (bytes, parse_ms) = (disk_bytes(&file), parse_ms(&file, text(&file), repetitions)?);
+        let (over_pc2, parse_over_pc2) = (0.0, 0.0);
+        formats.push(ReadTiming {
+            file: name,
+            bytes,
+            read_ms,
+            over_pc2,
+            parse_ms,
+            parse_over_pc2,
+            same_frames,
+        });
     }
     let pc2 = formats[0].read_ms;
     for f in &mut formats {
-        f.over_pc2 = f.read_ms / pc2;
+        (f.over_pc2, f.parse_over_pc2) = (f.read_ms / pc2, f.parse_ms / pc2);
     }
     let worst_over_pc2 = formats.iter().map(|f| f.over_pc2).fold(0.0, f64::max);
     let (vertices, frames) = (sequence.frames[0].len(), sequence.frames.len());
@@ -113,10 +130,106 @@ fn fastest_read(path: &Path, repetitions: usize) -> Result<(f64, MeshSequence), 
     Ok(best)
 }
 
+/// A bare parse of `path` (a file, or a folder's files), fastest of `repetitions`, ms: its bytes
+/// read and, when it is `text`, each decimal in them parsed by the standard (exact) float
+/// parser, on every thread (a folder's files spread over them, a file's text cut at line ends),
+/// and nothing built. A text reader using the same parser spends about this on numbers alone.
+fn parse_ms(path: &Path, text: bool, repetitions: usize) -> Result<f64, SequenceError> {
+    let files: Vec<PathBuf> = match std::fs::read_dir(path) {
+        Ok(entries) => entries.flatten().map(|e| e.path()).collect(),
+        Err(_) => vec![path.to_owned()],
+    };
+    let mut best = f64::INFINITY;
+    for _ in 0..repetitions.max(1) {
+        let start = Instant::now();
+        std::hint::black_box(read_all(&files, text)?);
+        best = best.min(start.elapsed().as_secs_f64() * 1e3);
+    }
+    Ok(best)
+}
+
+/// Reads `files` on every thread and, when `text`, parses the decimals in them; how many.
+fn read_all(files: &[PathBuf], text: bool) -> Result<usize, SequenceError> {
+    // A single file is cut at line ends so that its text too is spread over the threads.
+    let threads = match files.len() {
+        1 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        _ => 1,
+    };
+    let counts = crate::io::host::parallel_map(files, |file| -> Result<usize, SequenceError> {
+        let bytes = std::fs::read(file).map_err(|e| SequenceError::Invalid {
+            path: file.clone(),
+            problem: format!("cannot read: {e}"),
+        })?;
+        if !text {
+            return Ok(0);
+        }
+        let chunks = line_chunks(&bytes, threads);
+        let counts =
+            crate::io::host::parallel_map(&chunks, |c| Ok::<_, SequenceError>(count_numbers(c)))?;
+        Ok(counts.iter().sum::<usize>())
+    })?;
+    Ok(counts.iter().sum())
+}
+
+/// `bytes` cut into about `parts` pieces, each ending at a line end (or the end).
+fn line_chunks(bytes: &[u8], parts: usize) -> Vec<&[u8]> {
+    let (mut chunks, mut rest) = (Vec::new(), bytes);
+    let step = bytes.len().div_ceil(parts.max(1)).max(1);
+    while !rest.is_empty() {
+        let cut =
+            rest.iter().skip(step).position(|&b| b == b'\n').map_or(rest.len(), |i| step + i + 1);
+        let (head, tail) = rest.split_at(cut.min(rest.len()));
+        chunks.push(head);
+        rest = tail;
+    }
+    chunks
+}
+
+/// How many of the words of `bytes` (split at white space and commas, brackets and parentheses
+/// trimmed) written as decimals (with a point or an exponent: the coordinates) parse as an `f32`, each
+/// one parsed as a reader of the text must. Integers (face indices, counts) are left alone: a
+/// reader may compare a frame's face text with frame 0's instead of parsing it again.
+fn count_numbers(bytes: &[u8]) -> usize {
+    let separator = |b: &u8| b.is_ascii_whitespace() || *b == b',';
+    fn trim(w: &[u8]) -> &[u8] {
+        let bracket = |b: &u8| b"()[]{}".contains(b);
+        let start = w.iter().position(|b| !bracket(b)).unwrap_or(w.len());
+        let end = w.iter().rposition(|b| !bracket(b)).map_or(start, |i| i + 1);
+        &w[start..end.max(start)]
+    }
+    let decimal = |w: &&[u8]| w.iter().any(|b| matches!(b, b'.' | b'e' | b'E'));
+    let number = |w: &[u8]| std::str::from_utf8(w).is_ok_and(|w| w.parse::<f32>().is_ok());
+    bytes.split(separator).map(trim).filter(decimal).filter(|w| number(w)).count()
+}
+
 /// Bytes of a file, or of every file in a folder.
 fn disk_bytes(path: &Path) -> u64 {
     match std::fs::read_dir(path) {
         Ok(entries) => entries.flatten().filter_map(|e| e.metadata().ok()).map(|m| m.len()).sum(),
         Err(_) => std::fs::metadata(path).map_or(0, |m| m.len()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chunks_end_at_line_ends_and_join_back() {
+        let text = b"v 0.5 -1.25 3e2\nf 1/2/3 4 5\nv 1.0 2.0 3.0\nlast 0.5";
+        for parts in [1, 2, 3, 7, 100] {
+            let chunks = line_chunks(text, parts);
+            assert_eq!(chunks.concat(), text, "{parts} parts");
+            let (last, whole) = chunks.split_last().unwrap();
+            assert!(whole.iter().all(|c| c.ends_with(b"\n")) && !last.is_empty(), "{parts}");
+        }
+        assert!(line_chunks(b"", 4).is_empty());
+    }
+
+    #[test]
+    fn decimals_are_counted_and_integers_and_words_are_not() {
+        let text =
+            b"v 0.5 -1.25 3e2\nf 1/2/3 4 5\npoint3f[] points = [(0.25, 1.5, -.5)]\nname.obj e";
+        assert_eq!(count_numbers(text), 6);
     }
 }
