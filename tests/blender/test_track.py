@@ -1,15 +1,20 @@
 """Tracking selected vertices: each empty's keyframed location is, at every frame, Blender's
 own evaluated position of the vertex it was made from (a vertex bound on frame 0 follows
-itself), in the object's space and in the world."""
+itself), in the object's space and in the world; its keyed rotation is, at every frame, the
+rotation Blender's own three-vertex parent on the bound triangle of the evaluated mesh gives
+(an independent construction of the same frame), also when the Mesh Cache modifier mirrors."""
 
 import bmesh
 import bpy
 import numpy as np
-from mathutils import Vector
+from mathutils import Matrix, Vector
 
 import oracle
+from tagsplat_blender import axes
 
 SELECTED = (0, 7, 13, 19)
+# Rotation matrix entries, against Blender's single-precision three-vertex parent.
+ROTATION_TOLERANCE = 5e-5
 
 
 def sequence_object(env, up="Y", frames=6):
@@ -60,17 +65,48 @@ def assert_follow(obj, empties, frames, subframe=0.0):
     return worst
 
 
+def assert_turn(obj, empties, frames):
+    """At each frame every empty's world rotation is a three-vertex parent's: a child of
+    ``obj`` on the empty's bound triangle (Blender builds that frame from the evaluated mesh).
+    Returns the largest difference of the rotation matrices' entries."""
+    rivets = {}
+    for index, empty in empties.items():
+        rivet = bpy.data.objects.new(f"rivet {index}", None)
+        bpy.context.collection.objects.link(rivet)
+        rivet.parent, rivet.parent_type = obj, "VERTEX_3"
+        rivet.parent_vertices = list(empty["tagsplat_triangle"])
+        rivet.matrix_parent_inverse = Matrix.Identity(4)
+        rivets[index] = rivet
+    worst = 0.0
+    for frame in frames:
+        bpy.context.scene.frame_set(frame)
+        for index, empty in empties.items():
+            keyed = np.array(empty.matrix_world.to_3x3())
+            rivet = np.array(rivets[index].matrix_world.to_3x3())
+            worst = max(worst, float(np.abs(keyed - rivet).max()))
+    for rivet in rivets.values():
+        bpy.data.objects.remove(rivet)
+    return worst
+
+
 def test_selected_vertices_become_empties_on_their_vertices_at_every_frame(env):
     obj = sequence_object(env)
     empties = tracked(obj, SELECTED)
     for empty in empties.values():
         assert empty.parent == obj
         curves = empty.animation_data.action.fcurves
-        assert sorted(c.data_path for c in curves) == ["location"] * 3, "location keys only"
+        paths = sorted(c.data_path for c in curves)
+        assert paths == ["location"] * 3 + ["rotation_quaternion"] * 4, paths
         assert all(len(c.keyframe_points) == 6 for c in curves), "one key per frame"
     worst = assert_follow(obj, empties, range(1, 7))
     assert worst <= 1e-6, f"an empty is {worst} off its vertex"
     assert assert_follow(obj, empties, [2, 4], subframe=0.5) <= 1e-6
+    turned = assert_turn(obj, empties, range(1, 7))
+    print(f"track: keyed rotations within {turned:.2g} of a three-vertex parent's")
+    # Blender builds the parent's frame in single precision from the evaluated (f32) mesh,
+    # and the keys are f32 quaternions: entries agree to a few 1e-5 (a wrong edge or side
+    # would be off by O(1)).
+    assert turned <= ROTATION_TOLERANCE, f"an empty's rotation is {turned} off its triangle's"
 
 
 def test_tracks_follow_the_modifier_axes_as_set_on_the_object(env):
@@ -79,6 +115,8 @@ def test_tracks_follow_the_modifier_axes_as_set_on_the_object(env):
     modifier.forward_axis, modifier.up_axis, modifier.flip_axis = "NEG_X", "POS_Y", {"Z"}
     empties = tracked(obj, SELECTED[:2])
     assert assert_follow(obj, empties, range(1, 4)) <= 1e-6
+    assert np.linalg.det(axes.cache_matrix(modifier)) < 0, "the settings mirror"
+    assert assert_turn(obj, empties, range(1, 4)) <= ROTATION_TOLERANCE
 
 
 def expect_error(words):

@@ -1,15 +1,17 @@
 """Tracking the selected vertices of a sequence object: tagsplat binds each vertex on frame 0
 and follows it through the sequence the object's Mesh Cache modifier plays; each track becomes
-an empty parented to the object with one location keyframe per frame.
+an empty parented to the object with one location and one rotation keyframe per frame.
 
-The Python package's tracks are positions only (no orientation frame), so the empties carry
-location keys only.
+The rotation is the engine's orientation frame of the bound triangle (columns: its tangent, the
+normal × tangent, the normal), the frame Blender's three-vertex parent gives a child of that
+triangle, so an empty turns with the surface as a rivet or uvPin does.
 """
 
 import os
 
 import bpy
 import numpy as np
+from mathutils import Matrix
 
 from . import axes, engine
 
@@ -60,17 +62,42 @@ def scene_frames(modifier, count):
     return (np.arange(count, dtype=np.float64) + modifier.frame_start) / modifier.frame_scale
 
 
-def keyframe_locations(empty, frames, locations):
-    """One linear location keyframe on ``empty`` per frame: ``locations`` (T, 3) at ``frames``."""
-    action = bpy.data.actions.new(f"{empty.name} track")
-    empty.animation_data_create().action = action
-    for axis in range(3):
-        curve = action.fcurves.new("location", index=axis, action_group="Location")
+def keyframe(action, path, group, frames, values):
+    """One linear keyframe per frame on each component of ``path``: ``values`` (T, C) at
+    ``frames``."""
+    for axis in range(values.shape[1]):
+        curve = action.fcurves.new(path, index=axis, action_group=group)
         points = curve.keyframe_points
         points.add(len(frames))
-        points.foreach_set("co", np.column_stack([frames, locations[:, axis]]).ravel())
+        points.foreach_set("co", np.column_stack([frames, values[:, axis]]).ravel())
         points.foreach_set("interpolation", np.full(len(frames), _LINEAR, dtype=np.int32))
         curve.update()
+
+
+def frame_quaternions(matrix, normals, tangents):
+    """Per frame, the rotation (w, x, y, z) whose columns are the tangent, normal × tangent and
+    normal, turned into the object's space by ``matrix`` as the displayed triangle turns: its
+    edges by ``matrix`` itself, its normal also reversed when ``matrix`` mirrors (the winding
+    then reads the other way). Each quaternion is on the same side as the one before, so linear
+    keys between frames take the short way round."""
+    t = np.asarray(tangents, dtype=np.float64) @ matrix.T
+    n = np.linalg.det(matrix) * (np.asarray(normals, dtype=np.float64) @ matrix.T)
+    rotations = np.stack([t, np.cross(n, t), n], axis=-1)
+    quaternions = np.array([tuple(Matrix(r.tolist()).to_quaternion()) for r in rotations])
+    for k in range(1, len(quaternions)):
+        if np.dot(quaternions[k], quaternions[k - 1]) < 0.0:
+            quaternions[k] = -quaternions[k]
+    return quaternions
+
+
+def keyframe_track(empty, frames, locations, rotations):
+    """``empty``'s action: its ``locations`` (T, 3) and quaternion ``rotations`` (T, 4) keyed
+    linearly at ``frames``."""
+    action = bpy.data.actions.new(f"{empty.name} track")
+    empty.animation_data_create().action = action
+    empty.rotation_mode = "QUATERNION"
+    keyframe(action, "location", "Location", frames, locations)
+    keyframe(action, "rotation_quaternion", "Rotation", frames, rotations)
 
 
 def track_selected(context, obj):
@@ -90,19 +117,25 @@ def track_selected(context, obj):
             f"{path} has {positions.shape[1]} vertices, {obj.name} has {len(obj.data.vertices)}"
         )
     tracks = ts.track(sequence, points=positions[0][indices], ids=[str(i) for i in indices])
-    moved = axes.apply(axes.cache_matrix(modifier), tracks.positions)
+    turn = axes.cache_matrix(modifier)
+    moved = axes.apply(turn, tracks.positions)
     frames = scene_frames(modifier, positions.shape[0])
+    triangles = sequence.faces[tracks.bindings[0]]
     collection = bpy.data.collections.new(f"{obj.name} tracks")
     context.collection.children.link(collection)
     size = max(obj.dimensions.length, 1e-6) * 0.01
     empties = []
-    for vertex, locations in zip(tracks.ids, moved):
+    for k, vertex in enumerate(tracks.ids):
         empty = bpy.data.objects.new(f"{obj.name} v{vertex}", None)
-        empty.empty_display_type = "SPHERE"
+        empty.empty_display_type = "ARROWS"
         empty.empty_display_size = size
         empty.parent = obj
         empty["tagsplat_vertex"] = int(vertex)  # the id given to track: the vertex index
-        keyframe_locations(empty, frames, locations)
+        # The bound triangle's corners, in the order its frame is built from (a three-vertex
+        # parent with these vertices turns as the empty does).
+        empty["tagsplat_triangle"] = [int(v) for v in triangles[k]]
+        rotations = frame_quaternions(turn, tracks.normals[k], tracks.tangents[k])
+        keyframe_track(empty, frames, moved[k], rotations)
         collection.objects.link(empty)
         empties.append(empty)
     return empties, tracks.unbound
@@ -126,7 +159,7 @@ class TAGSPLAT_OT_track_vertices(bpy.types.Operator):
 
         def run():
             empties, unbound = track_selected(context, context.active_object)
-            self.report({"INFO"}, f"{len(empties)} vertices tracked (location keys; no rotation)")
+            self.report({"INFO"}, f"{len(empties)} vertices tracked")
             if unbound:
                 self.report({"WARNING"}, f"not tracked (the engine could not bind them): {unbound}")
             return {"FINISHED"}
