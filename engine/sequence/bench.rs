@@ -22,7 +22,7 @@ pub struct ReadTiming {
     pub read_ms: f64,
     /// `read_ms` over the OBJ + PC2 read of the same run.
     pub over_pc2: f64,
-    /// A bare parse of these bytes ([`parse_ms`]): the fastest of the repetitions, ms.
+    /// A bare parse of these bytes (see the module docs): the fastest of the repetitions, ms.
     pub parse_ms: f64,
     /// `parse_ms` over the OBJ + PC2 read of the same run.
     pub parse_over_pc2: f64,
