@@ -96,7 +96,11 @@ pub fn read_mesh(
                     vec![[0.0; 3]; n]
                 }
             };
-            out.targets[k].extend(offsets);
+            // The first primitive's offsets are kept as read (no copy of each target).
+            match out.targets[k].is_empty() {
+                true => out.targets[k] = offsets,
+                false => out.targets[k].extend(offsets),
+            }
         }
         if let Some(joint_count) = joints {
             let sets = read_influences(accessors, &primitive, n, joint_count).map_err(problem)?;
