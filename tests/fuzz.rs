@@ -517,6 +517,27 @@ fn readers(scratch: &Path) -> Vec<Reader> {
                 .unwrap(),
             )]],
         },
+        // The stage Pixar's usd-core writes for tests/formats/usd.rs, as text and as a crate
+        // file: an animated mesh under animated xforms, and a static one beside it.
+        Reader {
+            name: "usd_sequence",
+            read: |d| {
+                let options = tagsplat::sequence::ReadOptions {
+                    mesh: Some("/World/Rig/Body".into()),
+                    ..Default::default()
+                };
+                let file = ["anim.usda", "anim.usdc"].map(|f| d.join(f));
+                let file = file.iter().find(|f| f.exists()).expect("a seed's file");
+                message(MeshSequence::read_with(file, &options))
+            },
+            seeds: vec![
+                vec![text("anim.usda", include_str!("fuzz_corpus/usd_sequence/seed-anim.usda"))],
+                vec![binary(
+                    "anim.usdc",
+                    include_bytes!("fuzz_corpus/usd_sequence/seed-anim.usdc").to_vec(),
+                )],
+            ],
+        },
         Reader {
             name: "camera_json",
             read: |d| message(Camera::load_json(&d.join("cam.json"))),
@@ -1182,8 +1203,8 @@ fn claiming(file: &SeedFile, claim: &Claim) -> Vec<u8> {
 }
 
 /// Headers and metadata that claim about 10^12 elements (PLY rows, PC2 points and samples,
-/// glTF accessor elements, dataset frames) are refused at once, within the allowance, by an
-/// error naming the file.
+/// glTF accessor elements, dataset frames, USD polygons, and a crate file's sections and arrays)
+/// are refused at once, within the allowance, by an error naming the file.
 #[test]
 fn claims_of_a_trillion_elements_are_refused_at_once() {
     let claims = [
@@ -1195,6 +1216,18 @@ fn claims_of_a_trillion_elements_are_refused_at_once() {
         ("glb_sequence", "anim.glb", Claim::After("\"count\":")),
         ("frame_folder", "frames/frame_000001.ply", Claim::After("element vertex ")),
         ("own_dataset", "dataset.json", Claim::After("\"frames\": ")),
+        ("usd_sequence", "anim.usda", Claim::After("faceVertexCounts = [")),
+        ("usd_sequence", "anim.usda", Claim::After("faceVertexIndices = [")),
+        // The seed crate file's table-of-contents offset, the size of its tokens' text, its
+        // string, path and spec counts, and the element counts of two arrays (the body's
+        // faceVertexCounts, the other mesh's points).
+        ("usd_sequence", "anim.usdc", Claim::Word(16)),
+        ("usd_sequence", "anim.usdc", Claim::Word(1396)),
+        ("usd_sequence", "anim.usdc", Claim::Word(1779)),
+        ("usd_sequence", "anim.usdc", Claim::Word(2205)),
+        ("usd_sequence", "anim.usdc", Claim::Word(2307)),
+        ("usd_sequence", "anim.usdc", Claim::Word(252)),
+        ("usd_sequence", "anim.usdc", Claim::Word(328)),
     ];
     let dir = scratch("claims");
     for (k, (name, file, claim)) in claims.iter().enumerate() {

@@ -14,7 +14,8 @@
 //! Refused with an error, never read in part: a layer or arc that fails to compose (a missing
 //! sublayer or reference), an attribute authored as a spline (openusd 0.6 cannot evaluate
 //! them), an xformOp it does not know, values of the wrong type, topology that changes over
-//! time.
+//! time, and a layer openusd could not walk to the end (a path that never reaches the root, a
+//! prim child whose name is not an identifier).
 
 use super::orient::SignedAxis;
 use super::source::{ReadOptions, SourceSequence};
@@ -89,7 +90,71 @@ fn open(path: &Path) -> Result<Stage, String> {
         .map_err(|e| format!("cannot open the stage: {e:#}"))?;
     match stage.composition_errors().first() {
         Some(error) => Err(format!("composition failed (not read in part): {error}")),
-        None => Ok(stage),
+        None => check_paths(&stage).map(|()| stage),
+    }
+}
+
+/// The fields whose values are paths that composition walks up: arcs and relationship targets.
+const PATH_FIELDS: [&str; 6] =
+    ["references", "payload", "inheritPaths", "specializes", "targetPaths", "connectionPaths"];
+
+/// Refuses a layer of the stage that openusd could not walk to the end: a spec path, or a path
+/// in [`PATH_FIELDS`], whose chain of parents does not end (openusd 0.6 takes a path that ends
+/// in `}` without being a variant selection, `/A}`, for its own parent, and composing it
+/// recurses until the stack overflows), or a prim child that is no identifier. (Crate layers
+/// are refused before, by their path tokens; text layers opened later, through a reference,
+/// are not checked.)
+fn check_paths(stage: &Stage) -> Result<(), String> {
+    for id in stage.layer_identifiers() {
+        let Some(layer) = stage.layer(&id) else { continue };
+        let data = layer.data();
+        for path in data.spec_paths() {
+            let values = PATH_FIELDS.iter().filter_map(|f| data.try_field(&path, f).ok().flatten());
+            let named: Vec<sdf::Path> = values.flat_map(|v| paths_in(&v)).collect();
+            if let Some(path) = std::iter::once(&path).chain(&named).find(|p| !has_root(p)) {
+                return Err(format!("{id}: the path {path} has no root openusd can find"));
+            }
+            check_children(data, &path).map_err(|e| format!("{id}: {e}"))?;
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a prim whose `primChildren` names one that is not an identifier: openusd's text
+/// parser appends whatever string a prim is named to its parent's path, so that a child named
+/// `""` is its parent again and traversing the stage never ends.
+fn check_children(data: &dyn sdf::AbstractData, path: &sdf::Path) -> Result<(), String> {
+    let children = data.try_field(path, "primChildren").ok().flatten();
+    let Some(sdf::Value::TokenVec(names)) = children.as_deref() else { return Ok(()) };
+    match names.iter().find(|name| !sdf::Path::is_valid_identifier(name.as_str())) {
+        Some(name) => {
+            Err(format!("the prim {path} has a child named {:?}, not an identifier", name.as_str()))
+        }
+        None => Ok(()),
+    }
+}
+
+/// Whether walking up from `path`, parent after parent, ends: each step of a sound path
+/// shortens it, so the walk takes at most its length.
+fn has_root(path: &sdf::Path) -> bool {
+    let mut ancestor = path.clone();
+    for _ in 0..=path.as_str().len() {
+        match ancestor.parent() {
+            Some(parent) => ancestor = parent,
+            None => return true,
+        }
+    }
+    false
+}
+
+/// The paths a path-valued field holds.
+fn paths_in(value: &sdf::Value) -> Vec<sdf::Path> {
+    match value {
+        sdf::Value::PathListOp(op) => op.iter().cloned().collect(),
+        sdf::Value::PathVec(paths) => paths.clone(),
+        sdf::Value::ReferenceListOp(op) => op.iter().map(|r| r.prim_path.clone()).collect(),
+        sdf::Value::PayloadListOp(op) => op.iter().map(|p| p.prim_path.clone()).collect(),
+        _ => Vec::new(),
     }
 }
 
@@ -187,8 +252,11 @@ fn xform_op(prim: &Prim, entry: &str) -> Result<XformOp, String> {
         None => (false, entry),
     };
     let name = format!("{}.{attribute}", prim.path().as_str());
+    // Never asked of openusd unless a property name: it cannot compose others (check_paths).
+    let property = attribute.chars().all(|c| c.is_alphanumeric() || c == '_' || c == ':');
     let kind = attribute
         .strip_prefix("xformOp:")
+        .filter(|_| property)
         .and_then(|rest| op_kind(rest.split(':').next().unwrap_or_default()))
         .ok_or_else(|| format!("{name}: not an xformOp this reader knows"))?;
     let query = AttributeQuery::new(&prim.attribute(attribute));

@@ -316,6 +316,39 @@ fn changing_topology_unknown_ops_and_broken_composition_are_refused() {
             format!("{points}\n{counts}\nint[] faceVertexIndices = [0, -1, 2]"),
             "/M.faceVertexIndices[1] is -1",
         ),
+        // Hostile text openusd 0.6 would never finish composing, or would overflow the stack
+        // parsing: a prim whose path ends in `}`, an op that is no property name, deep nesting.
+        (
+            "brace.usda",
+            "",
+            format!("{points}\n{counts}\nint[] faceVertexIndices = [0, 1, 2]\ndef Xform \"A}}\" {{}}"),
+            "the prim /M has a child named \"A}\", not an identifier",
+        ),
+        (
+            "target.usda",
+            "",
+            format!("{points}\n{counts}\nint[] faceVertexIndices = [0, 1, 2]\nrel r = </A}}>"),
+            "the path /A} has no root openusd can find",
+        ),
+        // A prim named "" is its parent again: traversing the stage would never end.
+        (
+            "unnamed.usda",
+            "",
+            format!("{points}\n{counts}\nint[] faceVertexIndices = [0, 1, 2]\ndef Xform \"\" {{}}"),
+            "the prim /M has a child named \"\", not an identifier",
+        ),
+        (
+            "op.usda",
+            "",
+            format!("{points}\n{counts}\nint[] faceVertexIndices = [0, 1, 2]\nuniform token[] xformOpOrder = [\"xformOp:translate}}\"]"),
+            "/M.xformOp:translate}: not an xformOp this reader knows",
+        ),
+        (
+            "nested.usda",
+            &format!("(\n    customLayerData = {}\n)", "{ dictionary d = ".repeat(600) + &"}".repeat(600)),
+            format!("{points}\n{counts}\nint[] faceVertexIndices = [0, 1, 2]"),
+            "text nested 601 deep, more than 512",
+        ),
     ];
     for (name, header, body, expected) in cases {
         let path = stage_with(&dir, name, header, &body);
