@@ -137,7 +137,8 @@ pub fn run_with_progress(ctx: &Arc<GpuContext>, job: &TrainJob) -> Result<TrainR
 pub fn print_report(r: &TrainReport) {
     println!(
         "{} frames in {:.1} s on {} ({} vertices, {} faces; {} evaluation views)",
-        r.frames.len() - r.resumed_frames.len(),
+        // Frames trained by this run (an earlier run's report may lack frames it finished).
+        r.frames.iter().filter(|f| !r.resumed_frames.contains(&f.frame)).count(),
         r.total_wall_s,
         r.device,
         r.vertices,
