@@ -464,26 +464,20 @@ fn bad_benchmark_input_names_the_file() {
     std::fs::remove_dir_all(&root).unwrap();
 }
 
-/// A Panoptic-layout `train_meta.json` in `root` for `frames` frames: one 64² camera per
+/// The 64² camera (focal length 40 px, y up) at `eye` looking at `at`, as [`write_rig`] writes it.
+fn rig_camera((eye, at): ([f64; 3], [f64; 3])) -> tagsplat::camera::Camera {
+    let (eye, at) = (glam::DVec3::from(eye), glam::DVec3::from(at));
+    tagsplat::camera::Camera::look_at(64, 64, 40.0, 40.0, 32.0, 32.0, eye, at, glam::DVec3::Y)
+        .unwrap()
+}
+
+/// A Panoptic-layout `train_meta.json` in `root` for `frames` frames: one [`rig_camera`] per
 /// (eye, point looked at) of `rig` (image files are not read).
 fn write_rig(root: &std::path::Path, frames: usize, rig: &[([f64; 3], [f64; 3])]) {
-    use glam::DVec3;
     let w2c: Vec<[[f64; 4]; 4]> = rig
         .iter()
-        .map(|&(eye, at)| {
-            let camera = tagsplat::camera::Camera::look_at(
-                64,
-                64,
-                40.0,
-                40.0,
-                32.0,
-                32.0,
-                DVec3::from(eye),
-                DVec3::from(at),
-                DVec3::Y,
-            )
-            .unwrap();
-            let m = camera.world_to_camera;
+        .map(|&view| {
+            let m = rig_camera(view).world_to_camera;
             std::array::from_fn(|r| std::array::from_fn(|c| m.col(c)[r]))
         })
         .collect();
@@ -531,19 +525,8 @@ fn the_tracking_error_splits_by_how_many_training_cameras_see_the_points() {
     assert_eq!(above.sight.tracking_unseen_over_size, None);
     // In pixels: each pair's slide of 0.2 along y through the pinhole of each camera (focal
     // length 40 px), the median of the three, RMS over every pair (frame 0's slide is 0).
-    let slid_px = |g: glam::DVec3, (eye, at): ([f64; 3], [f64; 3])| {
-        let camera = tagsplat::camera::Camera::look_at(
-            64,
-            64,
-            40.0,
-            40.0,
-            32.0,
-            32.0,
-            eye.into(),
-            at.into(),
-            glam::DVec3::Y,
-        )
-        .unwrap();
+    let slid_px = |g: glam::DVec3, view: ([f64; 3], [f64; 3])| {
+        let camera = rig_camera(view);
         let [a, b] = [g + glam::DVec3::new(0.0, 0.2, 0.0), g].map(|p| camera.to_camera(p));
         40.0 * ((a.x / a.z - b.x / b.z).powi(2) + (a.y / a.z - b.y / b.z).powi(2)).sqrt()
     };

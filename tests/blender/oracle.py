@@ -95,3 +95,18 @@ def evaluated_world(bpy, obj, frame):
     local = evaluated_positions(bpy, obj, whole, max(0.0, frame - whole)).astype(np.float64)
     world = np.array(obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).matrix_world)
     return local @ world[:3, :3].T + world[:3, 3]
+
+
+def export_fbx(bpy, path, all_actions):
+    """Exports the armatures and meshes of the scene to ``path`` with Blender's FBX exporter,
+    +Y up and -Z forward in centimetres (FBX_SCALE_NONE), every frame baked; each action as a
+    stack of its own when ``all_actions``, else the active one only."""
+    result = bpy.ops.export_scene.fbx(
+        filepath=path, object_types={"ARMATURE", "MESH"}, axis_forward="-Z", axis_up="Y",
+        apply_unit_scale=True, apply_scale_options="FBX_SCALE_NONE", bake_space_transform=False,
+        add_leaf_bones=False, use_mesh_modifiers=False, bake_anim=True,
+        bake_anim_use_all_bones=True, bake_anim_use_nla_strips=False,
+        bake_anim_use_all_actions=all_actions, bake_anim_force_startend_keying=True,
+        bake_anim_step=1.0, bake_anim_simplify_factor=0.0)
+    assert result == {"FINISHED"}
+    return path

@@ -94,16 +94,7 @@ def export_glb(work):
 
 
 def export_fbx(work):
-    path = os.path.join(work, "fox.fbx")
-    result = bpy.ops.export_scene.fbx(
-        filepath=path, object_types={"ARMATURE", "MESH"}, axis_forward="-Z", axis_up="Y",
-        apply_unit_scale=True, apply_scale_options="FBX_SCALE_NONE", bake_space_transform=False,
-        add_leaf_bones=False, use_mesh_modifiers=False, bake_anim=True,
-        bake_anim_use_all_bones=True, bake_anim_use_nla_strips=False,
-        bake_anim_use_all_actions=False, bake_anim_force_startend_keying=True,
-        bake_anim_step=1.0, bake_anim_simplify_factor=0.0)
-    assert result == {"FINISHED"}
-    return path
+    return oracle.export_fbx(bpy, os.path.join(work, "fox.fbx"), all_actions=False)
 
 
 def export_mdd(work):
