@@ -131,6 +131,34 @@ impl<'a> Accessors<'a> {
         Ok(Values { data, components })
     }
 
+    /// A VEC3 accessor's values as f32 triples: what [`Self::read`] gives, rounded to f32, and
+    /// for a plain F32 accessor (no sparse part: what positions and morph targets are) read
+    /// straight from its bytes, without the f64 copy that would double a large file's memory.
+    pub fn read_vec3_f32(&self, a: &gltf::Accessor) -> Result<Vec<[f32; 3]>, String> {
+        let index = a.index();
+        if a.dimensions() != Dimensions::Vec3 {
+            return Err(format!("accessor {index} is not VEC3"));
+        }
+        let plain = a.data_type() == DataType::F32 && a.sparse().is_none();
+        let Some(view) = a.view().filter(|_| plain) else {
+            let values = self.read(a)?;
+            return Ok(values
+                .data
+                .chunks_exact(3)
+                .map(|v| [v[0] as f32, v[1] as f32, v[2] as f32])
+                .collect());
+        };
+        self.budget.charge(Some(a.count()), 12, || {
+            format!("accessor {index} ({} elements of VEC3)", a.count())
+        })?;
+        let (data, stride) = self.view_bytes(&view, a.offset(), 12, a.count())?;
+        let float = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        Ok((0..a.count())
+            .map(|i| &data[a.offset() + i * stride..][..12])
+            .map(|b| [float(&b[0..4]), float(&b[4..8]), float(&b[8..12])])
+            .collect())
+    }
+
     /// `count` elements of `components` values of `data_type` from `view`, starting `offset`
     /// bytes into it, `view.stride()` bytes apart (tightly packed without one).
     fn elements(
@@ -141,6 +169,27 @@ impl<'a> Accessors<'a> {
         count: usize,
         components: usize,
     ) -> Result<Vec<f64>, String> {
+        let size = data_type.size();
+        let (data, stride) = self.view_bytes(view, offset, size * components, count)?;
+        let mut out = Vec::with_capacity(count * components);
+        for i in 0..count {
+            for c in 0..components {
+                let at = offset + i * stride + c * size;
+                out.push(decode(data_type, &data[at..at + size]));
+            }
+        }
+        Ok(out)
+    }
+
+    /// The bytes of `view` and its stride, checked to hold `count` elements of `element` bytes
+    /// from `offset` on.
+    fn view_bytes(
+        &self,
+        view: &gltf::buffer::View,
+        offset: usize,
+        element: usize,
+        count: usize,
+    ) -> Result<(&'a [u8], usize), String> {
         let name = view.index();
         let buffer = self
             .buffers
@@ -158,8 +207,6 @@ impl<'a> Accessors<'a> {
                     buffer.len()
                 )
             })?;
-        let size = data_type.size();
-        let element = size * components;
         let stride = view.stride().unwrap_or(element);
         if stride < element {
             return Err(format!(
@@ -180,14 +227,7 @@ impl<'a> Accessors<'a> {
                 data.len()
             ));
         }
-        let mut out = Vec::with_capacity(count * components);
-        for i in 0..count {
-            for c in 0..components {
-                let at = offset + i * stride + c * size;
-                out.push(decode(data_type, &data[at..at + size]));
-            }
-        }
-        Ok(out)
+        Ok((data, stride))
     }
 }
 

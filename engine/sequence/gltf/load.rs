@@ -46,7 +46,7 @@ pub fn load(path: &Path) -> Result<Loaded, String> {
     let mut file_bytes = bytes.len();
     let mut buffers = Vec::new();
     for buffer in document.buffers() {
-        let data = match buffer.source() {
+        let mut data = match buffer.source() {
             gltf::buffer::Source::Bin => bin.map(<[u8]>::to_vec).ok_or_else(|| {
                 format!(
                     "buffer {} is the BIN chunk of a GLB, and this file is not one",
@@ -72,7 +72,8 @@ pub fn load(path: &Path) -> Result<Loaded, String> {
                 buffer.length()
             ));
         }
-        buffers.push(data[..buffer.length()].to_vec());
+        data.truncate(buffer.length());
+        buffers.push(data);
     }
     Ok(Loaded { document, buffers, file_bytes })
 }

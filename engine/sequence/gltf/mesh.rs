@@ -125,11 +125,7 @@ fn vec3(
     what: &str,
 ) -> Result<Option<Vec<[f32; 3]>>, String> {
     let Some(a) = accessor else { return Ok(None) };
-    let values = accessors.read(&a)?;
-    if values.components != 3 {
-        return Err(format!("{what} accessor {} is not VEC3", a.index()));
-    }
-    Ok(Some(values.data.chunks_exact(3).map(|v| [v[0] as f32, v[1] as f32, v[2] as f32]).collect()))
+    accessors.read_vec3_f32(&a).map(Some).map_err(|e| format!("{what}: {e}"))
 }
 
 /// The primitive's triangle indices (0, 1, 2, … without an index accessor), each below `n`.
