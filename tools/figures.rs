@@ -281,9 +281,10 @@ fn sequence_figure(v: &Value, words: &[&str]) -> Result<String> {
 fn sequence_value(v: &Value) -> Result<String> {
     let percent = |path: &str| num(v, path).map(|x| x * 100.0);
     Ok(format!(
-        "tracking {:.2} % of size (worst frame {}: {:.2} %; along the surface {:.2} %); Chamfer \
-         ≤ {:.3} %; mesh PSNR {:.2} → {:.2} dB; {:.1} s per later frame",
+        "tracking {:.2} % of size, {} (worst frame {}: {:.2} %; along the surface {:.2} %); \
+         Chamfer ≤ {:.3} %; mesh PSNR {:.2} → {:.2} dB; {:.1} s per later frame",
         percent("scores.tracking_rmse_over_size")?,
+        tracking_pixels(v)?,
         num(v, "scores.tracking_worst_frame.frame")?,
         percent("scores.tracking_worst_frame.value")?,
         percent("scores.tracking_along_surface_over_size")?,
@@ -292,6 +293,16 @@ fn sequence_value(v: &Value) -> Result<String> {
         num(v, "scores.psnr_mesh_last_db")?,
         num(v, "later_frame_mean_s")?
     ))
+}
+
+/// The tracking error in pixels (`eval::pixels`), or that the result file predates it (a
+/// `null` means no training camera saw any tracked point, which `bench sequence` writes as such).
+fn tracking_pixels(v: &Value) -> Result<String> {
+    match v.pointer("/scores/tracking_rmse_px") {
+        None => Ok("pixels not measured".into()),
+        Some(Value::Null) => Ok("no point seen to measure in pixels".into()),
+        Some(_) => Ok(format!("{:.2} px", num(v, "scores.tracking_rmse_px")?)),
+    }
 }
 
 /// The value at a dotted path (`a.b.0`: a list's element by index).
@@ -366,5 +377,19 @@ mod tests {
             "| [sort](docs/sort.md), 8 pairs, 32-bit keys | 1.3 ms (6 M pairs/s), 0.50 of the \
              copy bound; `sort_unstable`, one core: 2.0 ms | d on h | 2026-11-28 | [abc](r.json) |\n"
         );
+    }
+
+    /// A sequence row gives pixels only where the result file measured them.
+    #[test]
+    fn a_sequence_row_gives_pixels_where_measured() {
+        let mut result = serde_json::json!({"later_frame_mean_s": 20.0, "scores": {
+            "tracking_rmse_over_size": 0.0134, "tracking_worst_frame": {"frame": 12, "value": 0.02},
+            "tracking_along_surface_over_size": 0.013, "chamfer_worst_frame": {"value": 0.0026},
+            "psnr_mesh_first_db": 35.2, "psnr_mesh_last_db": 34.8}});
+        assert!(sequence_value(&result)
+            .unwrap()
+            .starts_with("tracking 1.34 % of size, pixels not"));
+        result["scores"]["tracking_rmse_px"] = serde_json::json!(2.414);
+        assert!(sequence_value(&result).unwrap().starts_with("tracking 1.34 % of size, 2.41 px ("));
     }
 }
