@@ -96,7 +96,8 @@ enum Command {
     Bench(Bench),
     /// Track surface points through a topology-consistent mesh sequence.
     Track(Box<track::TrackArgs>),
-    /// Convert a mesh sequence between a folder of frames, OBJ + PC2 and GLB.
+    /// Convert a mesh sequence from any form `track` reads to a folder of frames, OBJ + PC2,
+    /// OBJ + MDD, GLB or USDA.
     Convert(track::ConvertArgs),
     /// Build a frame's first mesh from its masks (visual hull), coloured from its images.
     InitMesh(init_mesh::InitMeshArgs),

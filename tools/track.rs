@@ -285,13 +285,14 @@ pub enum FrameFormatArg {
 
 #[derive(Args)]
 pub struct ConvertArgs {
-    /// The sequence to read: a folder of .ply/.obj frames, a .pc2 (with its .obj) or a .glb.
+    /// The sequence to read: a folder of .ply/.obj frames, or a .pc2 (with its .obj), .mdd
+    /// (with its .obj), .gltf, .glb, .usda, .usdc, .usd, .usdz, .abc or .fbx file.
     #[arg(long)]
     sequence: PathBuf,
     #[command(flatten)]
     read: ReadArgs,
-    /// Where to write: FILE.pc2 (plus FILE.obj), FILE.glb, FILE.usda, or a folder (created;
-    /// must hold no frame files yet).
+    /// Where to write: FILE.pc2 or FILE.mdd (plus FILE.obj), FILE.glb, FILE.usda, or a folder
+    /// (created; must hold no frame files yet).
     #[arg(long)]
     to: PathBuf,
     /// Frame file format when writing a folder.
