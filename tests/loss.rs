@@ -137,13 +137,14 @@ fn assert_matches_reference(
     assert!(error < 1e-4 * scale, "{what}: gradient error {error:e} of max {scale:e}");
 }
 
-/// One render per run, and two renders sharing the target (each with its own λ), on sizes
-/// that end in a partial run of 8 pixels along both axes.
+/// One render per run, and two renders sharing the target (each with its own λ, the second
+/// with a channel at λ = 0, which sums no term), on sizes that end in a partial run of 8 pixels
+/// along both axes.
 #[test]
 fn gpu_loss_matches_the_reference() {
     let g = gpu();
     let lambda = [0.3, 0.3, 0.3, 3.0];
-    let second_lambda = [1.0, 0.5, 0.25, 2.0];
+    let second_lambda = [1.0, 0.0, 0.25, 2.0];
     for (width, height, weighted) in [(37, 29, false), (23, 41, true), (16, 16, true)] {
         let images = random_images(width, height, weighted, width as u64);
         let single = gpu_loss(g.ctx(), &images, lambda);
@@ -164,6 +165,8 @@ fn gpu_loss_matches_the_reference() {
             &reference(&second, second_lambda),
             second_lambda,
         );
+        let left_out = (pair[1].0.l1[1], pair[1].0.dssim[1]);
+        assert_eq!(left_out, (0.0, 0.0), "{width}×{height}: a channel at λ = 0 is not summed");
     }
 }
 

@@ -9,7 +9,7 @@ use tagsplat::ablate::copy_frame0;
 use tagsplat::demo::train_and_score;
 use tagsplat::eval::chamfer_meshes;
 use tagsplat::io::trajectories::read_trajectories_csv;
-use tagsplat::mesh::TriMesh;
+use tagsplat::mesh::{bounding_diagonal, TriMesh};
 use tagsplat::sequence::MeshSequence;
 use tagsplat::synth::manifold::closed_manifold_problem;
 use tagsplat::synth::{generate, SubjectSource, SynthOptions};
@@ -264,18 +264,91 @@ fn beats_the_unchanged_mesh(data: &Path, meshes: &[TriMesh]) {
 /// of light would.
 fn relight(data: &Path, t: usize, factor: f32) {
     for camera in std::fs::read_dir(data.join("images")).unwrap() {
-        let camera = camera.unwrap().file_name();
-        let name = format!("{t:06}.png");
-        let image_path = data.join("images").join(&camera).join(&name);
-        let mut image = image::open(&image_path).unwrap().to_rgb8();
-        let mask = image::open(data.join("masks").join(&camera).join(&name)).unwrap().to_luma8();
-        for (pixel, alpha) in image.pixels_mut().zip(mask.pixels()) {
-            if alpha.0[0] == 255 {
-                pixel.0 = pixel.0.map(|c| (c as f32 * factor).round() as u8);
-            }
-        }
-        image.save(&image_path).unwrap();
+        relight_camera(data, &camera.unwrap().file_name().to_string_lossy(), t, factor);
     }
+}
+
+/// Scales the subject's pixels (mask 255) of `camera`'s image at frame `t` by `factor`,
+/// clipped to 255.
+fn relight_camera(data: &Path, camera: &str, t: usize, factor: f32) {
+    let name = format!("{t:06}.png");
+    let image_path = data.join("images").join(camera).join(&name);
+    let mut image = image::open(&image_path).unwrap().to_rgb8();
+    let mask = image::open(data.join("masks").join(camera).join(&name)).unwrap().to_luma8();
+    for (pixel, alpha) in image.pixels_mut().zip(mask.pixels()) {
+        if alpha.0[0] == 255 {
+            pixel.0 = pixel.0.map(|c| (c as f32 * factor).round() as u8);
+        }
+    }
+    image.save(&image_path).unwrap();
+}
+
+/// The names of a generated dataset's training cameras (those not held out).
+fn training_cameras(data: &Path) -> Vec<String> {
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(data.join("dataset.json")).unwrap()).unwrap();
+    let names = |key: &str| -> Vec<String> {
+        let list = meta[key].as_array().unwrap().iter();
+        list.map(|c| c.as_str().unwrap().to_string()).collect()
+    };
+    let held_out = names("test_cameras");
+    names("cameras").into_iter().filter(|c| !held_out.contains(c)).collect()
+}
+
+/// How far a frame with a dark and a saturated view may land from the clean images' frame, ×
+/// the diagonal. Measured on lavapipe (Intel Xeon host, 256-bit vectors): 0.43 % with the two
+/// views' colours left out and also 0.43 % with them matched (a throw-away switch), while
+/// held-out mesh PSNR is 27.82 dB against 27.23 dB matched (clean 28.19): on this small subject
+/// the skip shows in the colours, not in the shape.
+const FLAWED_BOUND: f64 = 0.01;
+
+/// A later frame in which one training view is dark and another saturated: their colours are
+/// left out (their masks still count), the report and the run log name them, and the frame
+/// lands about where the clean images put it.
+#[test]
+fn views_too_dark_or_saturated_to_match_leave_their_colours_out_and_say_so() {
+    let g = gpu();
+    let dir = temp("flawed");
+    let (clean, flawed) = (dir.join("clean"), dir.join("flawed"));
+    sequence(&clean);
+    sequence(&flawed);
+    let cameras = training_cameras(&flawed);
+    relight_camera(&flawed, &cameras[0], 1, 0.0);
+    relight_camera(&flawed, &cameras[1], 1, 20.0);
+    let (clean_out, flawed_out) = (dir.join("clean_out"), dir.join("flawed_out"));
+    let config = quick_config();
+    let run = |data: &Path, out: &Path| {
+        run_train(g.ctx(), &job(data, out, config.clone(), Some(0..2)), &mut |_| {}).unwrap()
+    };
+    let clean_report = run(&clean, &clean_out);
+    copy_frame0(&clean_out, &flawed_out).unwrap();
+    let report = run(&flawed, &flawed_out);
+
+    let frame1 = report.frames.iter().find(|f| f.frame == 1).unwrap();
+    let clean1 = clean_report.frames.iter().find(|f| f.frame == 1).unwrap();
+    let said = &frame1.colour_left_out;
+    assert_eq!(said.len(), 2, "{said:?}");
+    assert!(said[0].starts_with(&format!("{}: dark", cameras[0])), "{said:?}");
+    assert!(said[1].starts_with(&format!("{}: saturated", cameras[1])), "{said:?}");
+    assert!(frame1.lost_views.is_empty() && frame1.iterations > 0);
+    let log = std::fs::read_to_string(flawed_out.join("run.log")).unwrap();
+    assert!(log.contains("warning: frame 1: colours left out"), "{log}");
+    let mesh = |out: &Path| TriMesh::read_ply(&out.join("meshes/000001.ply")).unwrap();
+    let (a, b) = (mesh(&clean_out), mesh(&flawed_out));
+    let squares: f64 = a
+        .positions
+        .iter()
+        .zip(&b.positions)
+        .map(|(p, q)| (0..3).map(|k| (p[k] as f64 - q[k] as f64).powi(2)).sum::<f64>())
+        .sum();
+    let moved = (squares / a.positions.len() as f64).sqrt() / bounding_diagonal(&a.positions);
+    let message = format!(
+        "frame 1 with a dark and a saturated view: {:.3} % of the diagonal from the clean run's, held-out PSNR {:.2} / {:.2} dB (clean {:.2} / {:.2})",
+        100.0 * moved, frame1.psnr_gs, frame1.psnr_mesh, clean1.psnr_gs, clean1.psnr_mesh
+    );
+    eprintln!("{message}");
+    assert!(moved < FLAWED_BOUND, "{message}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -441,17 +514,7 @@ fn frames_that_lose_the_subject_keep_going_and_say_where() {
         ..Default::default()
     };
     generate(&options, &data).unwrap();
-    let meta: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(data.join("dataset.json")).unwrap()).unwrap();
-    let test_cameras: Vec<&str> =
-        meta["test_cameras"].as_array().unwrap().iter().map(|c| c.as_str().unwrap()).collect();
-    let train_cameras: Vec<String> = meta["cameras"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|c| c.as_str().unwrap().to_string())
-        .filter(|c| !test_cameras.contains(&c.as_str()))
-        .collect();
+    let train_cameras = training_cameras(&data);
     let blank = |camera: &str, t: usize| {
         image::GrayImage::new(96, 96).save(data.join(format!("masks/{camera}/{t:06}.png"))).unwrap()
     };

@@ -187,6 +187,10 @@ pub fn print_report(r: &TrainReport) {
             }
         );
     }
+    for f in r.frames.iter().filter(|f| !f.colour_left_out.is_empty()) {
+        let views = f.colour_left_out.join("; ");
+        println!("frame {}: colours left out, the masks kept: {views}", f.frame);
+    }
     for path in &r.outputs {
         println!("wrote {}", path.display());
     }

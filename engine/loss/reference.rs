@@ -9,9 +9,11 @@ use crate::ssim_window::{gaussian_weights, ssim_formula, C1, C2, RADIUS, WINDOW}
 pub struct ReferenceLoss {
     /// `Σ_c λ_c (0.8 l1_c + 0.2 dssim_c)`.
     pub total: f64,
-    /// Per channel, the mean over all pixels of `w |x − y|`.
+    /// Per channel, the mean over all pixels of `w |x − y|` (0 where λ is 0: such a channel is
+    /// not summed).
     pub l1: [f64; 4],
-    /// Per channel, the mean of `w (1 − S)` over the pixels whose window lies inside the image.
+    /// Per channel, the mean of `w (1 − S)` over the pixels whose window lies inside the image
+    /// (0 where λ is 0).
     pub dssim: [f64; 4],
     /// dL/drender, one vec4 per pixel (row-major).
     pub gradient: Vec<[f64; 4]>,
@@ -28,6 +30,7 @@ pub fn image_loss(
 ) -> ReferenceLoss {
     let pixels = width * height;
     let w = |p: usize| weight.map_or(1.0, |w| w[p] as f64);
+    let counted = |c: usize| (channel_weights[c] != 0.0) as u8 as f64;
     let mut out = ReferenceLoss {
         total: 0.0,
         l1: [0.0; 4],
@@ -37,7 +40,7 @@ pub fn image_loss(
     for p in 0..pixels {
         for c in 0..4 {
             let d = render[p][c] as f64 - target[p][c] as f64;
-            out.l1[c] += w(p) * d.abs() / pixels as f64;
+            out.l1[c] += counted(c) * w(p) * d.abs() / pixels as f64;
             out.gradient[p][c] += channel_weights[c]
                 * LOSS_SHARE_L1 as f64
                 * w(p)
@@ -55,7 +58,7 @@ pub fn image_loss(
                     let p = y * width + x;
                     let window = Window { render, target, width, c, x, y };
                     let moments = window.moments();
-                    out.dssim[c] += w(p) * (1.0 - ssim_formula(moments)) / valid;
+                    out.dssim[c] += counted(c) * w(p) * (1.0 - ssim_formula(moments)) / valid;
                     window.scatter(
                         ssim_partials(moments).map(|d| d * scale * w(p)),
                         &mut out.gradient,

@@ -8,6 +8,39 @@ use crate::io::host::parallel_map_counted;
 use crate::io::image::Image;
 use std::sync::Arc;
 
+/// A view's subject is too dark to match when its brightest channel averages less than this
+/// under the mask (about 5 of 255): a frame the camera lost, or one its light missed.
+pub const DARK_LEVEL: f32 = 0.02;
+
+/// A view's subject is too saturated to match when more than this share of the mask's pixels
+/// are clipped in every channel: the bands and shading a render is scored on are gone there.
+pub const SATURATED_SHARE: f32 = 0.5;
+
+/// A channel at or above this is clipped (254 of 255 and up).
+const CLIPPED: f32 = 254.0 / 255.0;
+
+/// Why the image terms cannot match a view's colours.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AppearanceFlaw {
+    /// The mean of the brightest channel under the mask, under [`DARK_LEVEL`].
+    Dark(f32),
+    /// The share of the mask's pixels clipped in every channel, over [`SATURATED_SHARE`].
+    Saturated(f32),
+}
+
+impl std::fmt::Display for AppearanceFlaw {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            Self::Dark(level) => {
+                write!(f, "dark (its brightest channel averages {level:.3} under the mask)")
+            }
+            Self::Saturated(share) => {
+                write!(f, "saturated ({:.0} % of the mask's pixels clipped)", 100.0 * share)
+            }
+        }
+    }
+}
+
 /// One view of one frame as a training target (see the module docs).
 #[derive(Clone)]
 pub struct ViewTarget {
@@ -34,6 +67,30 @@ impl ViewTarget {
     /// Whether the mask has a foreground pixel (> 0.5).
     pub fn has_subject(&self) -> bool {
         self.target.iter().any(|p| p[3] > 0.5)
+    }
+
+    /// Why the image terms cannot match this view's colours, if they cannot: the subject is
+    /// dark ([`DARK_LEVEL`]) or mostly clipped ([`SATURATED_SHARE`]). Only the pixels the mask
+    /// covers (> 0.5) count; a view without any has no flaw here (see [`Self::has_subject`]).
+    pub fn appearance_flaw(&self) -> Option<AppearanceFlaw> {
+        let subject = self.target.iter().filter(|p| p[3] > 0.5);
+        let (mut count, mut brightest, mut clipped) = (0usize, 0.0f64, 0usize);
+        for p in subject {
+            count += 1;
+            brightest += p[0].max(p[1]).max(p[2]) as f64;
+            clipped += (p[0].min(p[1]).min(p[2]) >= CLIPPED) as usize;
+        }
+        if count == 0 {
+            return None;
+        }
+        let (level, share) = ((brightest / count as f64) as f32, clipped as f32 / count as f32);
+        if level < DARK_LEVEL {
+            Some(AppearanceFlaw::Dark(level))
+        } else if share > SATURATED_SHARE {
+            Some(AppearanceFlaw::Saturated(share))
+        } else {
+            None
+        }
     }
 
     /// The view at 1/`factor` resolution: each pixel the mean of a `factor × factor` block (a
@@ -126,4 +183,49 @@ fn composite(image: &Image, mask: Option<&[f32]>, background: [f32; 3]) -> Vec<[
             [r, g, b, m]
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 10 × 10 view whose left half is subject (mask 1) of colour `subject` and whose right
+    /// half is background of colour `background`.
+    fn view(subject: [f32; 3], background: [f32; 3]) -> ViewTarget {
+        let target = (0..100)
+            .map(|i| match i % 10 < 5 {
+                true => [subject[0], subject[1], subject[2], 1.0],
+                false => [background[0], background[1], background[2], 0.0],
+            })
+            .collect();
+        let camera = Camera {
+            width: 10,
+            height: 10,
+            fx: 10.0,
+            fy: 10.0,
+            cx: 5.0,
+            cy: 5.0,
+            world_to_camera: glam::DMat4::IDENTITY,
+        };
+        ViewTarget { name: "cam".into(), camera, target: Arc::new(target) }
+    }
+
+    #[test]
+    fn a_dark_or_clipped_subject_is_flawed_and_only_the_mask_counts() {
+        assert_eq!(view([0.4, 0.3, 0.2], [0.0; 3]).appearance_flaw(), None);
+        // A bright background does not save a dark subject, nor a dark one spoil a bright one.
+        let dark = view([0.01, 0.015, 0.005], [1.0; 3]).appearance_flaw();
+        assert!(matches!(dark, Some(AppearanceFlaw::Dark(l)) if (l - 0.015).abs() < 1e-6));
+        assert_eq!(
+            view([1.0; 3], [0.0; 3]).appearance_flaw(),
+            Some(AppearanceFlaw::Saturated(1.0))
+        );
+        // One channel clipped is colour, not saturation; dark in two channels is not dark.
+        assert_eq!(view([1.0, 0.5, 0.5], [0.0; 3]).appearance_flaw(), None);
+        assert_eq!(view([0.0, 0.0, 0.3], [0.0; 3]).appearance_flaw(), None);
+        // No subject in the mask: nothing to judge.
+        let mut empty = view([0.0; 3], [0.0; 3]);
+        empty.target = Arc::new(vec![[0.0; 4]; 100]);
+        assert_eq!(empty.appearance_flaw(), None);
+    }
 }

@@ -61,12 +61,15 @@ bool column_run(uint invocation, out uint x, out uint y0) {
 uint plane(uint r) { return r * pixel_count(); }
 
 // Adds each render's per-channel `totals[r] * scale` to sums [first, first + 4) of its term
-// buffer, one fixed-point add per subgroup (order-independent, so runs repeat bit for bit).
+// buffer, one fixed-point add per subgroup (order-independent, so runs repeat bit for bit). A
+// channel whose λ is 0 adds nothing: a view whose colour is left out (a dark or saturated
+// image) then adds no colour to its pass's loss, which the plateau test reads.
 // A macro, as GLSL cannot pass a buffer: the kernel declares term_sums_a and term_sums_b and
 // includes fixed_sum.glsl and subgroup arithmetic.
 #define ADD_TERMS(first, totals, scale) {                                        \
     [[unroll]] for (uint r_ = 0u; r_ < RENDERS; r_++) {                           \
-        vec4 total_ = subgroupAdd(totals[r_]) * (scale);                         \
+        vec4 counted_ = vec4(notEqual(params.channel_weights[r_], vec4(0.0)));   \
+        vec4 total_ = subgroupAdd(totals[r_]) * (scale) * counted_;              \
         if (subgroupElect()) {                                                   \
             [[unroll]] for (int c_ = 0; c_ < 4; c_++) {                           \
                 if (r_ == 0u) FIXED_ADD_TOTAL(term_sums_a, (first) + uint(c_), total_[c_]) \

@@ -49,10 +49,13 @@ pub fn trainer_for(
     }
 }
 
-/// The trainer's learned maps by its views' names (empty without camera colour).
+/// The trainer's learned maps by its views' names (empty without camera colour). A view
+/// whose colours were left out ([`ViewTarget::appearance_flaw`]) taught its map nothing, so it
+/// has none: later frames score that camera through the identity.
 pub fn learned_maps(trainer: &Trainer, views: &[ViewTarget]) -> Result<CameraMaps, TrainError> {
     let maps = trainer.camera_colour()?.unwrap_or_default();
-    Ok(views.iter().map(|v| v.name.clone()).zip(maps).collect())
+    let matched = views.iter().zip(maps).filter(|(v, _)| v.appearance_flaw().is_none());
+    Ok(matched.map(|(v, map)| (v.name.clone(), map)).collect())
 }
 
 /// Writes `maps` to `path` (JSON, atomically).

@@ -52,6 +52,10 @@ pub struct FrameReport {
     pub correspondences: Option<CorrespondenceReport>,
     /// Training views left out of this frame: their mask is empty (the subject is lost there).
     pub lost_views: Vec<String>,
+    /// Training views whose colours this frame leaves out (their masks still count), each
+    /// "name: why": a dark or saturated image ([`ViewTarget::appearance_flaw`]).
+    #[serde(default)]
+    pub colour_left_out: Vec<String>,
     /// Optimisation wall time (evaluation excluded), seconds.
     pub wall_s: f64,
     /// The whole frame's wall time (setup and evaluation included) split into the device's
@@ -162,7 +166,10 @@ pub fn optimize_frame(
     let (started, clock) = (Instant::now(), ctx.clock());
     let canonical = task.previous.is_none();
     let (w, t) = (&config.loss, &config.temporal);
-    let weights = ImageWeights { gaussians: w.gaussians.channels(), mesh: w.mesh.channels() };
+    let flaws: Vec<_> = task.train.iter().map(ViewTarget::appearance_flaw).collect();
+    let colourless = flaws.iter().map(Option::is_some).collect();
+    let (gaussians, mesh) = (w.gaussians.channels(), w.mesh.channels());
+    let weights = ImageWeights { gaussians, mesh, colourless };
     let extent = scene_extent(&task.train.iter().map(|v| &v.camera).collect::<Vec<_>>());
     let first = task
         .train
@@ -171,6 +178,9 @@ pub fn optimize_frame(
     let mut settings = render_settings(config, extent);
     let mut rng = SplitMix64::new(config.seed ^ task.frame as u64);
     let mut report = empty_report(task.frame);
+    report.colour_left_out = (task.train.iter().zip(&flaws))
+        .filter_map(|(v, flaw)| Some(format!("{}: {}", v.name, flaw.as_ref()?)))
+        .collect();
 
     let silhouette = silhouette_term(ctx, &task, canonical, t)?;
     let matches = match_terms(ctx, &task, &task.start, t)?;
@@ -181,7 +191,7 @@ pub fn optimize_frame(
         let graph = GraphRun {
             silhouette: silhouette.as_ref(),
             matches: &matches,
-            weights,
+            weights: weights.clone(),
             settings: &settings,
         };
         let (moved, graph) = deform_start(ctx, &task, &start, config, graph, &mut rng)?;
@@ -192,7 +202,8 @@ pub fn optimize_frame(
     task.mesh.positions = start.positions.clone();
     let terms = frame_terms(ctx, &task, &start, &first.camera, t, (silhouette, matches))?;
     let learn = matches!(task.colour, ColourUse::Learn);
-    let (schedule, plateau) = frame_schedule(config, (canonical, learn), weights, task.train.len());
+    let (schedule, plateau) =
+        frame_schedule(config, (canonical, learn), &weights, task.train.len());
     let budget = match config.canonical.budget {
         0 => covered_pixels(task.train),
         b => b as usize,
@@ -431,7 +442,7 @@ fn frame_terms(
 fn frame_schedule(
     config: &TrainConfig,
     (canonical, learn_colour): (bool, bool),
-    weights: ImageWeights,
+    weights: &ImageWeights,
     views: usize,
 ) -> (Schedule, Plateau) {
     let (c, t) = (&config.canonical, &config.temporal);
@@ -526,7 +537,7 @@ impl StepTerms for FrameStage<'_, '_> {
         let (terms, config) = (&self.terms, self.config);
         let (camera, target) = (trainer.camera(view), trainer.target(view));
         let (params, grads) = (trainer.params(), trainer.grads());
-        let weights = [splat_weights, self.weights.mesh];
+        let weights = self.weights.of_view(view, splat_weights);
         terms.mesh_term.record_step_with(
             trainer,
             rec,
@@ -575,7 +586,7 @@ impl Stage for FrameStage<'_, '_> {
         first: u32,
         last: u32,
     ) -> Result<Result<f64, String>, TrainError> {
-        let mean = read_losses(trainer, &self.terms, self.weights, (first, last), self.report)?;
+        let mean = read_losses(trainer, &self.terms, &self.weights, (first, last), self.report)?;
         self.loss = mean.as_ref().ok().copied().or(self.loss);
         Ok(mean)
     }
@@ -613,7 +624,7 @@ impl Stage for FrameStage<'_, '_> {
 fn read_losses(
     trainer: &Trainer,
     terms: &FrameTerms,
-    weights: ImageWeights,
+    weights: &ImageWeights,
     (first, last): (u32, u32),
     report: &mut FrameReport,
 ) -> Result<Result<f64, String>, TrainError> {
@@ -658,6 +669,7 @@ fn empty_report(frame: usize) -> FrameReport {
         graph: None,
         correspondences: None,
         lost_views: Vec::new(),
+        colour_left_out: Vec::new(),
         wall_s: 0.0,
         device_s: None,
         host_s: None,

@@ -67,11 +67,24 @@ pub struct GraphInput<'a> {
     pub colour: ColourUse<'a>,
 }
 
-/// The loss weights of a step: λ per rgba channel of the Gaussian and mesh renders.
-#[derive(Clone, Copy)]
+/// The loss weights of a step: λ per rgba channel of the Gaussian and mesh renders, and per
+/// training view whether its colours are left out (a dark or saturated image,
+/// [`ViewTarget::appearance_flaw`]).
+#[derive(Clone)]
 pub struct ImageWeights {
     pub gaussians: [f32; 4],
     pub mesh: [f32; 4],
+    pub colourless: Arc<[bool]>,
+}
+
+impl ImageWeights {
+    /// The Gaussian (`gaussians`, as the schedule gives them) and mesh weights of a step on
+    /// training view `view`: where its colours are left out, their λ is 0 and the mask's stays.
+    pub fn of_view(&self, view: usize, gaussians: [f32; 4]) -> [[f32; 4]; 2] {
+        let colourless = self.colourless.get(view).copied().unwrap_or(false);
+        let keep = |w: [f32; 4]| if colourless { [0.0, 0.0, 0.0, w[3]] } else { w };
+        [keep(gaussians), keep(self.mesh)]
+    }
 }
 
 /// Solves the graph level by level; returns the start moved by the graph (appearance
@@ -127,7 +140,7 @@ pub fn solve_graph(
             deformer,
             mesh_term: &mesh_term,
             coverage: &coverage,
-            weights,
+            weights: weights.clone(),
             settings,
         };
         let step = (&terms as &dyn StepTerms, weights.gaussians);
@@ -208,7 +221,7 @@ impl StepTerms for GraphStep<'_> {
     ) -> Result<(), TrainError> {
         let (t, near) = (&self.config.temporal, self.settings.near);
         let (params, grads) = (trainer.params(), trainer.grads());
-        let weights = [splat_weights, self.weights.mesh];
+        let weights = self.weights.of_view(view, splat_weights);
         let background = self.settings.background;
         self.mesh_term.record_step_with(trainer, rec, (view, frame), weights, background)?;
         self.input.silhouette.record(

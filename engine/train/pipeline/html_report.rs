@@ -191,6 +191,9 @@ fn warnings(f: &FrameReport) -> String {
     if !f.lost_views.is_empty() {
         said.push(format!("views without the subject: {}", f.lost_views.join(", ")));
     }
+    if !f.colour_left_out.is_empty() {
+        said.push(format!("colours left out: {}", f.colour_left_out.join("; ")));
+    }
     if f.truncated_steps > 0 {
         said.push(format!("{} truncated steps", f.truncated_steps));
     }

@@ -468,6 +468,10 @@ fn frame_lines(f: &FrameReport) -> String {
         text +=
             &format!("\nwarning: frame {}: views left out, their mask is empty: {views}", f.frame);
     }
+    if !f.colour_left_out.is_empty() {
+        let views = f.colour_left_out.join("; ");
+        text += &format!("\nwarning: frame {}: colours left out (the image terms cannot match them; the masks still count): {views}", f.frame);
+    }
     if let Some(c) = f.correspondences.as_ref().filter(|c| !c.unmatched_views.is_empty()) {
         let views = c.unmatched_views.join(", ");
         text += &format!("\nwarning: frame {}: nothing to match in these views (dark, saturated, textureless or the subject hidden; the correspondence terms skip them): {views}", f.frame);
