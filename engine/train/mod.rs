@@ -27,7 +27,9 @@ pub use fit::{fit, FitOutcome, Progress};
 pub use job::{initial_gaussians, run_fit_job, write_fit_outputs, FitJob};
 pub use report::{write_curve_csv, write_curve_plot, CurvePoint, FitReport};
 pub use step::Trainer;
-pub use views::{load_targets, load_targets_counted, ViewTarget};
+pub use views::{
+    load_targets, load_targets_counted, AppearanceFlaw, ViewTarget, DARK_LEVEL, SATURATED_SHARE,
+};
 
 use std::path::PathBuf;
 
