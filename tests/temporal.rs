@@ -32,6 +32,7 @@ fn sequence(dir: &Path, motion: MotionPreset, resolution: u32, seed: u64) {
         track_vertices: 100,
         track_surface: 200,
         motion,
+        ..Default::default()
     };
     generate(&options, dir).unwrap();
 }

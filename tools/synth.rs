@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use std::path::PathBuf;
-use tagsplat::synth::{generate, MotionPreset, SubjectSource, SynthOptions};
+use tagsplat::synth::{generate, MotionPreset, Pattern, SubjectSource, SynthOptions};
 
 #[derive(clap::Args)]
 pub struct SynthArgs {
@@ -45,6 +45,10 @@ pub struct SynthArgs {
     /// (5×), as at capture frame rates.
     #[arg(long, default_value = "gentle", value_parser = MotionPreset::from_name)]
     motion: MotionPreset,
+    /// What is printed on the skin: smooth (soft colour bands) or bands (high-contrast bands,
+    /// at 96² 1–6 px across a row, and a speckle, as fox_walk_banded's printed cloth).
+    #[arg(long, default_value = "smooth", value_parser = Pattern::from_name)]
+    pattern: Pattern,
     #[arg(long)]
     json: bool,
 }
@@ -65,6 +69,7 @@ pub fn run(a: SynthArgs) -> Result<()> {
         track_vertices: a.track_vertices,
         track_surface: a.track_surface,
         motion: a.motion,
+        pattern: a.pattern,
     };
     let start = std::time::Instant::now();
     let report =

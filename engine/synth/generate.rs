@@ -18,7 +18,7 @@ use super::gltf::{load_gltf, GltfError};
 use super::manifold::closed_manifold_problem;
 use super::motion_stats::{motion_stats, MotionStats};
 use super::raster::{render, RenderError};
-use super::texture::Texture;
+use super::texture::{Pattern, Texture};
 use super::Subject;
 use crate::camera::{Camera, CameraError};
 use crate::dataset::own::{self, OwnMeta};
@@ -107,6 +107,8 @@ pub struct SynthOptions {
     pub track_surface: usize,
     /// How fast the subject moves per captured frame.
     pub motion: MotionPreset,
+    /// What is printed on the subject's skin.
+    pub pattern: Pattern,
 }
 
 impl Default for SynthOptions {
@@ -122,6 +124,7 @@ impl Default for SynthOptions {
             track_vertices: 100,
             track_surface: 200,
             motion: MotionPreset::Gentle,
+            pattern: Pattern::Smooth,
         }
     }
 }
@@ -234,7 +237,7 @@ pub fn generate(options: &SynthOptions, out: &Path) -> Result<SynthReport, Synth
     let (center, radius) = bounding_sphere(&frames);
     let cameras = place_cameras(options, center, radius)?;
     let tracks = track_points(&subject, options)?;
-    let texture = Texture::fit(&subject.rest);
+    let texture = Texture::fit(&subject.rest).with_pattern(options.pattern);
     let colors = texture.vertex_colors(&subject.rest);
     let names: Vec<String> = (0..cameras.len()).map(|c| format!("cam{c:03}")).collect();
 

@@ -4,7 +4,8 @@
 //! - [`gltf`]: a rigged glTF 2.0 character (skin, joints, animation channels).
 //! - linear blend skinning ([`crate::mesh::skinning`]), shared by both subjects and the glTF
 //!   sequence reader.
-//! - [`texture`]: the coloured procedural texture painted on the rest pose.
+//! - [`texture`]: the coloured procedural texture painted on the rest pose, with printed bands
+//!   or without.
 //! - [`raster`]: the supersampled CPU reference renderer (RGB + anti-aliased mask).
 //! - [`generate`](mod@generate): cameras, renders, per-frame meshes and point trajectories on disk.
 
@@ -20,7 +21,7 @@ pub mod texture;
 pub use crate::mesh::skinning::{skin, SkinWeights};
 pub use generate::{generate, MotionPreset, SubjectSource, SynthOptions, SynthReport};
 pub use raster::{render, Render, RenderError};
-pub use texture::Texture;
+pub use texture::{Pattern, Texture};
 
 use glam::DMat4;
 

@@ -158,6 +158,7 @@ fn resolve(camera: &Camera, s: usize, depth: &[f64], color: &[[f32; 3]]) -> Rend
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::synth::texture::Pattern;
     use glam::DMat4;
 
     fn camera(size: u32) -> Camera {
@@ -184,7 +185,7 @@ mod tests {
     #[test]
     fn coverage_equals_projected_area_and_shared_edge_has_no_crack() {
         let (p, f) = square();
-        let tex = Texture { center: DVec3::ZERO, radius: 1.0 };
+        let tex = Texture { center: DVec3::ZERO, radius: 1.0, pattern: Pattern::Smooth };
         let r = render(&camera(64), &p, &p, &f, &tex, 4).unwrap();
         // Projection: f·x/z = 64·1/4 = 16 px half-side → a 32×32 px square centred in the image.
         let covered: f32 = r.alpha.iter().sum();
@@ -206,7 +207,7 @@ mod tests {
         for q in &mut p {
             q[0] += 0.5 / 16.0 * 0.5; // shift by a quarter pixel
         }
-        let tex = Texture { center: DVec3::ZERO, radius: 1.0 };
+        let tex = Texture { center: DVec3::ZERO, radius: 1.0, pattern: Pattern::Smooth };
         let r = render(&camera(64), &p, &p, &f, &tex, 4).unwrap();
         let left = r.alpha[32 * 64 + 16];
         assert!((left - 0.75).abs() < 1e-6, "{left}");
@@ -230,7 +231,7 @@ mod tests {
     fn vertex_behind_the_camera_is_an_error() {
         let (mut p, f) = square();
         p[1][2] = -1.0;
-        let tex = Texture { center: DVec3::ZERO, radius: 1.0 };
+        let tex = Texture { center: DVec3::ZERO, radius: 1.0, pattern: Pattern::Smooth };
         assert_eq!(
             render(&camera(8), &p, &p, &f, &tex, 1).unwrap_err(),
             RenderError::BehindCamera { vertex: 1, depth: -1.0 }
