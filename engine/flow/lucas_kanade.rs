@@ -18,6 +18,15 @@ pub struct GrayImage<'a> {
     pub height: usize,
 }
 
+/// A 2×2 linear map of window offsets, row-major `[a, b, c, d]`: what lies at offset δ from a
+/// point in the image it comes from lies at `[a δx + b δy, c δx + d δy]` from it in the image it
+/// is searched in. It carries what a translation cannot: a window that turned, stretched or
+/// sheared between the two frames (a limb that swung, a surface that tilted).
+pub type Warp = [f32; 4];
+
+/// The warp of a window that only moved.
+pub const IDENTITY: Warp = [1.0, 0.0, 0.0, 1.0];
+
 /// Parameters of the tracker; [`Default`] suits images in [0, 1] and motions of a few tens of
 /// pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -61,7 +70,9 @@ impl LucasKanade {
         guesses: &[[f32; 2]],
     ) -> Vec<Option<[f32; 2]>> {
         match self.pyramids(prev, next).filter(|_| guesses.len() == points.len()) {
-            Some((from, to)) => self.follow_all(&from, &to, points, guesses),
+            Some((from, to)) => {
+                self.follow_all(&from, &to, points, guesses, &vec![IDENTITY; points.len()])
+            }
             None => vec![None; points.len()],
         }
     }
@@ -77,14 +88,31 @@ impl LucasKanade {
         guesses: &[[f32; 2]],
         max_error: f32,
     ) -> Vec<Option<[f32; 2]>> {
-        let pyramids = self.pyramids(prev, next).filter(|_| guesses.len() == points.len());
-        let Some((from, to)) = pyramids else {
+        let warps = vec![IDENTITY; points.len()];
+        self.track_warped(prev, next, points, guesses, &warps, max_error)
+    }
+
+    /// As [`Self::track_consistent`], with each point's window mapped by its warp from `prev`
+    /// to `next` (and back by the inverse), so only the translation is searched. A point whose
+    /// warp is singular or not finite is None; all None when `warps` is not one per point.
+    pub fn track_warped(
+        &self,
+        prev: GrayImage,
+        next: GrayImage,
+        points: &[[f32; 2]],
+        guesses: &[[f32; 2]],
+        warps: &[Warp],
+        max_error: f32,
+    ) -> Vec<Option<[f32; 2]>> {
+        let one_each = guesses.len() == points.len() && warps.len() == points.len();
+        let Some((from, to)) = self.pyramids(prev, next).filter(|_| one_each) else {
             return vec![None; points.len()];
         };
-        let forward = self.follow_all(&from, &to, points, guesses);
+        let inverses: Vec<Warp> = warps.iter().map(|&w| inverse(w)).collect();
+        let forward = self.follow_all(&from, &to, points, guesses, warps);
         // A point lost forward goes back as NaN, which is never followed.
         let reached: Vec<[f32; 2]> = forward.iter().map(|p| p.unwrap_or([f32::NAN; 2])).collect();
-        let backward = self.follow_all(&to, &from, &reached, points);
+        let backward = self.follow_all(&to, &from, &reached, points, &inverses);
         let returns = |start: &[f32; 2], back: Option<[f32; 2]>| {
             back.is_some_and(|b| (b[0] - start[0]).hypot(b[1] - start[1]) <= max_error)
         };
@@ -108,39 +136,41 @@ impl LucasKanade {
         Some((pyramid(prev, self.levels, side), pyramid(next, self.levels, side)))
     }
 
-    /// Every point from `from` to `to`, each searched from its guess, with one set of scratch
-    /// windows for all.
+    /// Every point from `from` to `to`, each searched from its guess with its warp, with one
+    /// set of scratch windows for all.
     fn follow_all(
         &self,
         from: &[Level],
         to: &[Level],
         points: &[[f32; 2]],
         guesses: &[[f32; 2]],
+        warps: &[Warp],
     ) -> Vec<Option<[f32; 2]>> {
         let side = window_side(self.window_radius);
         let (mut fine, mut coarse) = (Template::new(side), Template::new(side));
         let mut scratch = (&mut fine, &mut coarse);
-        points
-            .iter()
-            .zip(guesses)
-            .map(|(&p, &g)| self.follow(from, to, [p, g], &mut scratch))
+        (points.iter().zip(guesses).zip(warps))
+            .map(|((&p, &g), &w)| self.follow(from, to, [p, g], w, &mut scratch))
             .collect()
     }
 
-    /// One point through the pyramids from where it is guessed to be, coarse to fine; the
-    /// templates are scratch.
+    /// One point through the pyramids from where it is guessed to be, coarse to fine, its
+    /// window mapped by `warp`; the templates are scratch.
     fn follow(
         &self,
         from: &[Level],
         to: &[Level],
         [point, expected]: [[f32; 2]; 2],
+        warp: Warp,
         (fine, coarse): &mut (&mut Template, &mut Template),
     ) -> Option<[f32; 2]> {
-        if !from[0].contains(point) {
+        // The template is `from` seen through the warp: where `to`'s window pixel ε looks.
+        let unwarp = inverse(warp);
+        if !from[0].contains(point) || unwarp.iter().any(|m| !m.is_finite()) {
             return None;
         }
         // Texture is judged at full resolution first, so a flat window costs no coarse work.
-        fine.load(&from[0], point);
+        fine.load(&from[0], point, unwarp);
         if !fine.is_textured(self.min_eigenvalue) {
             return None;
         }
@@ -153,7 +183,7 @@ impl LucasKanade {
         for level in (1..from.len()).rev() {
             let scale = 0.5f32.powi(level as i32);
             let at = [point[0] * scale, point[1] * scale];
-            coarse.load(&from[level], at);
+            coarse.load(&from[level], at, unwarp);
             if coarse.is_textured(self.min_eigenvalue) {
                 guess = self.refine(coarse, &to[level], at, guess)?.0;
             }
@@ -213,6 +243,12 @@ fn window_side(radius: usize) -> usize {
     radius.saturating_mul(2).saturating_add(1)
 }
 
+/// The inverse of a warp; not finite where it is singular.
+fn inverse([a, b, c, d]: Warp) -> Warp {
+    let det = a * d - b * c;
+    [d / det, -b / det, -c / det, a / det]
+}
+
 /// One pyramid level: intensities and their central-difference gradients, row-major, and
 /// the full-resolution pixels' area in this level's coordinates as (left, top, right, bottom).
 /// Decimation keeps even pixels, so on coarse levels that area reaches up to half a pixel past
@@ -236,6 +272,22 @@ impl Level {
     fn contains(&self, p: [f32; 2]) -> bool {
         let [left, top, right, bottom] = self.area;
         (left..=right).contains(&p[0]) && (top..=bottom).contains(&p[1])
+    }
+
+    /// The bilinear samples of the intensity and both gradients at `p`, None unless all four
+    /// taps are pixels of the level.
+    fn bilinear(&self, p: [f32; 2]) -> Option<[f32; 3]> {
+        let (x, y) = (p[0].floor(), p[1].floor());
+        let inside = x >= 0.0 && y >= 0.0 && x + 1.0 < self.width as f32;
+        if !(inside && y + 1.0 < self.height as f32) {
+            return None;
+        }
+        let (tx, ty) = (p[0] - x, p[1] - y);
+        let at = y as usize * self.width + x as usize;
+        let taps = [at, at + 1, at + self.width, at + self.width + 1];
+        let weights = [(1.0 - tx) * (1.0 - ty), tx * (1.0 - ty), (1.0 - tx) * ty, tx * ty];
+        let sample = |map: &[f32]| taps.iter().zip(weights).map(|(&i, w)| w * map[i]).sum();
+        Some([sample(&self.pixels), sample(&self.gradient_x), sample(&self.gradient_y)])
     }
 }
 
@@ -395,7 +447,20 @@ impl Template {
         }
     }
 
-    fn load(&mut self, level: &Level, centre: [f32; 2]) {
+    /// The window of `level` around `centre`, each window offset ε sampled at
+    /// `centre + unwarp·ε`: the image seen through the inverse of the point's warp.
+    fn load(&mut self, level: &Level, centre: [f32; 2], unwarp: Warp) {
+        if unwarp == IDENTITY {
+            self.load_shifted(level, centre);
+        } else {
+            self.load_warped(level, centre, unwarp);
+        }
+        let (gx, gy) = (&self.gradient_x, &self.gradient_y);
+        self.tensor = [dot(gx, gx), dot(gx, gy), dot(gy, gy)];
+    }
+
+    /// The window's pixels share one set of bilinear weights: rows of the maps are read whole.
+    fn load_shifted(&mut self, level: &Level, centre: [f32; 2]) {
         let footprint = Footprint::new(level, centre, self.side);
         self.gradient_x.fill(0.0);
         self.gradient_y.fill(0.0);
@@ -412,9 +477,23 @@ impl Template {
                 window[at.clone()].iter_mut().zip(samples).for_each(|(v, s)| *v = s);
             }
         }
-        let (gx, gy) = (&self.gradient_x, &self.gradient_y);
-        self.tensor = [dot(gx, gx), dot(gx, gy), dot(gy, gy)];
         self.footprint = footprint;
+    }
+
+    /// Each window pixel sampled on its own; the gradients are turned into the window's
+    /// coordinates (∇ε = unwarpᵀ ∇I), and a pixel whose sample leaves the level weighs nothing.
+    fn load_warped(&mut self, level: &Level, centre: [f32; 2], [a, b, c, d]: Warp) {
+        let radius = (self.side / 2) as f32;
+        for k in 0..self.side * self.side {
+            let e = [(k % self.side) as f32 - radius, (k / self.side) as f32 - radius];
+            let p = [centre[0] + a * e[0] + b * e[1], centre[1] + c * e[0] + d * e[1]];
+            let [value, gx, gy] = level.bilinear(p).unwrap_or([0.0; 3]);
+            self.values[k] = value;
+            self.gradient_x[k] = a * gx + c * gy;
+            self.gradient_y[k] = b * gx + d * gy;
+        }
+        let whole = 0..self.side;
+        self.footprint = Footprint { columns: whole.clone(), rows: whole, ..Footprint::default() };
     }
 
     /// Whether the tensor's smallest eigenvalue per window pixel reaches `min_eigenvalue`
@@ -585,6 +664,72 @@ mod tests {
         assert_eq!(tracker.track(prev, next, &points[..1], &[[f32::NAN, 0.0]]), vec![None]);
         // Guesses must be one per point.
         assert_eq!(tracker.track(prev, next, &points[..2], &points[..1]), vec![None; 2]);
+    }
+
+    #[test]
+    fn a_warp_follows_a_window_that_turned_and_stretched() {
+        let (w, h, centre, shift) = (128, 128, [64.0f64, 64.0], [3.4f64, -2.6]);
+        // Turned 30 degrees and stretched by a fifth about the centre, then moved.
+        let (angle, scale) = (30f64.to_radians(), 1.2);
+        let warp = [angle.cos(), -angle.sin(), angle.sin(), angle.cos()].map(|m| scale * m);
+        let texture = Texture::new(7);
+        let prev = texture.image(w, h, [0.0; 2]);
+        // Pixel q of `next` shows what was at warp⁻¹ (q − centre − shift) + centre.
+        let det = warp[0] * warp[3] - warp[1] * warp[2];
+        let next: Vec<f32> = (0..w * h)
+            .map(|i| {
+                let q =
+                    [(i % w) as f64 - centre[0] - shift[0], (i / w) as f64 - centre[1] - shift[1]];
+                let x = (warp[3] * q[0] - warp[1] * q[1]) / det + centre[0];
+                let y = (warp[0] * q[1] - warp[2] * q[0]) / det + centre[1];
+                texture.at(x, y)
+            })
+            .collect();
+        let moved = |p: &[f32; 2]| {
+            let d = [p[0] as f64 - centre[0], p[1] as f64 - centre[1]];
+            let x = warp[0] * d[0] + warp[1] * d[1] + centre[0] + shift[0];
+            let y = warp[2] * d[0] + warp[3] * d[1] + centre[1] + shift[1];
+            [x as f32, y as f32]
+        };
+        let (prev, next) = (gray(&prev, w, h), gray(&next, w, h));
+        let points: Vec<[f32; 2]> = grid(w, h, 40, 4);
+        let guesses: Vec<[f32; 2]> = points.iter().map(moved).collect();
+        let tracker = LucasKanade::default();
+        let within = |found: &[Option<[f32; 2]>], tolerance: f32| {
+            let hit = |(g, f): (&[f32; 2], &Option<[f32; 2]>)| {
+                f.is_some_and(|f| (f[0] - g[0]).hypot(f[1] - g[1]) < tolerance)
+            };
+            guesses.iter().zip(found).filter(|&pair| hit(pair)).count()
+        };
+        // Searched from the right place, a window matched as it was is still off.
+        let plain = tracker.track_consistent(prev, next, &points, &guesses, 1.0);
+        assert!(
+            within(&plain, 0.05) * 2 < points.len(),
+            "{} of {}",
+            within(&plain, 0.05),
+            points.len()
+        );
+        let warps = vec![warp.map(|m| m as f32); points.len()];
+        let warped = tracker.track_warped(prev, next, &points, &guesses, &warps, 0.1);
+        assert!(
+            within(&warped, 0.05) * 100 >= points.len() * 95,
+            "{} of {}",
+            within(&warped, 0.05),
+            points.len()
+        );
+        // A singular warp follows nothing; warps must be one per point.
+        let flat = vec![[1.0, 2.0, 0.5, 1.0]; points.len()];
+        assert!(tracker
+            .track_warped(prev, next, &points, &guesses, &flat, 1.0)
+            .iter()
+            .all(Option::is_none));
+        assert_eq!(
+            tracker.track_warped(prev, next, &points, &guesses, &warps[1..], 1.0),
+            vec![None; points.len()]
+        );
+        // The identity is the plain tracker.
+        let identity = vec![IDENTITY; points.len()];
+        assert_eq!(tracker.track_warped(prev, next, &points, &guesses, &identity, 1.0), plain);
     }
 
     #[test]

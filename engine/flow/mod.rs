@@ -4,5 +4,5 @@
 mod lucas_kanade;
 mod tracks;
 
-pub use lucas_kanade::{luma, GrayImage, LucasKanade};
+pub use lucas_kanade::{luma, GrayImage, LucasKanade, Warp, IDENTITY};
 pub use tracks::ImageTracks;

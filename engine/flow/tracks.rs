@@ -7,7 +7,7 @@
 //! guess: a track restarts only where the first image matches, so it carries what the images
 //! say, not the guess.
 
-use super::{GrayImage, LucasKanade};
+use super::{GrayImage, LucasKanade, Warp, IDENTITY};
 
 /// Largest forward-backward round trip of a kept step, pixels.
 const MAX_STEP_ROUND_TRIP: f32 = 0.5;
@@ -44,14 +44,15 @@ impl ImageTracks {
     }
 
     /// Follows every live point from `previous` (the frame its positions are in) to `next`,
-    /// then matches it against `first` (the first frame's image) from where the step put it.
-    /// All images must share one size; otherwise every point is lost.
+    /// then matches it against `first` (the first frame's image) from where the step put it,
+    /// its first-frame window mapped by its warp in `warps` (first frame to `next`; a point
+    /// past the slice's end is matched unwarped). All images must share one size; otherwise
+    /// every point is lost.
     pub fn advance(
         &mut self,
         lk: &LucasKanade,
-        first: GrayImage,
-        previous: GrayImage,
-        next: GrayImage,
+        [first, previous, next]: [GrayImage; 3],
+        warps: &[Warp],
     ) {
         let (live, points): (Vec<usize>, Vec<[f32; 2]>) =
             self.now.iter().enumerate().filter_map(|(i, p)| Some((i, (*p)?))).unzip();
@@ -59,7 +60,14 @@ impl ImageTracks {
         let sources: Vec<[f32; 2]> =
             live.iter().map(|&i| self.first[i].unwrap_or([f32::NAN; 2])).collect();
         let guesses: Vec<[f32; 2]> = stepped.iter().map(|p| p.unwrap_or([f32::NAN; 2])).collect();
-        let anchored = lk.track_consistent(first, next, &sources, &guesses, MAX_ANCHOR_ROUND_TRIP);
+        let anchored = lk.track_warped(
+            first,
+            next,
+            &sources,
+            &guesses,
+            &warps_of(&live, warps),
+            MAX_ANCHOR_ROUND_TRIP,
+        );
         for ((&i, step), anchor) in live.iter().zip(stepped).zip(anchored) {
             self.now[i] = step.map(|s| match anchor {
                 Some(a) if (a[0] - s[0]).hypot(a[1] - s[1]) <= MAX_ANCHOR_SHIFT => a,
@@ -71,13 +79,14 @@ impl ImageTracks {
 
     /// Searches every lost point with a guess (where it is expected in `next`, the latest
     /// frame) for its first-frame pixel: matched from `first` to `next` from the guess and kept
-    /// where the backward match returns within a pixel. `guesses` has one entry per point.
+    /// where the backward match returns within a pixel. `guesses` has one entry per point;
+    /// `warps` as in [`Self::advance`].
     pub fn revive(
         &mut self,
         lk: &LucasKanade,
-        first: GrayImage,
-        next: GrayImage,
+        [first, next]: [GrayImage; 2],
         guesses: &[Option<[f32; 2]>],
+        warps: &[Warp],
     ) {
         // (point, its first-frame pixel, its guess) of every lost point with both.
         let lost: Vec<(usize, [f32; 2], [f32; 2])> = (0..self.now.len())
@@ -86,11 +95,18 @@ impl ImageTracks {
             .collect();
         let sources: Vec<[f32; 2]> = lost.iter().map(|l| l.1).collect();
         let near: Vec<[f32; 2]> = lost.iter().map(|l| l.2).collect();
-        let found = lk.track_consistent(first, next, &sources, &near, MAX_ANCHOR_ROUND_TRIP);
+        let points: Vec<usize> = lost.iter().map(|l| l.0).collect();
+        let warps = warps_of(&points, warps);
+        let found = lk.track_warped(first, next, &sources, &near, &warps, MAX_ANCHOR_ROUND_TRIP);
         for ((i, _, _), p) in lost.into_iter().zip(found) {
             self.now[i] = p;
         }
     }
+}
+
+/// The warps of `points` (indices into `warps`), unwarped past its end.
+fn warps_of(points: &[usize], warps: &[Warp]) -> Vec<Warp> {
+    points.iter().map(|&i| warps.get(i).copied().unwrap_or(IDENTITY)).collect()
 }
 
 #[cfg(test)]
@@ -127,7 +143,7 @@ mod tests {
         let lk = LucasKanade::default();
         for t in 1..frames.len() {
             let (f0, prev, next) = (&frames[0], &frames[t - 1], &frames[t]);
-            tracks.advance(&lk, gray(f0, w), gray(prev, w), gray(next, w));
+            tracks.advance(&lk, [gray(f0, w), gray(prev, w), gray(next, w)], &[]);
         }
         assert_eq!(tracks.steps, 10);
         assert_eq!(tracks.now[25], None, "a point the track never had stays without one");
@@ -146,26 +162,26 @@ mod tests {
         let flat = vec![0.5; w * h];
         let mut tracks = ImageTracks::new(vec![Some([32.0, 32.0])]);
         let lk = LucasKanade::default();
-        tracks.advance(&lk, gray(&textured, w), gray(&textured, w), gray(&flat, w));
+        tracks.advance(&lk, [gray(&textured, w), gray(&textured, w), gray(&flat, w)], &[]);
         assert_eq!(tracks.now, vec![None]);
         // The texture back: the lost point is not found again by stepping...
-        tracks.advance(&lk, gray(&textured, w), gray(&flat, w), gray(&textured, w));
+        tracks.advance(&lk, [gray(&textured, w), gray(&flat, w), gray(&textured, w)], &[]);
         assert_eq!((tracks.now.clone(), tracks.live()), (vec![None], 0));
         // ...but from a guess three pixels off, where the first image matches again.
         let moved = image(w, h, [2.0, -1.0]);
-        tracks.revive(&lk, gray(&textured, w), gray(&moved, w), &[Some([31.0, 34.0])]);
+        tracks.revive(&lk, [gray(&textured, w), gray(&moved, w)], &[Some([31.0, 34.0])], &[]);
         let now = tracks.now[0].expect("revived");
         assert!((now[0] - 34.0).hypot(now[1] - 31.0) < 0.05, "{now:?}");
         // Not where the image holds no texture, nor without a guess.
         let mut lost = ImageTracks::new(vec![Some([32.0, 32.0])]);
         lost.now = vec![None];
-        lost.revive(&lk, gray(&textured, w), gray(&flat, w), &[Some([32.0, 32.0])]);
-        lost.revive(&lk, gray(&textured, w), gray(&moved, w), &[None]);
+        lost.revive(&lk, [gray(&textured, w), gray(&flat, w)], &[Some([32.0, 32.0])], &[]);
+        lost.revive(&lk, [gray(&textured, w), gray(&moved, w)], &[None], &[]);
         assert_eq!(lost.now, vec![None]);
         // Images of another size lose every point.
         let mut tracks = ImageTracks::new(vec![Some([10.0, 10.0])]);
         let small = image(32, 32, [0.0; 2]);
-        tracks.advance(&lk, gray(&textured, w), gray(&textured, w), gray(&small, 32));
+        tracks.advance(&lk, [gray(&textured, w), gray(&textured, w), gray(&small, 32)], &[]);
         assert_eq!(tracks.now, vec![None]);
     }
 }

@@ -9,11 +9,11 @@
 //!   from an estimate, so a slide the earlier frames let in costs error and is pulled back.
 
 use crate::camera::Camera;
-use crate::flow::{luma, GrayImage, ImageTracks, LucasKanade};
+use crate::flow::{luma, GrayImage, ImageTracks, LucasKanade, Warp, IDENTITY};
 use crate::geometry::SurfaceBvh;
 use crate::loss::flow::FlowTarget;
 use crate::train::ViewTarget;
-use glam::DVec3;
+use glam::{DMat2, DVec2, DVec3};
 
 /// Largest forward-backward round trip of a kept track, pixels.
 const MAX_ROUND_TRIP_PIXELS: f32 = 1.0;
@@ -102,6 +102,8 @@ pub fn correspondences(
 /// Every training view's image tracks of the vertices it saw at frame 0.
 pub struct VertexTracks {
     views: Vec<ViewTracks>,
+    /// Frame 0's vertex positions, from which each frame's window warps are measured.
+    start: Vec<[f32; 3]>,
     lk: LucasKanade,
 }
 
@@ -121,7 +123,7 @@ impl VertexTracks {
     pub fn start(frame0: SeenPose, faces: &[[u32; 3]]) -> Self {
         let lk = LucasKanade { window_radius: TRACK_WINDOW_RADIUS, ..LucasKanade::default() };
         let Ok(bvh) = SurfaceBvh::build(frame0.positions, faces) else {
-            return Self { views: Vec::new(), lk };
+            return Self { views: Vec::new(), start: Vec::new(), lk };
         };
         let views = frame0
             .views
@@ -138,13 +140,15 @@ impl VertexTracks {
                 }
             })
             .collect();
-        Self { views, lk }
+        Self { views, start: frame0.positions.to_vec(), lk }
     }
 
     /// Steps every view's tracks to its image in `next` (the following frame's training
     /// views), then revives lost tracks of vertices that `guess` (that frame's starting pose,
     /// on `faces`) shows in the view near where it projects them; a view missing in `next`, or
-    /// of another size, loses its tracks.
+    /// of another size, loses its tracks. Frame 0's windows are matched through the warps the
+    /// surface went through from frame 0 to `guess` ([`surface_warps`]), so a part that turned
+    /// or stretched since is matched as it now looks.
     pub fn advance(&mut self, next: &[ViewTarget], guess: &[[f32; 3]], faces: &[[u32; 3]]) {
         let bvh = SurfaceBvh::build(guess, faces).ok();
         for view in &mut self.views {
@@ -159,10 +163,12 @@ impl VertexTracks {
             let (width, height) = (size.0 as usize, size.1 as usize);
             let image = |pixels| GrayImage { pixels, width, height };
             let now = luma(&target.target);
-            view.tracks.advance(&self.lk, image(&view.first), image(&view.latest), image(&now));
+            let warps = surface_warps(&self.start, guess, faces, &view.camera);
+            let frames = [image(&view.first), image(&view.latest), image(&now)];
+            view.tracks.advance(&self.lk, frames, &warps);
             if let Some(bvh) = &bvh {
                 let near = visible_pixels(bvh, guess, &view.camera);
-                view.tracks.revive(&self.lk, image(&view.first), image(&now), &near);
+                view.tracks.revive(&self.lk, [frames[0], frames[2]], &near, &warps);
             }
             view.latest = now;
         }
@@ -215,6 +221,65 @@ impl VertexTracks {
 /// background): on fox_run_textured, stepping the true points frame by frame, 9 × 9 keeps
 /// more of them within a pixel of the truth after five frames (53 % against 39 %).
 const TRACK_WINDOW_RADIUS: usize = 4;
+
+/// Each vertex's window warp in `camera` from pose `from` to pose `to` (the same vertices on
+/// `faces`): the 2×2 map that best carries, in least squares, the pixel offsets to its faces'
+/// other corners under `from` onto those under `to`. [`IDENTITY`] where the offsets do not fix
+/// one (fewer than two independent ones, a corner behind the camera) or it turns the window
+/// inside out or scales its area past [`MAX_WARP_AREA`]: there the window is matched unwarped.
+fn surface_warps(
+    from: &[[f32; 3]],
+    to: &[[f32; 3]],
+    faces: &[[u32; 3]],
+    camera: &Camera,
+) -> Vec<Warp> {
+    let pixels = |pose: &[[f32; 3]]| -> Vec<Option<DVec2>> {
+        pose.iter().map(|x| camera.project(DVec3::from(x.map(f64::from)))).collect()
+    };
+    let (before, after) = (pixels(from), pixels(to));
+    // Per vertex: Σ d dᵀ of its offsets before, and Σ d' dᵀ of after against before.
+    let mut sums = vec![(DMat2::ZERO, DMat2::ZERO); from.len().min(to.len())];
+    let offset = |p: &[Option<DVec2>], a: usize, b: usize| Some((*p.get(b)?)? - (*p.get(a)?)?);
+    for face in faces {
+        for k in 0..3 {
+            let [a, b, c] = [0, 1, 2].map(|j| face[(k + j) % 3] as usize);
+            for other in [b, c] {
+                let (Some(d), Some(e)) = (offset(&before, a, other), offset(&after, a, other))
+                else {
+                    continue;
+                };
+                if let Some(sum) = sums.get_mut(a) {
+                    sum.0 += DMat2::from_cols(d * d.x, d * d.y);
+                    sum.1 += DMat2::from_cols(e * d.x, e * d.y);
+                }
+            }
+        }
+    }
+    sums.iter().map(|&(spread, carried)| warp_of(spread, carried)).collect()
+}
+
+/// Smallest ratio of the short to the long axis of a vertex's offsets that fixes a warp.
+const MIN_SPREAD_RATIO: f64 = 0.01;
+
+/// Largest factor by which a kept warp may scale a window's area, or shrink it.
+const MAX_WARP_AREA: f64 = 4.0;
+
+/// The least-squares map `carried · spread⁻¹` as a [`Warp`], [`IDENTITY`] where `spread` is
+/// near singular or the map is not a plausible surface motion (see [`surface_warps`]).
+fn warp_of(spread: DMat2, carried: DMat2) -> Warp {
+    // Offsets along one line only (or none) leave the other direction unknown.
+    // det / trace² is about the ratio of the spread's two axes when one is small.
+    let trace = spread.x_axis.x + spread.y_axis.y;
+    if spread.determinant() <= MIN_SPREAD_RATIO * trace * trace {
+        return IDENTITY;
+    }
+    let map = carried * spread.inverse();
+    let area = map.determinant();
+    if !(area.is_finite() && (1.0 / MAX_WARP_AREA..=MAX_WARP_AREA).contains(&area)) {
+        return IDENTITY;
+    }
+    [map.x_axis.x, map.y_axis.x, map.x_axis.y, map.y_axis.y].map(|m| m as f32)
+}
 
 /// Whether index-coordinate pixel `p` lies on `view`'s mask (`width` its row length).
 fn on_mask(view: &ViewTarget, width: usize, p: [f32; 2]) -> bool {
@@ -378,5 +443,36 @@ mod tests {
         let found = correspondences(source, &positions, &faces, std::slice::from_ref(&dark));
         assert!(found.targets.iter().all(|t| t.weight == 0.0));
         assert_eq!(found.unmatched_views, vec!["top".to_string()]);
+    }
+
+    #[test]
+    fn a_turned_plane_warps_its_windows_by_the_turn() {
+        // On the plane's axis, so the image of the plane is a similarity of it.
+        let eye = DVec3::new(0.0, 0.0, 3.0);
+        let camera =
+            Camera::look_at(64, 64, 60.0, 60.0, 32.0, 32.0, eye, DVec3::ZERO, DVec3::Y).unwrap();
+        let (from, faces) = grid(11, 1.0, 0.0, 0);
+        // Turned 20 degrees about the view axis and pushed a third closer: the image turns by
+        // as much (either way round: the image's y axis points down) and grows by 3 / 2.
+        let (c, s) = (20f32.to_radians().cos(), 20f32.to_radians().sin());
+        let turned: Vec<[f32; 3]> =
+            from.iter().map(|p| [c * p[0] - s * p[1], s * p[0] + c * p[1], 1.0]).collect();
+        let warps = surface_warps(&from, &turned, &faces, &camera);
+        let scale = 3.0 / 2.0;
+        for (i, w) in warps.iter().enumerate() {
+            let turn = [c, s.copysign(w[1]), -s.copysign(w[1]), c].map(|m| m * scale);
+            let off = (w.iter().zip(turn)).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+            assert!(off < 1e-4, "vertex {i}: {w:?} against {turn:?}");
+        }
+        // A pose behind the camera, a mirrored one and a collapsed one are not warped.
+        let behind: Vec<[f32; 3]> = from.iter().map(|p| [p[0], p[1], 5.0]).collect();
+        let mirrored: Vec<[f32; 3]> = from.iter().map(|p| [-p[0], p[1], 0.0]).collect();
+        let collapsed: Vec<[f32; 3]> = from.iter().map(|p| [p[0], 0.0, 0.0]).collect();
+        for pose in [&behind, &mirrored, &collapsed] {
+            assert!(surface_warps(&from, pose, &faces, &camera).iter().all(|&w| w == IDENTITY));
+        }
+        // Vertices of no face, or faces past the poses, leave the rest as they are.
+        let short = surface_warps(&from[..5], &turned, &faces, &camera);
+        assert_eq!(short.len(), 5);
     }
 }
